@@ -1,0 +1,116 @@
+"""Input validation shared by the formula modules (imports nothing else of refnpr).
+
+Conventions: float32 in -> float32 out (if every floating input is float32, or a Python scalar
+beside float32 arrays); anything else computes in float64. Errors name the parameter, the value
+received, what was expected and how to fix it.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+__all__ = [
+    "as_float",
+    "result_dtype",
+    "check_finite",
+    "check_scalar",
+    "check_int",
+    "describe",
+]
+
+
+def describe(value) -> str:
+    """Short description of a value for an error message."""
+    if isinstance(value, np.ndarray):
+        if value.size <= 4:
+            return f"array {value.tolist()!r} ({value.dtype})"
+        return f"array of shape {value.shape} ({value.dtype})"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def as_float(name: str, value, *, finite: bool = False) -> np.ndarray:
+    """``value`` as a float ndarray: float32 stays float32, every other real type becomes float64.
+
+    Raises ``TypeError`` for non-numeric, boolean-free complex or object input and, with
+    ``finite=True``, ``ValueError`` for NaN or inf.
+    """
+    if isinstance(value, (str, bytes)) or value is None:
+        raise TypeError(f"{name}: expected a real number or array, got {describe(value)}")
+    arr = np.asarray(value)
+    if arr.dtype.kind == "c":
+        raise TypeError(f"{name}: expected real values, got complex {describe(value)}; take .real first")
+    if arr.dtype.kind not in "biuf":
+        raise TypeError(
+            f"{name}: expected a real number or numeric array, got {describe(value)}; "
+            "convert with numpy.asarray(..., dtype=float)"
+        )
+    arr = arr.astype(np.float32 if arr.dtype == np.float32 else np.float64, copy=False)
+    if finite:
+        check_finite(name, arr)
+    return arr
+
+
+def result_dtype(*values) -> np.dtype:
+    """float32 if every array-valued floating input is float32 (Python scalars do not promote);
+    float64 otherwise."""
+    arrays = [v for v in values if isinstance(v, np.ndarray) or isinstance(v, np.floating)]
+    if arrays and all(np.asarray(v).dtype == np.float32 for v in arrays):
+        return np.dtype(np.float32)
+    return np.dtype(np.float64)
+
+
+def check_finite(name: str, arr: np.ndarray) -> None:
+    """Raise ``ValueError`` if ``arr`` holds NaN or inf."""
+    if not np.all(np.isfinite(arr)):
+        bad = np.flatnonzero(~np.isfinite(np.ravel(arr)))[0]
+        raise ValueError(
+            f"{name}: must be finite, got {np.ravel(arr)[bad]} at flat index {bad}; "
+            "remove NaN/inf before calling"
+        )
+
+
+def check_scalar(
+    name: str,
+    value,
+    *,
+    lo: float | None = None,
+    hi: float | None = None,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    hint: str = "",
+) -> float:
+    """Validate a real scalar parameter in the interval given by ``lo``/``hi`` and return it."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+            value = value.item()
+        else:
+            raise TypeError(f"{name}: expected a real number, got {describe(value)}")
+    v = float(value)
+    if not np.isfinite(v):
+        raise ValueError(f"{name}: must be finite, got {v}")
+    bad = (
+        (lo is not None and (v <= lo if lo_open else v < lo))
+        or (hi is not None and (v >= hi if hi_open else v > hi))
+    )
+    if bad:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        interval = f"{left}{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}{right}"
+        raise ValueError(f"{name}: expected a value in {interval}, got {v}" + (f"; {hint}" if hint else ""))
+    return v
+
+
+def check_int(name: str, value, *, lo: int | None = None, hi: int | None = None) -> int:
+    """Validate an integer parameter (bools rejected) in [lo, hi] and return it."""
+    if isinstance(value, bool) or not isinstance(value, (numbers.Integral,)):
+        raise TypeError(f"{name}: expected an integer, got {describe(value)}")
+    v = int(value)
+    if (lo is not None and v < lo) or (hi is not None and v > hi):
+        raise ValueError(
+            f"{name}: expected an integer in [{'-inf' if lo is None else lo}, "
+            f"{'inf' if hi is None else hi}], got {v}"
+        )
+    return v

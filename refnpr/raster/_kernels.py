@@ -1,0 +1,555 @@
+"""numba kernels of the rasterizer. Private: inputs are validated by :mod:`refnpr.raster.rasterize`.
+
+Conventions shared by every kernel
+----------------------------------
+* Sample grid: ``spp = n * n`` samples per pixel laid out as an ``(n H) x (n W)`` image; sample
+  ``(sx, sy)`` has its centre at pixel coordinates ``((sx + 0.5) / n, (sy + 0.5) / n)``.
+* Fixed point: vertices are snapped to 1/256 pixel (8 sub-pixel bits). Edge functions are evaluated
+  in units of ``1 / (512 n)`` pixel, where sample centres are the integers ``512 s + 256`` and a
+  snapped vertex ``X / 256`` px is ``2 n X``; every product fits in int64 (the guard band bounds
+  the coordinates), so coverage is exact and deterministic.
+* Interpolation uses the exact float64 clip-space vertices: for triangle t,
+  ``lam[t] @ (sx, sy, 1)`` gives ``lambda'_i = b_i / w`` (perspective-correct barycentrics over w),
+  their sum ``Q = 1 / w`` and ``b_i = lambda'_i / Q``. Both P = sum(lambda'_i f_i) and Q are affine in
+  the sample position, so derivatives follow from the quotient rule.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import prange
+
+from refnpr._jit import njit, pnjit
+
+# Clip planes as (a, b, c, d): inside where a x + b y + c z + d w >= 0. Guard band G fills d for x, y.
+# Order: near, far, left, right, bottom, top.
+N_PLANES = 6
+MAX_POLY = 3 + N_PLANES  # Sutherland-Hodgman adds at most one vertex per plane
+
+
+@njit(inline="always")
+def _plane_dist(p, x, y, z, w, guard):
+    if p == 0:
+        return z + w  # near: z_ndc >= -1
+    if p == 1:
+        return w - z  # far: z_ndc <= 1
+    if p == 2:
+        return x + guard * w
+    if p == 3:
+        return guard * w - x
+    if p == 4:
+        return y + guard * w
+    return guard * w - y
+
+
+@njit(inline="always")
+def _snap(x, w, half_w, half_h, out, k):
+    """Project clip (x, y, w) to pixels and snap to 1/256 px (round half up). out[k], out[k+1]."""
+    sx = (x[0] / w + 1.0) * half_w
+    sy = (1.0 - x[1] / w) * half_h
+    out[k] = np.int64(math.floor(sx * 256.0 + 0.5))
+    out[k + 1] = np.int64(math.floor(sy * 256.0 + 0.5))
+
+
+@njit(inline="always")
+def _signed_area(c):
+    """Twice the signed area of snapped (X0, Y0, X1, Y1, X2, Y2), screen y down (int64)."""
+    return (c[2] - c[0]) * (c[5] - c[1]) - (c[3] - c[1]) * (c[4] - c[0])
+
+
+@njit(inline="always")
+def _lex_greater(a, b):
+    for i in range(4):
+        if a[i] > b[i]:
+            return True
+        if a[i] < b[i]:
+            return False
+    return False
+
+
+@njit
+def _clip_polygon(v0, v1, v2, guard, poly, tmp):
+    """Sutherland-Hodgman clip of a triangle against the six planes, in homogeneous clip space.
+
+    Edge intersections are computed from the lexicographically smaller endpoint so that two
+    triangles sharing an edge produce bit-identical clipped vertices (watertight clipping).
+    Returns the vertex count of the clipped polygon stored in ``poly`` (MAX_POLY, 4).
+    """
+    for j in range(4):
+        poly[0, j] = v0[j]
+        poly[1, j] = v1[j]
+        poly[2, j] = v2[j]
+    count = 3
+    a = np.empty(4)
+    b = np.empty(4)
+    for p in range(N_PLANES):
+        if count == 0:
+            return 0
+        out = 0
+        for i in range(count):
+            j = (i + 1) % count
+            da = _plane_dist(p, poly[i, 0], poly[i, 1], poly[i, 2], poly[i, 3], guard)
+            db = _plane_dist(p, poly[j, 0], poly[j, 1], poly[j, 2], poly[j, 3], guard)
+            if da >= 0.0:
+                for k in range(4):
+                    tmp[out, k] = poly[i, k]
+                out += 1
+            if (da >= 0.0) != (db >= 0.0):
+                # canonical order of the endpoints -> identical intersection for shared edges
+                if _lex_greater(poly[i], poly[j]):
+                    for k in range(4):
+                        a[k] = poly[j, k]
+                        b[k] = poly[i, k]
+                    dA, dB = db, da
+                else:
+                    for k in range(4):
+                        a[k] = poly[i, k]
+                        b[k] = poly[j, k]
+                    dA, dB = da, db
+                s = dA / (dA - dB)
+                for k in range(4):
+                    tmp[out, k] = a[k] + s * (b[k] - a[k])
+                out += 1
+        count = out
+        for i in range(count):
+            for k in range(4):
+                poly[i, k] = tmp[i, k]
+    return count
+
+
+@njit(inline="always")
+def _outcode_reject(c0, c1, c2, guard):
+    """True if all three vertices are outside one clip plane; also returns whether any is outside."""
+    any_out = False
+    for p in range(N_PLANES):
+        d0 = _plane_dist(p, c0[0], c0[1], c0[2], c0[3], guard)
+        d1 = _plane_dist(p, c1[0], c1[1], c1[2], c1[3], guard)
+        d2 = _plane_dist(p, c2[0], c2[1], c2[2], c2[3], guard)
+        if d0 < 0.0 and d1 < 0.0 and d2 < 0.0:
+            return True, True
+        if d0 < 0.0 or d1 < 0.0 or d2 < 0.0:
+            any_out = True
+    return False, any_out
+
+
+@njit(inline="always")
+def _keep(area, cull):
+    # Screen y points down, so a triangle counter-clockwise in NDC (front-facing in GL) has area < 0.
+    if area == 0:
+        return False
+    if cull == 1 and area > 0:
+        return False
+    return True
+
+
+@pnjit
+def setup_triangles(clip, faces, width, height, guard, cull, coords, status, lam, n):
+    """Per triangle: trivial reject, snapped screen coordinates (fast path) and the lam matrix.
+
+    status[t]: 0 rejected, 1 one primitive in coords[t], 2 needs clipping (see clip_triangles).
+    lam[t] (3, 3): rows i map (sx, sy, 1) of the sample grid to lambda'_i = b_i / w.
+    """
+    half_w = 0.5 * width
+    half_h = 0.5 * height
+    nw = n * width
+    nh = n * height
+    for t in prange(faces.shape[0]):
+        c0 = clip[faces[t, 0]]
+        c1 = clip[faces[t, 1]]
+        c2 = clip[faces[t, 2]]
+        reject, any_out = _outcode_reject(c0, c1, c2, guard)
+        status[t] = 0
+        if reject:
+            continue
+        # M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]]; lambda' = M^-1 (ndc_x, ndc_y, 1)
+        x0, x1, x2 = c0[0], c1[0], c2[0]
+        y0, y1, y2 = c0[1], c1[1], c2[1]
+        w0, w1, w2 = c0[3], c1[3], c2[3]
+        a00 = y1 * w2 - y2 * w1
+        a01 = x2 * w1 - x1 * w2
+        a02 = x1 * y2 - x2 * y1
+        a10 = y2 * w0 - y0 * w2
+        a11 = x0 * w2 - x2 * w0
+        a12 = x2 * y0 - x0 * y2
+        a20 = y0 * w1 - y1 * w0
+        a21 = x1 * w0 - x0 * w1
+        a22 = x0 * y1 - x1 * y0
+        det = x0 * a00 + x1 * a10 + x2 * a20
+        if det == 0.0 or not math.isfinite(det):
+            continue  # the triangle's plane passes through the eye: it projects to a line
+        inv = 1.0 / det
+        # (ndc_x, ndc_y, 1) = S (sx, sy, 1): ndc_x = 2 sx / nW + (1/nW - 1), ndc_y = -2 sy / nH + (1 - 1/nH)
+        sxx = 2.0 / nw
+        sx1 = 1.0 / nw - 1.0
+        syy = -2.0 / nh
+        sy1 = 1.0 - 1.0 / nh
+        lam[t, 0, 0] = a00 * inv * sxx
+        lam[t, 0, 1] = a01 * inv * syy
+        lam[t, 0, 2] = (a00 * sx1 + a01 * sy1 + a02) * inv
+        lam[t, 1, 0] = a10 * inv * sxx
+        lam[t, 1, 1] = a11 * inv * syy
+        lam[t, 1, 2] = (a10 * sx1 + a11 * sy1 + a12) * inv
+        lam[t, 2, 0] = a20 * inv * sxx
+        lam[t, 2, 1] = a21 * inv * syy
+        lam[t, 2, 2] = (a20 * sx1 + a21 * sy1 + a22) * inv
+        if any_out:
+            status[t] = 2
+            continue
+        _snap(c0[:2], w0, half_w, half_h, coords[t], 0)
+        _snap(c1[:2], w1, half_w, half_h, coords[t], 2)
+        _snap(c2[:2], w2, half_w, half_h, coords[t], 4)
+        if _keep(_signed_area(coords[t]), cull):
+            status[t] = 1
+
+
+@njit
+def clip_triangles(clip, faces, todo, width, height, guard, cull, max_out):
+    """Clip the triangles listed in ``todo`` (status 2); fan-triangulate and snap the result.
+
+    Returns (sub_coords (K, 6) int64, sub_parent (K,) int64, first (len(todo)+1,) int64), in the
+    order of ``todo`` so the output is deterministic.
+    """
+    half_w = 0.5 * width
+    half_h = 0.5 * height
+    sub = np.empty((max_out, 6), dtype=np.int64)
+    parent = np.empty(max_out, dtype=np.int64)
+    first = np.zeros(todo.shape[0] + 1, dtype=np.int64)
+    poly = np.empty((MAX_POLY + 1, 4))
+    tmp = np.empty((MAX_POLY + 1, 4))
+    pts = np.empty(2 * (MAX_POLY + 1), dtype=np.int64)
+    c = np.empty(6, dtype=np.int64)
+    k = 0
+    for i in range(todo.shape[0]):
+        t = todo[i]
+        first[i] = k
+        cnt = _clip_polygon(clip[faces[t, 0]], clip[faces[t, 1]], clip[faces[t, 2]], guard, poly, tmp)
+        for j in range(cnt):
+            _snap(poly[j, :2], poly[j, 3], half_w, half_h, pts, 2 * j)
+        for j in range(1, cnt - 1):
+            c[0] = pts[0]
+            c[1] = pts[1]
+            c[2] = pts[2 * j]
+            c[3] = pts[2 * j + 1]
+            c[4] = pts[2 * j + 2]
+            c[5] = pts[2 * j + 3]
+            if _keep(_signed_area(c), cull):
+                for q in range(6):
+                    sub[k, q] = c[q]
+                parent[k] = t
+                k += 1
+    first[todo.shape[0]] = k
+    return sub[:k].copy(), parent[:k].copy(), first
+
+
+@njit(inline="always")
+def _sample_bbox(c, n, nw, nh):
+    """Inclusive sample-index bounding box of snapped coords (1/256 px) on the n-times grid."""
+    xmin = min(c[0], min(c[2], c[4])) * 2 * n
+    xmax = max(c[0], max(c[2], c[4])) * 2 * n
+    ymin = min(c[1], min(c[3], c[5])) * 2 * n
+    ymax = max(c[1], max(c[3], c[5])) * 2 * n
+    # sample s has centre 512 s + 256 (units of 1/(512 n) px)
+    sx0 = -((-(xmin - 256)) // 512)
+    sx1 = (xmax - 256) // 512
+    sy0 = -((-(ymin - 256)) // 512)
+    sy1 = (ymax - 256) // 512
+    sx0 = max(sx0, 0)
+    sy0 = max(sy0, 0)
+    sx1 = min(sx1, nw - 1)
+    sy1 = min(sy1, nh - 1)
+    return sx0, sx1, sy0, sy1
+
+
+@pnjit
+def bin_count(prim_coords, n_prims_chunks, n, nw, nh, tile, tiles_x, tiles_y, counts):
+    """counts[c, tile] = how many primitives of chunk c touch each tile (parallel over chunks)."""
+    n_chunks = counts.shape[0]
+    total = prim_coords.shape[0]
+    for c in prange(n_chunks):
+        lo = c * n_prims_chunks
+        hi = min(total, lo + n_prims_chunks)
+        for p in range(lo, hi):
+            sx0, sx1, sy0, sy1 = _sample_bbox(prim_coords[p], n, nw, nh)
+            if sx0 > sx1 or sy0 > sy1:
+                continue
+            for ty in range(sy0 // tile, sy1 // tile + 1):
+                for tx in range(sx0 // tile, sx1 // tile + 1):
+                    counts[c, ty * tiles_x + tx] += 1
+
+
+@pnjit
+def bin_fill(prim_coords, n_prims_chunks, n, nw, nh, tile, tiles_x, tiles_y, offsets, lists):
+    """Write primitive indices into per-tile lists; each tile's list is in increasing order."""
+    n_chunks = offsets.shape[0]
+    total = prim_coords.shape[0]
+    for c in prange(n_chunks):
+        lo = c * n_prims_chunks
+        hi = min(total, lo + n_prims_chunks)
+        cursor = offsets[c].copy()
+        for p in range(lo, hi):
+            sx0, sx1, sy0, sy1 = _sample_bbox(prim_coords[p], n, nw, nh)
+            if sx0 > sx1 or sy0 > sy1:
+                continue
+            for ty in range(sy0 // tile, sy1 // tile + 1):
+                for tx in range(sx0 // tile, sx1 // tile + 1):
+                    k = ty * tiles_x + tx
+                    lists[cursor[k]] = p
+                    cursor[k] += 1
+
+
+@njit(inline="always")
+def _edge_setup(c, n, ia, ib, bias_out, k):
+    """Edge a->b of the canonical (area > 0) triangle: E(sx, sy) = A sx + B sy + C (int64),
+    inside where E - bias >= 0 (bias 0 on top-left edges, 1 otherwise)."""
+    ax = c[2 * ia] * 2 * n
+    ay = c[2 * ia + 1] * 2 * n
+    bx = c[2 * ib] * 2 * n
+    by = c[2 * ib + 1] * 2 * n
+    dx = bx - ax
+    dy = by - ay
+    A = -dy * 512
+    B = dx * 512
+    C = dx * (256 - ay) - dy * (256 - ax)
+    # Top-left rule for y-down screens with interior on the side where E > 0:
+    # left edges go up (dy < 0), top edges are horizontal going right (dy == 0, dx > 0).
+    top_left = dy < 0 or (dy == 0 and dx > 0)
+    bias_out[k] = 0 if top_left else 1
+    return A, B, C
+
+
+@njit(inline="always")
+def _canonical(src, dst):
+    """Copy snapped coords so that the signed area is positive (swap vertices 1 and 2)."""
+    for q in range(6):
+        dst[q] = src[q]
+    if _signed_area(src) < 0:
+        dst[2], dst[3], dst[4], dst[5] = src[4], src[5], src[2], src[3]
+
+
+@pnjit
+def raster_visibility(
+    prim_coords, prim_parent, lam, tile_first, tile_lists, n, nw, nh, tile, tiles_x, tri_id
+):
+    """Depth-tested visibility, one tile per task: tri_id (nH, nW) int32 gets the nearest parent
+    triangle index (-1 where empty). Depth is Q = 1/w from the exact vertices; larger Q is nearer;
+    ties keep the lower primitive index (lists are in increasing order), so the result is
+    independent of the thread count."""
+    n_tiles = tile_first.shape[0] - 1
+    for k in prange(n_tiles):
+        ty = k // tiles_x
+        tx = k - ty * tiles_x
+        x0 = tx * tile
+        y0 = ty * tile
+        x1 = min(x0 + tile, nw)
+        y1 = min(y0 + tile, nh)
+        qbuf = np.full((y1 - y0, x1 - x0), -np.inf)
+        ibuf = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
+        c = np.empty(6, dtype=np.int64)
+        bias = np.empty(3, dtype=np.int64)
+        for e in range(tile_first[k], tile_first[k + 1]):
+            p = tile_lists[e]
+            t = prim_parent[p]
+            _canonical(prim_coords[p], c)
+            A0, B0, C0 = _edge_setup(c, n, 1, 2, bias, 0)
+            A1, B1, C1 = _edge_setup(c, n, 2, 0, bias, 1)
+            A2, B2, C2 = _edge_setup(c, n, 0, 1, bias, 2)
+            sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
+            sx0 = max(sx0, x0)
+            sy0 = max(sy0, y0)
+            sx1 = min(sx1, x1 - 1)
+            sy1 = min(sy1, y1 - 1)
+            qa = lam[t, 0, 0] + lam[t, 1, 0] + lam[t, 2, 0]
+            qb = lam[t, 0, 1] + lam[t, 1, 1] + lam[t, 2, 1]
+            qc = lam[t, 0, 2] + lam[t, 1, 2] + lam[t, 2, 2]
+            for sy in range(sy0, sy1 + 1):
+                e0 = A0 * sx0 + B0 * sy + C0 - bias[0]
+                e1 = A1 * sx0 + B1 * sy + C1 - bias[1]
+                e2 = A2 * sx0 + B2 * sy + C2 - bias[2]
+                for sx in range(sx0, sx1 + 1):
+                    if e0 >= 0 and e1 >= 0 and e2 >= 0:
+                        q = qa * sx + qb * sy + qc
+                        if q > qbuf[sy - y0, sx - x0]:
+                            qbuf[sy - y0, sx - x0] = q
+                            ibuf[sy - y0, sx - x0] = t
+                    e0 += A0
+                    e1 += A1
+                    e2 += A2
+        for sy in range(y0, y1):
+            for sx in range(x0, x1):
+                tri_id[sy, sx] = ibuf[sy - y0, sx - x0]
+
+
+@pnjit
+def raster_count(prim_coords, tile_first, tile_lists, n, nw, nh, tile, tiles_x, count):
+    """Debug: count[sy, sx] = how many primitives claim each sample (no depth test)."""
+    n_tiles = tile_first.shape[0] - 1
+    for k in prange(n_tiles):
+        ty = k // tiles_x
+        tx = k - ty * tiles_x
+        x0 = tx * tile
+        y0 = ty * tile
+        x1 = min(x0 + tile, nw)
+        y1 = min(y0 + tile, nh)
+        c = np.empty(6, dtype=np.int64)
+        bias = np.empty(3, dtype=np.int64)
+        for e in range(tile_first[k], tile_first[k + 1]):
+            p = tile_lists[e]
+            _canonical(prim_coords[p], c)
+            A0, B0, C0 = _edge_setup(c, n, 1, 2, bias, 0)
+            A1, B1, C1 = _edge_setup(c, n, 2, 0, bias, 1)
+            A2, B2, C2 = _edge_setup(c, n, 0, 1, bias, 2)
+            sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
+            sx0 = max(sx0, x0)
+            sy0 = max(sy0, y0)
+            sx1 = min(sx1, x1 - 1)
+            sy1 = min(sy1, y1 - 1)
+            for sy in range(sy0, sy1 + 1):
+                for sx in range(sx0, sx1 + 1):
+                    if (
+                        A0 * sx + B0 * sy + C0 - bias[0] >= 0
+                        and A1 * sx + B1 * sy + C1 - bias[1] >= 0
+                        and A2 * sx + B2 * sy + C2 - bias[2] >= 0
+                    ):
+                        count[sy, sx] += 1
+
+
+# ---------------------------------------------------------------------------------------------
+# Interpolation kernels: one specialisation per channel family, so a channel that is not asked for
+# costs nothing and no per-pixel branch decides what to compute.
+# ---------------------------------------------------------------------------------------------
+
+
+@pnjit
+def interp_depth(tri_id, lam, depth):
+    """depth = w = 1 / Q (eye-space distance along the view axis); +inf where empty."""
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                depth[sy, sx] = np.inf
+                continue
+            q = 0.0
+            for i in range(3):
+                q += lam[t, i, 0] * sx + lam[t, i, 1] * sy + lam[t, i, 2]
+            depth[sy, sx] = 1.0 / q
+
+
+@pnjit
+def interp_bary(tri_id, lam, bary):
+    """Perspective-correct barycentrics b_i = lambda'_i / Q; 0 where empty."""
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                for i in range(3):
+                    bary[sy, sx, i] = 0.0
+                continue
+            l0 = lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2]
+            l1 = lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2]
+            l2 = lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2]
+            q = l0 + l1 + l2
+            bary[sy, sx, 0] = l0 / q
+            bary[sy, sx, 1] = l1 / q
+            bary[sy, sx, 2] = l2 / q
+
+
+@pnjit
+def interp_attr(tri_id, lam, faces, attr, fill, out):
+    """out (nH, nW, C) = perspective-correct interpolation of per-vertex attr (N, C)."""
+    nc = attr.shape[1]
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                for c in range(nc):
+                    out[sy, sx, c] = fill
+                continue
+            l0 = lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2]
+            l1 = lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2]
+            l2 = lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2]
+            q = l0 + l1 + l2
+            i0 = faces[t, 0]
+            i1 = faces[t, 1]
+            i2 = faces[t, 2]
+            for c in range(nc):
+                out[sy, sx, c] = (l0 * attr[i0, c] + l1 * attr[i1, c] + l2 * attr[i2, c]) / q
+
+
+@pnjit
+def interp_attr_deriv(tri_id, lam, faces, attr, n, out, out_dx, out_dy):
+    """As interp_attr, plus analytic per-pixel derivatives d/dx (right) and d/dy (down):
+    f = P / Q, df = (dP - f dQ) / Q, with d(sample)/d(pixel) = n."""
+    nc = attr.shape[1]
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                for c in range(nc):
+                    out[sy, sx, c] = 0.0
+                    out_dx[sy, sx, c] = 0.0
+                    out_dy[sy, sx, c] = 0.0
+                continue
+            l0 = lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2]
+            l1 = lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2]
+            l2 = lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2]
+            q = l0 + l1 + l2
+            qx = (lam[t, 0, 0] + lam[t, 1, 0] + lam[t, 2, 0]) * n
+            qy = (lam[t, 0, 1] + lam[t, 1, 1] + lam[t, 2, 1]) * n
+            i0 = faces[t, 0]
+            i1 = faces[t, 1]
+            i2 = faces[t, 2]
+            for c in range(nc):
+                f0 = attr[i0, c]
+                f1 = attr[i1, c]
+                f2 = attr[i2, c]
+                f = (l0 * f0 + l1 * f1 + l2 * f2) / q
+                px = (lam[t, 0, 0] * f0 + lam[t, 1, 0] * f1 + lam[t, 2, 0] * f2) * n
+                py = (lam[t, 0, 1] * f0 + lam[t, 1, 1] * f1 + lam[t, 2, 1] * f2) * n
+                out[sy, sx, c] = f
+                out_dx[sy, sx, c] = (px - f * qx) / q
+                out_dy[sy, sx, c] = (py - f * qy) / q
+
+
+@pnjit
+def interp_normal(tri_id, lam, faces, normals, out):
+    """Interpolated vertex normals renormalized to unit length; 0 where empty or degenerate."""
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                for c in range(3):
+                    out[sy, sx, c] = 0.0
+                continue
+            l0 = lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2]
+            l1 = lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2]
+            l2 = lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2]
+            i0 = faces[t, 0]
+            i1 = faces[t, 1]
+            i2 = faces[t, 2]
+            nx = l0 * normals[i0, 0] + l1 * normals[i1, 0] + l2 * normals[i2, 0]
+            ny = l0 * normals[i0, 1] + l1 * normals[i1, 1] + l2 * normals[i2, 1]
+            nz = l0 * normals[i0, 2] + l1 * normals[i1, 2] + l2 * normals[i2, 2]
+            length = math.sqrt(nx * nx + ny * ny + nz * nz)
+            if length > 0.0:
+                out[sy, sx, 0] = nx / length
+                out[sy, sx, 1] = ny / length
+                out[sy, sx, 2] = nz / length
+            else:
+                for c in range(3):
+                    out[sy, sx, c] = 0.0
+
+
+@pnjit
+def resolve_coverage(tri_id, n, coverage):
+    """coverage[y, x] = fraction of the n x n samples of pixel (x, y) covered by a triangle."""
+    inv = 1.0 / (n * n)
+    for y in prange(coverage.shape[0]):
+        for x in range(coverage.shape[1]):
+            k = 0
+            for j in range(n):
+                for i in range(n):
+                    if tri_id[y * n + j, x * n + i] >= 0:
+                        k += 1
+            coverage[y, x] = k * inv

@@ -1,0 +1,192 @@
+"""Triangle meshes as the rasterizer sees them: validated float64 arrays in one space."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+__all__ = ["Mesh", "RESERVED_NAMES"]
+
+#: Names that are G-buffer channels and therefore cannot be vertex attribute names.
+RESERVED_NAMES = frozenset(
+    {
+        "depth",
+        "ndc_z",
+        "tri_id",
+        "mesh_id",
+        "bary",
+        "position",
+        "normal",
+        "uv",
+        "duv_dx",
+        "duv_dy",
+        "lod",
+        "dyadic_scale",
+        "coverage",
+        "coverage_count",
+    }
+)
+
+
+def _as_float_array(name: str, value, ncols: int | None, nverts: int | None) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(
+            f"{name}: expected a numeric array, got {type(value).__name__}; "
+            "pass a numpy array of floats"
+        ) from exc
+    if ncols is not None:
+        if arr.ndim != 2 or arr.shape[1] != ncols:
+            raise ValueError(
+                f"{name}: expected shape (N, {ncols}), got {arr.shape}; "
+                f"reshape to one row of {ncols} values per vertex"
+            )
+    if nverts is not None and arr.shape[0] != nverts:
+        raise ValueError(
+            f"{name}: expected {nverts} rows (one per vertex), got {arr.shape[0]}; "
+            "give one value per vertex of `positions`"
+        )
+    if not np.all(np.isfinite(arr)):
+        bad = np.argwhere(~np.isfinite(arr))[0]
+        raise ValueError(
+            f"{name}: contains NaN or inf (first at index {tuple(int(i) for i in bad)}, "
+            f"value {arr[tuple(bad)]}); remove or repair non-finite vertices"
+        )
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """An indexed triangle mesh with optional per-vertex normals, uv and named attributes.
+
+    Parameters
+    ----------
+    positions : (N, 3) float64
+        Vertex positions.
+    faces : (M, 3) int64
+        Zero-based vertex indices, counter-clockwise seen from outside.
+    normals : (N, 3) float64, optional
+        Per-vertex normals (need not be unit length; they are renormalized per pixel).
+    uv : (N, 2) float64, optional
+        Texture coordinates.
+    attributes : mapping of str to (N,) or (N, C) float64, optional
+        Extra per-vertex attributes, interpolated perspective-correctly on request by name.
+    name : str
+        Label used in error messages and scene listings.
+
+    All arrays are validated on construction (shapes, finite values, face indices in range) and
+    stored as read-only contiguous float64/int64 copies.
+    """
+
+    positions: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray | None = None
+    uv: np.ndarray | None = None
+    attributes: Mapping[str, np.ndarray] = field(default_factory=dict)
+    name: str = "mesh"
+
+    def __post_init__(self) -> None:
+        pos = _as_float_array("positions", self.positions, 3, None)
+        if pos.shape[0] == 0:
+            raise ValueError(
+                f"positions: mesh {self.name!r} is empty (0 vertices); give at least 3 vertices"
+            )
+        try:
+            faces_in = np.asarray(self.faces)
+        except (TypeError, ValueError) as exc:
+            raise TypeError(f"faces: expected an integer array, got {type(self.faces).__name__}") from exc
+        if faces_in.ndim != 2 or faces_in.shape[1] != 3:
+            raise ValueError(
+                f"faces: expected shape (M, 3), got {faces_in.shape}; "
+                "triangulate polygons first (trimesh does this on load)"
+            )
+        if faces_in.shape[0] == 0:
+            raise ValueError(f"faces: mesh {self.name!r} has no triangles; give at least one face")
+        if faces_in.dtype.kind not in "iu":
+            if faces_in.dtype.kind == "f" and np.all(faces_in == np.round(faces_in)):
+                faces_in = faces_in.astype(np.int64)
+            else:
+                raise TypeError(f"faces: expected integer indices, got dtype {faces_in.dtype}")
+        faces = np.ascontiguousarray(faces_in, dtype=np.int64)
+        lo, hi = int(faces.min()), int(faces.max())
+        if lo < 0 or hi >= pos.shape[0]:
+            raise ValueError(
+                f"faces: index out of range (min {lo}, max {hi}) for {pos.shape[0]} vertices; "
+                "indices are zero-based and must be < len(positions)"
+            )
+        nv = pos.shape[0]
+        normals = None if self.normals is None else _as_float_array("normals", self.normals, 3, nv)
+        uv = None if self.uv is None else _as_float_array("uv", self.uv, 2, nv)
+        attrs: dict[str, np.ndarray] = {}
+        for key, val in dict(self.attributes).items():
+            if not isinstance(key, str) or not key.isidentifier():
+                raise ValueError(f"attributes: name {key!r} must be a Python identifier")
+            if key in RESERVED_NAMES:
+                raise ValueError(
+                    f"attributes: name {key!r} is a G-buffer channel name; rename the attribute "
+                    f"(reserved: {sorted(RESERVED_NAMES)})"
+                )
+            arr = _as_float_array(f"attributes[{key!r}]", val, None, nv)
+            if arr.ndim not in (1, 2):
+                raise ValueError(f"attributes[{key!r}]: expected shape (N,) or (N, C), got {arr.shape}")
+            attrs[key] = arr
+        for arr in (pos, faces, normals, uv, *attrs.values()):
+            if arr is not None:
+                arr.setflags(write=False)
+        object.__setattr__(self, "positions", np.ascontiguousarray(pos))
+        object.__setattr__(self, "faces", faces)
+        object.__setattr__(self, "normals", normals)
+        object.__setattr__(self, "uv", uv)
+        object.__setattr__(self, "attributes", attrs)
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.positions.shape[0])
+
+    @property
+    def n_faces(self) -> int:
+        return int(self.faces.shape[0])
+
+    def transformed(self, matrix: np.ndarray) -> Mesh:
+        """Return this mesh with positions mapped by a 4x4 affine ``matrix`` (normals by its
+        inverse transpose, renormalized). uv and attributes are carried unchanged.
+
+        Parameters
+        ----------
+        matrix : (4, 4) float64
+            Object-to-world transform; the last row must be (0, 0, 0, 1).
+        """
+        m = np.asarray(matrix, dtype=np.float64)
+        if m.shape != (4, 4) or not np.all(np.isfinite(m)):
+            raise ValueError(f"matrix: expected a finite (4, 4) array, got shape {m.shape}")
+        if not np.allclose(m[3], [0.0, 0.0, 0.0, 1.0]):
+            raise ValueError(f"matrix: last row must be (0, 0, 0, 1) for an affine transform, got {m[3]}")
+        lin = m[:3, :3]
+        if abs(np.linalg.det(lin)) < 1e-300:
+            raise ValueError("matrix: the 3x3 part is singular; a mesh transform must be invertible")
+        pos = self.positions @ lin.T + m[:3, 3]
+        normals = None
+        if self.normals is not None:
+            nrm = self.normals @ np.linalg.inv(lin)
+            length = np.linalg.norm(nrm, axis=1, keepdims=True)
+            normals = np.divide(nrm, length, out=np.zeros_like(nrm), where=length > 0)
+        faces = self.faces
+        if np.linalg.det(lin) < 0:  # a mirror flips winding; keep faces counter-clockwise
+            faces = faces[:, ::-1]
+        return Mesh(pos, faces, normals, self.uv, self.attributes, self.name)
+
+    def with_(self, **changes) -> Mesh:
+        """Copy with some fields replaced (``mesh.with_(uv=...)``)."""
+        fields = dict(
+            positions=self.positions,
+            faces=self.faces,
+            normals=self.normals,
+            uv=self.uv,
+            attributes=self.attributes,
+            name=self.name,
+        )
+        fields.update(changes)
+        return Mesh(**fields)
