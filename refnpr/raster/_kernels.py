@@ -56,7 +56,11 @@ def _snap(x, w, half_w, half_h, out, k):
 @njit(inline="always")
 def _signed_area(c):
     """Twice the signed area of snapped (X0, Y0, X1, Y1, X2, Y2), screen y down (int64)."""
-    return (c[2] - c[0]) * (c[5] - c[1]) - (c[3] - c[1]) * (c[4] - c[0])
+    x0 = np.int64(c[0])
+    y0 = np.int64(c[1])
+    return (np.int64(c[2]) - x0) * (np.int64(c[5]) - y0) - (np.int64(c[3]) - y0) * (
+        np.int64(c[4]) - x0
+    )
 
 
 @njit(inline="always")
@@ -144,12 +148,53 @@ def _keep(area, cull):
     return True
 
 
-@pnjit
-def setup_triangles(clip, faces, width, height, guard, cull, coords, status, lam, n):
-    """Per triangle: trivial reject, snapped screen coordinates (fast path) and the lam matrix.
+@njit(inline="always")
+def _lam_rows(c0, c1, c2, nw, nh):
+    """M^-1 S for M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]] (clip x, y, w of the exact vertices).
 
-    status[t]: 0 rejected, 1 one primitive in coords[t], 2 needs clipping (see clip_triangles).
-    lam[t] (3, 3): rows i map (sx, sy, 1) of the sample grid to lambda'_i = b_i / w.
+    Row i maps sample indices (sx, sy, 1) to lambda'_i = b_i / w. (ndc_x, ndc_y, 1) = S (sx, sy, 1)
+    with ndc_x = 2 sx / nW + (1/nW - 1) and ndc_y = -2 sy / nH + (1 - 1/nH) (sample centres, row 0
+    at the top). Returns (det, 9 coefficients row-major); det == 0 means the triangle's plane
+    passes through the eye.
+    """
+    x0, x1, x2 = c0[0], c1[0], c2[0]
+    y0, y1, y2 = c0[1], c1[1], c2[1]
+    w0, w1, w2 = c0[3], c1[3], c2[3]
+    a00 = y1 * w2 - y2 * w1
+    a01 = x2 * w1 - x1 * w2
+    a02 = x1 * y2 - x2 * y1
+    a10 = y2 * w0 - y0 * w2
+    a11 = x0 * w2 - x2 * w0
+    a12 = x2 * y0 - x0 * y2
+    a20 = y0 * w1 - y1 * w0
+    a21 = x1 * w0 - x0 * w1
+    a22 = x0 * y1 - x1 * y0
+    det = x0 * a00 + x1 * a10 + x2 * a20
+    inv = 1.0 / det if det != 0.0 else 0.0
+    sxx = 2.0 / nw
+    sx1 = 1.0 / nw - 1.0
+    syy = -2.0 / nh
+    sy1 = 1.0 - 1.0 / nh
+    return (
+        det,
+        a00 * inv * sxx,
+        a01 * inv * syy,
+        (a00 * sx1 + a01 * sy1 + a02) * inv,
+        a10 * inv * sxx,
+        a11 * inv * syy,
+        (a10 * sx1 + a11 * sy1 + a12) * inv,
+        a20 * inv * sxx,
+        a21 * inv * syy,
+        (a20 * sx1 + a21 * sy1 + a22) * inv,
+    )
+
+
+@pnjit
+def setup_triangles(clip, faces, width, height, guard, cull, n, coords, status, qplane):
+    """Per triangle: trivial reject, snapped screen coordinates (fast path) and the depth plane.
+
+    status[t]: 0 rejected, 1 one primitive in coords[t] (1/256 px), 2 needs clipping.
+    qplane[t] = (a, b, c): Q = 1/w = a sx + b sy + c on the sample grid (exact vertices).
     """
     half_w = 0.5 * width
     half_h = 0.5 * height
@@ -159,61 +204,67 @@ def setup_triangles(clip, faces, width, height, guard, cull, coords, status, lam
         c0 = clip[faces[t, 0]]
         c1 = clip[faces[t, 1]]
         c2 = clip[faces[t, 2]]
-        reject, any_out = _outcode_reject(c0, c1, c2, guard)
         status[t] = 0
+        reject, any_out = _outcode_reject(c0, c1, c2, guard)
         if reject:
             continue
-        # M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]]; lambda' = M^-1 (ndc_x, ndc_y, 1)
-        x0, x1, x2 = c0[0], c1[0], c2[0]
-        y0, y1, y2 = c0[1], c1[1], c2[1]
-        w0, w1, w2 = c0[3], c1[3], c2[3]
-        a00 = y1 * w2 - y2 * w1
-        a01 = x2 * w1 - x1 * w2
-        a02 = x1 * y2 - x2 * y1
-        a10 = y2 * w0 - y0 * w2
-        a11 = x0 * w2 - x2 * w0
-        a12 = x2 * y0 - x0 * y2
-        a20 = y0 * w1 - y1 * w0
-        a21 = x1 * w0 - x0 * w1
-        a22 = x0 * y1 - x1 * y0
-        det = x0 * a00 + x1 * a10 + x2 * a20
+        det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(c0, c1, c2, nw, nh)
         if det == 0.0 or not math.isfinite(det):
             continue  # the triangle's plane passes through the eye: it projects to a line
-        inv = 1.0 / det
-        # (ndc_x, ndc_y, 1) = S (sx, sy, 1): ndc_x = 2 sx / nW + (1/nW - 1), ndc_y = -2 sy / nH + (1 - 1/nH)
-        sxx = 2.0 / nw
-        sx1 = 1.0 / nw - 1.0
-        syy = -2.0 / nh
-        sy1 = 1.0 - 1.0 / nh
-        lam[t, 0, 0] = a00 * inv * sxx
-        lam[t, 0, 1] = a01 * inv * syy
-        lam[t, 0, 2] = (a00 * sx1 + a01 * sy1 + a02) * inv
-        lam[t, 1, 0] = a10 * inv * sxx
-        lam[t, 1, 1] = a11 * inv * syy
-        lam[t, 1, 2] = (a10 * sx1 + a11 * sy1 + a12) * inv
-        lam[t, 2, 0] = a20 * inv * sxx
-        lam[t, 2, 1] = a21 * inv * syy
-        lam[t, 2, 2] = (a20 * sx1 + a21 * sy1 + a22) * inv
+        qplane[t, 0] = l00 + l10 + l20
+        qplane[t, 1] = l01 + l11 + l21
+        qplane[t, 2] = l02 + l12 + l22
         if any_out:
             status[t] = 2
             continue
-        _snap(c0[:2], w0, half_w, half_h, coords[t], 0)
-        _snap(c1[:2], w1, half_w, half_h, coords[t], 2)
-        _snap(c2[:2], w2, half_w, half_h, coords[t], 4)
-        if _keep(_signed_area(coords[t]), cull):
+        row = coords[t]
+        _snap(c0, c0[3], half_w, half_h, row, 0)
+        _snap(c1, c1[3], half_w, half_h, row, 2)
+        _snap(c2, c2[3], half_w, half_h, row, 4)
+        if _keep(_signed_area(row), cull):
             status[t] = 1
+
+
+@njit
+def mark_visible(tri_id, mark):
+    """mark[t] = 1 for every triangle that owns at least one sample."""
+    for sy in range(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t >= 0:
+                mark[t] = 1
+
+
+@pnjit
+def lam_for_marked(clip, faces, mark, n, width, height, lam):
+    """lam[t] (3, 3) for every marked triangle (see _lam_rows); others are left untouched."""
+    nw = n * width
+    nh = n * height
+    for t in prange(faces.shape[0]):
+        if mark[t] == 0:
+            continue
+        r = _lam_rows(clip[faces[t, 0]], clip[faces[t, 1]], clip[faces[t, 2]], nw, nh)
+        lam[t, 0, 0] = r[1]
+        lam[t, 0, 1] = r[2]
+        lam[t, 0, 2] = r[3]
+        lam[t, 1, 0] = r[4]
+        lam[t, 1, 1] = r[5]
+        lam[t, 1, 2] = r[6]
+        lam[t, 2, 0] = r[7]
+        lam[t, 2, 1] = r[8]
+        lam[t, 2, 2] = r[9]
 
 
 @njit
 def clip_triangles(clip, faces, todo, width, height, guard, cull, max_out):
     """Clip the triangles listed in ``todo`` (status 2); fan-triangulate and snap the result.
 
-    Returns (sub_coords (K, 6) int64, sub_parent (K,) int64, first (len(todo)+1,) int64), in the
+    Returns (sub_coords (K, 6) int32, sub_parent (K,) int64, first (len(todo)+1,) int64), in the
     order of ``todo`` so the output is deterministic.
     """
     half_w = 0.5 * width
     half_h = 0.5 * height
-    sub = np.empty((max_out, 6), dtype=np.int64)
+    sub = np.empty((max_out, 6), dtype=np.int32)
     parent = np.empty(max_out, dtype=np.int64)
     first = np.zeros(todo.shape[0] + 1, dtype=np.int64)
     poly = np.empty((MAX_POLY + 1, 4))
@@ -224,7 +275,9 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, max_out):
     for i in range(todo.shape[0]):
         t = todo[i]
         first[i] = k
-        cnt = _clip_polygon(clip[faces[t, 0]], clip[faces[t, 1]], clip[faces[t, 2]], guard, poly, tmp)
+        cnt = _clip_polygon(
+            clip[faces[t, 0]], clip[faces[t, 1]], clip[faces[t, 2]], guard, poly, tmp
+        )
         for j in range(cnt):
             _snap(poly[j, :2], poly[j, 3], half_w, half_h, pts, 2 * j)
         for j in range(1, cnt - 1):
@@ -245,97 +298,127 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, max_out):
 
 @njit(inline="always")
 def _sample_bbox(c, n, nw, nh):
-    """Inclusive sample-index bounding box of snapped coords (1/256 px) on the n-times grid."""
-    xmin = min(c[0], min(c[2], c[4])) * 2 * n
-    xmax = max(c[0], max(c[2], c[4])) * 2 * n
-    ymin = min(c[1], min(c[3], c[5])) * 2 * n
-    ymax = max(c[1], max(c[3], c[5])) * 2 * n
-    # sample s has centre 512 s + 256 (units of 1/(512 n) px)
-    sx0 = -((-(xmin - 256)) // 512)
-    sx1 = (xmax - 256) // 512
-    sy0 = -((-(ymin - 256)) // 512)
-    sy1 = (ymax - 256) // 512
-    sx0 = max(sx0, 0)
-    sy0 = max(sy0, 0)
-    sx1 = min(sx1, nw - 1)
-    sy1 = min(sy1, nh - 1)
+    """Inclusive sample-index bounding box of snapped coords (1/256 px) on the n-times grid.
+
+    In units of 1/(512 n) px a snapped coordinate X is 2 n X and sample s has its centre at
+    512 s + 256, so the first sample right of xmin is ceil((xmin - 256) / 512) (shifts floor).
+    """
+    xmin = np.int64(min(c[0], min(c[2], c[4]))) * 2 * n
+    xmax = np.int64(max(c[0], max(c[2], c[4]))) * 2 * n
+    ymin = np.int64(min(c[1], min(c[3], c[5]))) * 2 * n
+    ymax = np.int64(max(c[1], max(c[3], c[5]))) * 2 * n
+    sx0 = max(-((256 - xmin) >> 9), 0)
+    sx1 = min((xmax - 256) >> 9, nw - 1)
+    sy0 = max(-((256 - ymin) >> 9), 0)
+    sy1 = min((ymax - 256) >> 9, nh - 1)
     return sx0, sx1, sy0, sy1
 
 
+@njit(inline="always")
+def _prim(ref, coords, sub):
+    """Snapped coords of a primitive reference: ref < M is a whole triangle, else sub-primitive."""
+    m = coords.shape[0]
+    if ref < m:
+        return coords[ref]
+    return sub[ref - m]
+
+
 @pnjit
-def bin_count(prim_coords, n_prims_chunks, n, nw, nh, tile, tiles_x, tiles_y, counts):
-    """counts[c, tile] = how many primitives of chunk c touch each tile (parallel over chunks)."""
-    n_chunks = counts.shape[0]
-    total = prim_coords.shape[0]
-    for c in prange(n_chunks):
-        lo = c * n_prims_chunks
-        hi = min(total, lo + n_prims_chunks)
-        for p in range(lo, hi):
-            sx0, sx1, sy0, sy1 = _sample_bbox(prim_coords[p], n, nw, nh)
-            if sx0 > sx1 or sy0 > sy1:
+def bin_count(status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, tiles_x, counts):
+    """counts[c, tile] = how many primitives of triangle chunk c touch each tile.
+
+    Primitives are whole triangles (status 1) or the fan pieces of clipped ones (status 2, listed
+    in ``todo`` with their pieces sub[sub_first[i]:sub_first[i + 1]]).
+    """
+    m = status.shape[0]
+    for c in prange(counts.shape[0]):
+        lo = c * chunk
+        hi = min(m, lo + chunk)
+        cur = np.searchsorted(todo, lo)
+        for t in range(lo, hi):
+            st = status[t]
+            if st == 0:
                 continue
-            for ty in range(sy0 // tile, sy1 // tile + 1):
-                for tx in range(sx0 // tile, sx1 // tile + 1):
-                    counts[c, ty * tiles_x + tx] += 1
+            if st == 1:
+                first, last = t, t + 1
+            else:
+                first, last = m + sub_first[cur], m + sub_first[cur + 1]
+                cur += 1
+            for ref in range(first, last):
+                sx0, sx1, sy0, sy1 = _sample_bbox(_prim(ref, coords, sub), n, nw, nh)
+                if sx0 > sx1 or sy0 > sy1:
+                    continue
+                for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
+                    for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
+                        counts[c, ty * tiles_x + tx] += 1
 
 
 @pnjit
-def bin_fill(prim_coords, n_prims_chunks, n, nw, nh, tile, tiles_x, tiles_y, offsets, lists):
-    """Write primitive indices into per-tile lists; each tile's list is in increasing order."""
-    n_chunks = offsets.shape[0]
-    total = prim_coords.shape[0]
-    for c in prange(n_chunks):
-        lo = c * n_prims_chunks
-        hi = min(total, lo + n_prims_chunks)
+def bin_fill(
+    status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, tiles_x, offsets, lists
+):
+    """Write primitive references into per-tile lists (same traversal as bin_count), so every
+    tile's list is in increasing triangle order whatever the thread count."""
+    m = status.shape[0]
+    for c in prange(offsets.shape[0]):
+        lo = c * chunk
+        hi = min(m, lo + chunk)
+        cur = np.searchsorted(todo, lo)
         cursor = offsets[c].copy()
-        for p in range(lo, hi):
-            sx0, sx1, sy0, sy1 = _sample_bbox(prim_coords[p], n, nw, nh)
-            if sx0 > sx1 or sy0 > sy1:
+        for t in range(lo, hi):
+            st = status[t]
+            if st == 0:
                 continue
-            for ty in range(sy0 // tile, sy1 // tile + 1):
-                for tx in range(sx0 // tile, sx1 // tile + 1):
-                    k = ty * tiles_x + tx
-                    lists[cursor[k]] = p
-                    cursor[k] += 1
+            if st == 1:
+                first, last = t, t + 1
+            else:
+                first, last = m + sub_first[cur], m + sub_first[cur + 1]
+                cur += 1
+            for ref in range(first, last):
+                sx0, sx1, sy0, sy1 = _sample_bbox(_prim(ref, coords, sub), n, nw, nh)
+                if sx0 > sx1 or sy0 > sy1:
+                    continue
+                for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
+                    for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
+                        k = ty * tiles_x + tx
+                        lists[cursor[k]] = ref
+                        cursor[k] += 1
 
 
 @njit(inline="always")
-def _edge_setup(c, n, ia, ib, bias_out, k):
-    """Edge a->b of the canonical (area > 0) triangle: E(sx, sy) = A sx + B sy + C (int64),
-    inside where E - bias >= 0 (bias 0 on top-left edges, 1 otherwise)."""
+def _edge_setup(c, n, ia, ib):
+    """Edge a->b of the canonical (area > 0) triangle: E(sx, sy) = A sx + B sy + C (int64), with
+    the top-left bias folded into C so that a sample is inside where E >= 0 for all three edges."""
     ax = c[2 * ia] * 2 * n
     ay = c[2 * ia + 1] * 2 * n
     bx = c[2 * ib] * 2 * n
     by = c[2 * ib + 1] * 2 * n
     dx = bx - ax
     dy = by - ay
-    A = -dy * 512
-    B = dx * 512
-    C = dx * (256 - ay) - dy * (256 - ax)
-    # Top-left rule for y-down screens with interior on the side where E > 0:
-    # left edges go up (dy < 0), top edges are horizontal going right (dy == 0, dx > 0).
-    top_left = dy < 0 or (dy == 0 and dx > 0)
-    bias_out[k] = 0 if top_left else 1
-    return A, B, C
+    # Top-left rule for y-down screens with the interior where E > 0: left edges go up
+    # (dy < 0), top edges are horizontal going right (dy == 0, dx > 0); others exclude E == 0.
+    bias = 0 if (dy < 0 or (dy == 0 and dx > 0)) else 1
+    return -dy * 512, dx * 512, dx * (256 - ay) - dy * (256 - ax) - bias
 
 
 @njit(inline="always")
 def _canonical(src, dst):
-    """Copy snapped coords so that the signed area is positive (swap vertices 1 and 2)."""
+    """Copy snapped coords (as int64) so that the signed area is positive (swap vertices 1, 2)."""
     for q in range(6):
         dst[q] = src[q]
-    if _signed_area(src) < 0:
+    if _signed_area(dst) < 0:
         dst[2], dst[3], dst[4], dst[5] = src[4], src[5], src[2], src[3]
 
 
 @pnjit
 def raster_visibility(
-    prim_coords, prim_parent, lam, tile_first, tile_lists, n, nw, nh, tile, tiles_x, tri_id
+    coords, sub, sub_parent, qplane, tile_first, tile_lists, n, nw, nh, tile, tiles_x, tri_id
 ):
     """Depth-tested visibility, one tile per task: tri_id (nH, nW) int32 gets the nearest parent
-    triangle index (-1 where empty). Depth is Q = 1/w from the exact vertices; larger Q is nearer;
-    ties keep the lower primitive index (lists are in increasing order), so the result is
-    independent of the thread count."""
+    triangle index (-1 where empty). Depth is Q = 1/w of the exact vertices (larger is nearer);
+    ties keep the earlier primitive (lists are in increasing triangle order), so the result is
+    independent of the thread count and of the tile size."""
+    m = coords.shape[0]
     n_tiles = tile_first.shape[0] - 1
     for k in prange(n_tiles):
         ty = k // tiles_x
@@ -347,28 +430,27 @@ def raster_visibility(
         qbuf = np.full((y1 - y0, x1 - x0), -np.inf)
         ibuf = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
         c = np.empty(6, dtype=np.int64)
-        bias = np.empty(3, dtype=np.int64)
         for e in range(tile_first[k], tile_first[k + 1]):
-            p = tile_lists[e]
-            t = prim_parent[p]
-            _canonical(prim_coords[p], c)
-            A0, B0, C0 = _edge_setup(c, n, 1, 2, bias, 0)
-            A1, B1, C1 = _edge_setup(c, n, 2, 0, bias, 1)
-            A2, B2, C2 = _edge_setup(c, n, 0, 1, bias, 2)
+            ref = tile_lists[e]
+            t = ref if ref < m else sub_parent[ref - m]
+            _canonical(_prim(ref, coords, sub), c)
             sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
             sx0 = max(sx0, x0)
             sy0 = max(sy0, y0)
             sx1 = min(sx1, x1 - 1)
             sy1 = min(sy1, y1 - 1)
-            qa = lam[t, 0, 0] + lam[t, 1, 0] + lam[t, 2, 0]
-            qb = lam[t, 0, 1] + lam[t, 1, 1] + lam[t, 2, 1]
-            qc = lam[t, 0, 2] + lam[t, 1, 2] + lam[t, 2, 2]
+            A0, B0, C0 = _edge_setup(c, n, 1, 2)
+            A1, B1, C1 = _edge_setup(c, n, 2, 0)
+            A2, B2, C2 = _edge_setup(c, n, 0, 1)
+            qa = qplane[t, 0]
+            qb = qplane[t, 1]
+            qc = qplane[t, 2]
             for sy in range(sy0, sy1 + 1):
-                e0 = A0 * sx0 + B0 * sy + C0 - bias[0]
-                e1 = A1 * sx0 + B1 * sy + C1 - bias[1]
-                e2 = A2 * sx0 + B2 * sy + C2 - bias[2]
+                e0 = A0 * sx0 + B0 * sy + C0
+                e1 = A1 * sx0 + B1 * sy + C1
+                e2 = A2 * sx0 + B2 * sy + C2
                 for sx in range(sx0, sx1 + 1):
-                    if e0 >= 0 and e1 >= 0 and e2 >= 0:
+                    if (e0 | e1 | e2) >= 0:
                         q = qa * sx + qb * sy + qc
                         if q > qbuf[sy - y0, sx - x0]:
                             qbuf[sy - y0, sx - x0] = q
@@ -382,7 +464,7 @@ def raster_visibility(
 
 
 @pnjit
-def raster_count(prim_coords, tile_first, tile_lists, n, nw, nh, tile, tiles_x, count):
+def raster_count(coords, sub, tile_first, tile_lists, n, nw, nh, tile, tiles_x, count):
     """Debug: count[sy, sx] = how many primitives claim each sample (no depth test)."""
     n_tiles = tile_first.shape[0] - 1
     for k in prange(n_tiles):
@@ -393,25 +475,18 @@ def raster_count(prim_coords, tile_first, tile_lists, n, nw, nh, tile, tiles_x, 
         x1 = min(x0 + tile, nw)
         y1 = min(y0 + tile, nh)
         c = np.empty(6, dtype=np.int64)
-        bias = np.empty(3, dtype=np.int64)
         for e in range(tile_first[k], tile_first[k + 1]):
-            p = tile_lists[e]
-            _canonical(prim_coords[p], c)
-            A0, B0, C0 = _edge_setup(c, n, 1, 2, bias, 0)
-            A1, B1, C1 = _edge_setup(c, n, 2, 0, bias, 1)
-            A2, B2, C2 = _edge_setup(c, n, 0, 1, bias, 2)
+            _canonical(_prim(tile_lists[e], coords, sub), c)
             sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
-            sx0 = max(sx0, x0)
-            sy0 = max(sy0, y0)
-            sx1 = min(sx1, x1 - 1)
-            sy1 = min(sy1, y1 - 1)
-            for sy in range(sy0, sy1 + 1):
-                for sx in range(sx0, sx1 + 1):
-                    if (
-                        A0 * sx + B0 * sy + C0 - bias[0] >= 0
-                        and A1 * sx + B1 * sy + C1 - bias[1] >= 0
-                        and A2 * sx + B2 * sy + C2 - bias[2] >= 0
-                    ):
+            A0, B0, C0 = _edge_setup(c, n, 1, 2)
+            A1, B1, C1 = _edge_setup(c, n, 2, 0)
+            A2, B2, C2 = _edge_setup(c, n, 0, 1)
+            for sy in range(max(sy0, y0), min(sy1, y1 - 1) + 1):
+                for sx in range(max(sx0, x0), min(sx1, x1 - 1) + 1):
+                    e0 = A0 * sx + B0 * sy + C0
+                    e1 = A1 * sx + B1 * sy + C1
+                    e2 = A2 * sx + B2 * sy + C2
+                    if (e0 | e1 | e2) >= 0:
                         count[sy, sx] += 1
 
 
@@ -422,18 +497,15 @@ def raster_count(prim_coords, tile_first, tile_lists, n, nw, nh, tile, tiles_x, 
 
 
 @pnjit
-def interp_depth(tri_id, lam, depth):
+def interp_depth(tri_id, qplane, depth):
     """depth = w = 1 / Q (eye-space distance along the view axis); +inf where empty."""
     for sy in prange(tri_id.shape[0]):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
             if t < 0:
                 depth[sy, sx] = np.inf
-                continue
-            q = 0.0
-            for i in range(3):
-                q += lam[t, i, 0] * sx + lam[t, i, 1] * sy + lam[t, i, 2]
-            depth[sy, sx] = 1.0 / q
+            else:
+                depth[sy, sx] = 1.0 / (qplane[t, 0] * sx + qplane[t, 1] * sy + qplane[t, 2])
 
 
 @pnjit

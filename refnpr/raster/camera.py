@@ -81,15 +81,21 @@ class Camera:
         near = _real("near", near)
         far = _real("far", far)
         if not 0.0 < fov_y < 180.0:
-            raise ValueError(f"fov_y: expected degrees in (0, 180), got {fov_y}; typical values are 30-60")
+            raise ValueError(
+                f"fov_y: expected degrees in (0, 180), got {fov_y}; typical values are 30-60"
+            )
         if near <= 0.0:
             raise ValueError(f"near: expected a positive clip distance, got {near}; use e.g. 0.1")
         if far <= near:
             raise ValueError(f"far: must be greater than near ({near}), got {far}")
         forward = target - eye
         if np.linalg.norm(forward) == 0.0:
-            raise ValueError(f"target: equals eye {eye.tolist()}; the camera needs a view direction")
-        if np.linalg.norm(np.cross(forward, up)) <= 1e-12 * np.linalg.norm(forward) * np.linalg.norm(up):
+            raise ValueError(
+                f"target: equals eye {eye.tolist()}; the camera needs a view direction"
+            )
+        if np.linalg.norm(np.cross(forward, up)) <= 1e-12 * np.linalg.norm(
+            forward
+        ) * np.linalg.norm(up):
             raise ValueError(
                 f"up: {up.tolist()} is parallel to the view direction {forward.tolist()}; "
                 "choose an up vector that is not along the line of sight"
@@ -156,5 +162,11 @@ class Camera:
         if np.linalg.norm(right) > 0:
             right /= np.linalg.norm(right)
             e = math.radians(_real("elevation_deg", elevation_deg))
-            off = off * math.cos(e) + np.cross(right, off) * math.sin(e) + right * np.dot(right, off) * (1 - math.cos(e))
-        return Camera.look_at(self.target + off, self.target, self.up, self.fov_y, self.near, self.far)
+            off = (
+                off * math.cos(e)
+                + np.cross(right, off) * math.sin(e)
+                + right * np.dot(right, off) * (1 - math.cos(e))
+            )
+        return Camera.look_at(
+            self.target + off, self.target, self.up, self.fov_y, self.near, self.far
+        )

@@ -23,7 +23,10 @@ BUILTIN_CHANNELS: dict[str, tuple[int, str]] = {
     "uv": (2, "perspective-correct texture coordinates"),
     "duv_dx": (2, "analytic d(uv)/dx per pixel (x to the right)"),
     "duv_dy": (2, "analytic d(uv)/dy per pixel (y downward)"),
-    "lod": (0, "GL isotropic LOD log2(rho) for `texture_size` (rho = max footprint length in texels)"),
+    "lod": (
+        0,
+        "GL isotropic LOD log2(rho) for `texture_size` (rho = max footprint length in texels)",
+    ),
     "dyadic_scale": (0, "Veryovka eq. 5: s = log2(d / w), d = 1/|grad v| px, w = `line_period`"),
     "coverage": (0, "pixel-resolution fraction of the n x n samples covered (H, W)"),
     "coverage_count": (0, "debug: int32 number of primitives claiming each sample, no depth test"),

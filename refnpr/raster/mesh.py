@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 import numpy as np
 
@@ -97,7 +97,9 @@ class Mesh:
         try:
             faces_in = np.asarray(self.faces)
         except (TypeError, ValueError) as exc:
-            raise TypeError(f"faces: expected an integer array, got {type(self.faces).__name__}") from exc
+            raise TypeError(
+                f"faces: expected an integer array, got {type(self.faces).__name__}"
+            ) from exc
         if faces_in.ndim != 2 or faces_in.shape[1] != 3:
             raise ValueError(
                 f"faces: expected shape (M, 3), got {faces_in.shape}; "
@@ -131,7 +133,9 @@ class Mesh:
                 )
             arr = _as_float_array(f"attributes[{key!r}]", val, None, nv)
             if arr.ndim not in (1, 2):
-                raise ValueError(f"attributes[{key!r}]: expected shape (N,) or (N, C), got {arr.shape}")
+                raise ValueError(
+                    f"attributes[{key!r}]: expected shape (N,) or (N, C), got {arr.shape}"
+                )
             attrs[key] = arr
         for arr in (pos, faces, normals, uv, *attrs.values()):
             if arr is not None:
@@ -163,10 +167,14 @@ class Mesh:
         if m.shape != (4, 4) or not np.all(np.isfinite(m)):
             raise ValueError(f"matrix: expected a finite (4, 4) array, got shape {m.shape}")
         if not np.allclose(m[3], [0.0, 0.0, 0.0, 1.0]):
-            raise ValueError(f"matrix: last row must be (0, 0, 0, 1) for an affine transform, got {m[3]}")
+            raise ValueError(
+                f"matrix: last row must be (0, 0, 0, 1) for an affine transform, got {m[3]}"
+            )
         lin = m[:3, :3]
         if abs(np.linalg.det(lin)) < 1e-300:
-            raise ValueError("matrix: the 3x3 part is singular; a mesh transform must be invertible")
+            raise ValueError(
+                "matrix: the 3x3 part is singular; a mesh transform must be invertible"
+            )
         pos = self.positions @ lin.T + m[:3, 3]
         normals = None
         if self.normals is not None:

@@ -110,11 +110,15 @@ def _concat(meshes: list[Mesh], key: str, what: str) -> np.ndarray:
                 "'box'|'spherical'|'cylindrical'))",
                 "normals": "give the mesh vertex normals (e.g. trimesh's vertex_normals)",
             }.get(key, f"add attributes={{{key!r}: ...}} to the mesh")
-            raise ValueError(f"channels: {what} requested but mesh {m.name!r} has no {key}; {remedy}")
+            raise ValueError(
+                f"channels: {what} requested but mesh {m.name!r} has no {key}; {remedy}"
+            )
         arrays.append(a.reshape(a.shape[0], -1))
     ncols = {a.shape[1] for a in arrays}
     if len(ncols) != 1:
-        raise ValueError(f"channels: attribute {key!r} has different widths across meshes: {sorted(ncols)}")
+        raise ValueError(
+            f"channels: attribute {key!r} has different widths across meshes: {sorted(ncols)}"
+        )
     return np.ascontiguousarray(np.concatenate(arrays), dtype=np.float64)
 
 
@@ -178,6 +182,8 @@ def rasterize(
     height = _check_int("height", height, 1)
     n = _spp_side(spp)
     tile = _check_int("tile", tile, 4)
+    if tile & (tile - 1):
+        raise ValueError(f"tile: expected a power of two (8, 16, 32, 64), got {tile}")
     dtype = np.dtype(dtype)
     if dtype not in (np.float32, np.float64):
         raise TypeError(f"dtype: expected numpy.float32 or numpy.float64, got {dtype}")
@@ -211,10 +217,12 @@ def rasterize(
         )
 
     # ---- vertex stage (numpy) -------------------------------------------------------------
-    positions = np.concatenate([m.positions for m in meshes])
-    offsets = np.cumsum([0] + [m.n_vertices for m in meshes])
-    faces = np.concatenate([m.faces + o for m, o in zip(meshes, offsets[:-1], strict=True)])
-    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    if len(meshes) == 1:
+        positions, faces = meshes[0].positions, meshes[0].faces
+    else:
+        positions = np.concatenate([m.positions for m in meshes])
+        offsets = np.cumsum([0] + [m.n_vertices for m in meshes])
+        faces = np.concatenate([m.faces + o for m, o in zip(meshes, offsets[:-1], strict=True)])
     first_tri = np.cumsum([0] + [m.n_faces for m in meshes]).astype(np.int64)
     vp = camera.projection_matrix(width, height) @ camera.view_matrix()
     clip = np.ascontiguousarray(positions @ vp[:, :3].T + vp[:, 3])  # (N, 4) clip coordinates
@@ -223,47 +231,41 @@ def rasterize(
     # ---- triangle setup, clipping, binning ---------------------------------------------------
     t0 = time.perf_counter()
     m_tris = faces.shape[0]
-    coords = np.empty((m_tris, 6), dtype=np.int64)
+    coords = np.empty((m_tris, 6), dtype=np.int32)
     status = np.empty(m_tris, dtype=np.int8)
-    lam = np.empty((m_tris, 3, 3), dtype=np.float64)
-    K.setup_triangles(clip, faces, width, height, guard, int(cull_backfaces), coords, status, lam, n)
-    fast = np.flatnonzero(status == 1)
+    qplane = np.empty((m_tris, 3), dtype=np.float64)
+    cull = int(cull_backfaces)
+    K.setup_triangles(clip, faces, width, height, guard, cull, n, coords, status, qplane)
     todo = np.flatnonzero(status == 2)
-    if todo.size:
-        sub, sub_parent, _ = K.clip_triangles(
-            clip, faces, todo, width, height, guard, int(cull_backfaces), todo.size * (K.MAX_POLY - 2)
-        )
-        prim_coords = np.concatenate([coords[fast], sub])
-        prim_parent = np.concatenate([fast, sub_parent])
-        order = np.argsort(prim_parent, kind="stable")
-        prim_coords = np.ascontiguousarray(prim_coords[order])
-        prim_parent = np.ascontiguousarray(prim_parent[order])
-    else:
-        prim_coords = np.ascontiguousarray(coords[fast])
-        prim_parent = fast
+    sub, sub_parent, sub_first = K.clip_triangles(
+        clip, faces, todo, width, height, guard, cull, max(1, todo.size * (K.MAX_POLY - 2))
+    )
     timings["setup"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
+    shift = tile.bit_length() - 1
     tiles_x = -(-nw // tile)
     tiles_y = -(-nh // tile)
     n_tiles = tiles_x * tiles_y
-    n_prims = prim_coords.shape[0]
-    per_chunk = max(1, -(-n_prims // _BIN_CHUNKS))
+    chunk = max(1, -(-m_tris // _BIN_CHUNKS))
     counts = np.zeros((_BIN_CHUNKS, n_tiles), dtype=np.int64)
-    K.bin_count(prim_coords, per_chunk, n, nw, nh, tile, tiles_x, tiles_y, counts)
-    # tile-major, chunk-minor offsets: each tile's list is the chunks' lists in chunk order
-    flat = counts.T.ravel()
-    starts = np.concatenate([[0], np.cumsum(flat)])
-    offsets_ct = np.ascontiguousarray(starts[:-1].reshape(n_tiles, _BIN_CHUNKS).T)
+    K.bin_count(status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, tiles_x, counts)
+    # tile-major, chunk-minor: a tile's list is its chunks' lists in chunk (= triangle) order
+    starts = np.concatenate([[0], np.cumsum(counts.T.ravel())])
+    offsets = np.ascontiguousarray(starts[:-1].reshape(n_tiles, _BIN_CHUNKS).T)
     tile_first = np.ascontiguousarray(starts[::_BIN_CHUNKS])  # (n_tiles + 1,)
     lists = np.empty(int(starts[-1]), dtype=np.int64)
-    K.bin_fill(prim_coords, per_chunk, n, nw, nh, tile, tiles_x, tiles_y, offsets_ct, lists)
+    K.bin_fill(
+        status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, tiles_x, offsets, lists
+    )
     timings["bin"] = time.perf_counter() - t0
 
     # ---- visibility ------------------------------------------------------------------------
     t0 = time.perf_counter()
     tri_id = np.empty((nh, nw), dtype=np.int32)
-    K.raster_visibility(prim_coords, prim_parent, lam, tile_first, lists, n, nw, nh, tile, tiles_x, tri_id)
+    K.raster_visibility(
+        coords, sub, sub_parent, qplane, tile_first, lists, n, nw, nh, tile, tiles_x, tri_id
+    )
     timings["visibility"] = time.perf_counter() - t0
 
     # ---- channels ----------------------------------------------------------------------------
@@ -273,7 +275,7 @@ def rasterize(
         out["tri_id"] = tri_id
     if "coverage_count" in wanted:
         cc = np.zeros((nh, nw), dtype=np.int32)
-        K.raster_count(prim_coords, tile_first, lists, n, nw, nh, tile, tiles_x, cc)
+        K.raster_count(coords, sub, tile_first, lists, n, nw, nh, tile, tiles_x, cc)
         out["coverage_count"] = cc
     if "mesh_id" in wanted:
         mesh_id = np.searchsorted(first_tri, tri_id, side="right").astype(np.int32) - 1
@@ -283,9 +285,15 @@ def rasterize(
         cov = np.empty((height, width), dtype=dtype)
         K.resolve_coverage(tri_id, n, cov)
         out["coverage"] = cov
+    if wanted - {"tri_id", "coverage_count", "mesh_id", "coverage", "depth"}:
+        # exact perspective-correct barycentric planes, only for triangles that own a sample
+        mark = np.zeros(m_tris, dtype=np.uint8)
+        K.mark_visible(tri_id, mark)
+        lam = np.empty((m_tris, 3, 3), dtype=np.float64)
+        K.lam_for_marked(clip, faces, mark, n, width, height, lam)
     if "depth" in wanted or "ndc_z" in wanted:
         depth = np.empty((nh, nw), dtype=np.float64 if "ndc_z" in wanted else dtype)
-        K.interp_depth(tri_id, lam, depth)
+        K.interp_depth(tri_id, qplane, depth)
         if "ndc_z" in wanted:
             zc = np.empty((nh, nw, 1), dtype=np.float64)
             K.interp_attr(tri_id, lam, faces, np.ascontiguousarray(clip[:, 2:3]), 0.0, zc)
@@ -312,7 +320,9 @@ def rasterize(
             return
         values = positions if values_key == "position" else _concat(meshes, values_key, base)
         vals = np.empty((nh, nw, values.shape[1]), dtype=dtype)
-        squeeze = values_key not in ("uv", "position") and meshes[0].attributes[values_key].ndim == 1
+        squeeze = (
+            values_key not in ("uv", "position") and meshes[0].attributes[values_key].ndim == 1
+        )
         results = {base: vals}
         if need_d:
             dx, dy = np.empty_like(vals), np.empty_like(vals)
