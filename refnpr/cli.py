@@ -1,0 +1,242 @@
+"""The ``refnpr`` command: render, scenes, styles, info, golden, compare."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+
+__all__ = ["main"]
+
+DEFAULT_SUITE = Path("golden") / "suite.toml"
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"--size: expected WxH such as 512x512, got {text!r}"
+        ) from None
+    if w <= 0 or h <= 0:
+        raise argparse.ArgumentTypeError(f"--size: width and height must be positive, got {text!r}")
+    return w, h
+
+
+def _param(text: str) -> tuple[str, object]:
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"--param: expected KEY=VALUE, got {text!r}")
+    key, raw = text.split("=", 1)
+    import tomllib
+
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw  # a bare word is a string
+    return key.strip(), value
+
+
+class _Progress:
+    """A stderr progress bar that appears only once a render has taken more than a second."""
+
+    def __init__(self, stream=sys.stderr, delay: float = 1.0) -> None:
+        self.stream, self.delay = stream, delay
+        self.start = time.perf_counter()
+        self.phase, self.fraction = "start", 0.0
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._shown = False
+        self._thread.start()
+
+    def __call__(self, phase: str, fraction: float) -> None:
+        self.phase, self.fraction = phase, fraction
+
+    def _draw(self) -> None:
+        width = 30
+        filled = int(round(self.fraction * width))
+        elapsed = time.perf_counter() - self.start
+        bar = "#" * filled + "-" * (width - filled)
+        self.stream.write(f"\r[{bar}] {self.phase:10s} {elapsed:6.1f}s")
+        self.stream.flush()
+        self._shown = True
+
+    def _run(self) -> None:
+        if self._done.wait(self.delay):
+            return
+        while not self._done.wait(0.2):
+            self._draw()
+
+    def close(self) -> None:
+        self._done.set()
+        self._thread.join()
+        if self._shown:
+            self.fraction, self.phase = 1.0, "done"
+            self._draw()
+            self.stream.write("\n")
+
+
+def _cmd_render(args: argparse.Namespace) -> int:
+    from .render import render
+    from .scenes import load_scene
+
+    scene = load_scene(args.scene)
+    style = None
+    if args.style or args.param:
+        if args.style:
+            style = {"name": args.style, **dict(args.param or [])}
+        else:
+            base = dict(scene.style or {})
+            if not base:
+                print(
+                    "refnpr render: --param needs --style (the scene names no style)",
+                    file=sys.stderr,
+                )
+                return 2
+            style = {**base, **dict(args.param)}
+    width, height = args.size
+    progress = _Progress() if not args.quiet else None
+    try:
+        image = render(scene, style, width, height, args.spp, progress=progress)
+    finally:
+        if progress:
+            progress.close()
+    out = image.save(args.output)
+    if not args.quiet:
+        print(f"wrote {out} ({width}x{height}, spp={args.spp}) in {image.timings['total']:.2f} s")
+    return 0
+
+
+def _cmd_scenes(args: argparse.Namespace) -> int:
+    from .scenes import list_scenes
+
+    for name, desc in list_scenes().items():
+        print(f"{name:16s} {desc}")
+    return 0
+
+
+def _cmd_styles(args: argparse.Namespace) -> int:
+    from .styles import list_styles
+
+    for name, desc in list_styles().items():
+        print(f"{name:16s} {desc}")
+    return 0
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    import numba
+    import numpy
+    import skimage
+    import trimesh
+
+    from . import __version__
+
+    cache = os.environ.get("NUMBA_CACHE_DIR") or "(next to each module, __pycache__)"
+    info = {
+        "refnpr": __version__,
+        "python": sys.version.split()[0],
+        "numpy": numpy.__version__,
+        "numba": numba.__version__,
+        "scikit-image": skimage.__version__,
+        "trimesh": trimesh.__version__,
+        "numba threads": numba.get_num_threads(),
+        "numba cache dir": cache,
+    }
+    for k, v in info.items():
+        print(f"{k:16s} {v}")
+    return 0
+
+
+def _cmd_golden(args: argparse.Namespace) -> int:
+    from .golden import check_suite, update_suite
+
+    suite = Path(args.suite)
+    if args.update:
+        update_suite(suite, only=args.only)
+        return 0
+    results = check_suite(suite, only=args.only)
+    failed = 0
+    for r in results:
+        print(f"{'PASS' if r.passed else 'FAIL'} {r.name:32s} {r.message}")
+        failed += not r.passed
+    print(f"{len(results) - failed} passed, {failed} failed")
+    return 1 if failed else 0
+
+
+def _cmd_compare(args: argparse.Namespace) -> int:
+    from .compare import compare_dirs, format_table
+
+    results = compare_dirs(
+        args.reference, args.candidate, out_dir=args.out, tolerance=args.tolerance
+    )
+    print(format_table(results))
+    bad = [
+        m for m in results if not m.passes(max_frac_over=args.max_frac_over, min_ssim=args.min_ssim)
+    ]
+    if args.json:
+        Path(args.json).write_text(json.dumps([m.__dict__ for m in results], default=str, indent=2))
+    print(f"{len(results) - len(bad)} passed, {len(bad)} failed")
+    return 1 if bad else 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="refnpr", description="CPU reference renderer for NPR shading")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("render", help="render a scene to a PNG")
+    r.add_argument("--scene", default="default", help="built-in scene name or .toml file")
+    r.add_argument("--style", default=None, help="style name (default: the scene's style)")
+    r.add_argument(
+        "--param",
+        action="append",
+        type=_param,
+        metavar="KEY=VALUE",
+        help="style parameter (TOML value), repeatable",
+    )
+    r.add_argument("--size", type=_size, default=(512, 512), help="WxH (default 512x512)")
+    r.add_argument("--spp", type=int, default=1, help="samples per pixel, a square (1, 4, 9, 16)")
+    r.add_argument("-o", "--output", default="out.png", help="output PNG (default out.png)")
+    r.add_argument("-q", "--quiet", action="store_true")
+    r.set_defaults(func=_cmd_render)
+
+    sub.add_parser("scenes", help="list built-in scenes").set_defaults(func=_cmd_scenes)
+    sub.add_parser("styles", help="list styles").set_defaults(func=_cmd_styles)
+    sub.add_parser("info", help="versions, numba threads, cache dir").set_defaults(func=_cmd_info)
+
+    g = sub.add_parser("golden", help="check (default) or regenerate the golden images")
+    mode = g.add_mutually_exclusive_group()
+    mode.add_argument("--check", action="store_true", help="re-render and compare (default)")
+    mode.add_argument("--update", action="store_true", help="re-render and overwrite")
+    g.add_argument(
+        "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
+    )
+    g.add_argument("--only", nargs="+", default=None, metavar="NAME", help="only these cases")
+    g.set_defaults(func=_cmd_golden)
+
+    c = sub.add_parser("compare", help="compare another backend's renders with reference images")
+    c.add_argument("reference", help="directory of reference PNGs (e.g. golden/)")
+    c.add_argument("candidate", help="directory of candidate PNGs with the same file names")
+    c.add_argument("--out", default=None, help="write NAME.diff.png and report.json here")
+    c.add_argument("--json", default=None, help="write the metrics as JSON to this file")
+    c.add_argument("--tolerance", type=float, default=2.0 / 255)
+    c.add_argument("--max-frac-over", type=float, default=0.001)
+    c.add_argument("--min-ssim", type=float, default=0.99)
+    c.set_defaults(func=_cmd_compare)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ValueError, TypeError) as exc:
+        print(f"refnpr {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

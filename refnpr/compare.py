@@ -1,0 +1,169 @@
+"""Image comparison: how far a candidate render (another backend) is from the reference.
+
+Metrics per image, on sRGB-encoded values in [0, 1] (what a PNG stores), RGB channels composited
+over the image's own alpha onto black so that transparent pixels compare by coverage:
+
+* ``max_abs``: largest absolute difference of any channel (alpha included);
+* ``rmse``: root mean square difference over all channels;
+* ``frac_over``: fraction of pixels whose largest channel difference exceeds ``tolerance``;
+* ``ssim``: mean structural similarity (scikit-image, ``data_range=1``, on luminance).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .image import write_png_atomic
+
+__all__ = ["ImageMetrics", "compare_images", "compare_dirs", "load_image", "difference_image"]
+
+
+@dataclass(frozen=True)
+class ImageMetrics:
+    name: str
+    max_abs: float
+    rmse: float
+    frac_over: float
+    ssim: float
+    tolerance: float
+    status: str = "ok"  # "ok", "missing" (no candidate), "size" (shape mismatch)
+
+    def passes(self, *, max_frac_over: float, min_ssim: float) -> bool:
+        return self.status == "ok" and self.frac_over <= max_frac_over and self.ssim >= min_ssim
+
+
+def load_image(path: str | Path) -> np.ndarray:
+    """PNG (8 or 16 bit, gray/RGB/RGBA) -> (H, W, 4) float64 in [0, 1] (alpha 1 if absent)."""
+    import imageio.v3 as iio
+
+    path = Path(path)
+    try:
+        a = np.asarray(iio.imread(path))
+    except Exception as exc:  # imageio raises many types for unreadable files
+        raise ValueError(f"{path}: cannot read the image ({exc}); is it a valid PNG?") from exc
+    if a.dtype == np.uint8:
+        f = a.astype(np.float64) / 255.0
+    elif a.dtype == np.uint16:
+        f = a.astype(np.float64) / 65535.0
+    elif a.dtype.kind == "f":
+        f = a.astype(np.float64)
+    else:
+        raise ValueError(f"{path}: unsupported pixel type {a.dtype}; write 8- or 16-bit PNG")
+    if f.ndim == 2:
+        f = np.repeat(f[..., None], 3, axis=2)
+    if f.shape[2] == 2:  # gray + alpha
+        f = np.concatenate([np.repeat(f[..., :1], 3, axis=2), f[..., 1:]], axis=2)
+    if f.shape[2] == 3:
+        f = np.concatenate([f, np.ones(f.shape[:2] + (1,))], axis=2)
+    return f[..., :4]
+
+
+def _flatten(rgba: np.ndarray) -> np.ndarray:
+    out = rgba.copy()
+    out[..., :3] *= rgba[..., 3:4]
+    return out
+
+
+def difference_image(
+    reference: np.ndarray, candidate: np.ndarray, *, gain: float = 4.0
+) -> np.ndarray:
+    """(H, W, 3) uint8 visualisation: |difference| of the largest channel, amplified by ``gain``,
+    red where the candidate is brighter, blue where darker, gray scale of the reference below."""
+    ref, cand = _flatten(reference), _flatten(candidate)
+    d = cand[..., :3].mean(axis=-1) - ref[..., :3].mean(axis=-1)
+    mag = np.clip(np.abs(cand - ref).max(axis=-1) * gain, 0, 1)
+    base = 0.25 * ref[..., :3].mean(axis=-1)
+    out = np.stack([base, base, base], axis=-1)
+    out[..., 0] = np.where(d >= 0, np.maximum(base, mag), base)
+    out[..., 2] = np.where(d < 0, np.maximum(base, mag), base)
+    out[..., 1] = np.where(mag > 0, base * (1 - mag), base)
+    return np.rint(np.clip(out, 0, 1) * 255).astype(np.uint8)
+
+
+def compare_images(
+    reference: np.ndarray, candidate: np.ndarray, *, name: str = "", tolerance: float = 2.0 / 255
+) -> ImageMetrics:
+    """Metrics of ``candidate`` against ``reference``, both (H, W, 4) float in [0, 1]."""
+    from skimage.metrics import structural_similarity
+
+    if reference.shape != candidate.shape:
+        return ImageMetrics(name, np.inf, np.inf, 1.0, 0.0, tolerance, status="size")
+    ref, cand = _flatten(reference), _flatten(candidate)
+    diff = np.abs(cand - ref)
+    lum_r = ref[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+    lum_c = cand[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+    win = min(7, *(s if s % 2 else s - 1 for s in lum_r.shape))
+    ssim = (
+        float(structural_similarity(lum_r, lum_c, data_range=1.0, win_size=win))
+        if win >= 3
+        else float(np.all(diff == 0))
+    )
+    return ImageMetrics(
+        name=name,
+        max_abs=float(diff.max()),
+        rmse=float(np.sqrt(np.mean(diff**2))),
+        frac_over=float(np.mean(diff.max(axis=-1) > tolerance)),
+        ssim=ssim,
+        tolerance=tolerance,
+    )
+
+
+def compare_dirs(
+    reference_dir: str | Path,
+    candidate_dir: str | Path,
+    *,
+    out_dir: str | Path | None = None,
+    tolerance: float = 2.0 / 255,
+) -> list[ImageMetrics]:
+    """Compare every ``*.png`` of ``reference_dir`` with the file of the same name in
+    ``candidate_dir``. A missing candidate is reported with status "missing". With ``out_dir``,
+    writes ``<name>.diff.png`` per image and ``report.json``."""
+    ref_dir, cand_dir = Path(reference_dir), Path(candidate_dir)
+    for label, d in (("reference_dir", ref_dir), ("candidate_dir", cand_dir)):
+        if not d.is_dir():
+            raise ValueError(f"{label}: {str(d)!r} is not a directory")
+    names = sorted(p.name for p in ref_dir.glob("*.png"))
+    if not names:
+        raise ValueError(f"reference_dir: no .png files in {str(ref_dir)!r}")
+    results = []
+    for fname in names:
+        stem = fname[:-4]
+        cand_path = cand_dir / fname
+        if not cand_path.exists():
+            results.append(
+                ImageMetrics(stem, np.inf, np.inf, 1.0, 0.0, tolerance, status="missing")
+            )
+            continue
+        ref = load_image(ref_dir / fname)
+        cand = load_image(cand_path)
+        m = compare_images(ref, cand, name=stem, tolerance=tolerance)
+        results.append(m)
+        if out_dir is not None and m.status == "ok":
+            write_png_atomic(Path(out_dir) / f"{stem}.diff.png", difference_image(ref, cand))
+    if out_dir is not None:
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
+        report = [
+            {
+                k: (None if isinstance(v, float) and not np.isfinite(v) else v)
+                for k, v in asdict(m).items()
+            }
+            for m in results
+        ]
+        (Path(out_dir) / "report.json").write_text(json.dumps(report, indent=2))
+    return results
+
+
+def format_table(results: list[ImageMetrics]) -> str:
+    """Plain-text table of metrics."""
+    lines = [
+        f"{'image':32s} {'status':8s} {'max_abs':>8s} {'rmse':>8s} {'frac>tol':>9s} {'ssim':>7s}"
+    ]
+    for m in results:
+        lines.append(
+            f"{m.name:32s} {m.status:8s} {m.max_abs:8.4f} {m.rmse:8.4f} {m.frac_over:9.5f} {m.ssim:7.4f}"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,263 @@
+"""Golden-image suite: one module both checks and regenerates the ground truth in ``golden/``.
+
+``golden/suite.toml`` lists cases (scene x style x size). Each image case ``NAME`` is stored as
+``golden/NAME.png`` (8-bit sRGB RGBA). G-buffer cases (``kind = "gbuffer"``) store
+``golden/NAME.npz`` with float32 channels, for backends that compare their rasterizer itself.
+
+* ``update_suite`` renders every case and writes its files (atomically).
+* ``check_suite`` re-renders and compares; a missing golden file is a failure, never a skip. On a
+  mismatch it writes ``reference``, ``result`` and ``diff`` images to the failure directory.
+
+Suite format::
+
+    [defaults]              # any case key; the values below are the built-in defaults
+    width = 256
+    height = 192
+    spp = 1
+    tolerance = 0.0079      # per-channel difference that counts a pixel as differing (2/255)
+    max_frac_over = 0.0005  # fraction of differing pixels allowed
+    min_ssim = 0.995
+
+    [[case]]
+    name = "teapot-toon"    # file stem: [a-z0-9_-]+
+    scene = "teapot"        # built-in scene name or a .toml path relative to the suite file
+    style = { name = "toon", n = 2 }
+    spp = 4                 # overrides a default
+
+    [[case]]
+    name = "gbuffer-default"
+    kind = "gbuffer"
+    scene = "default"
+    channels = ["depth", "tri_id", "uv", "duv_dx", "duv_dy", "normal"]
+    rtol = 1e-5             # gbuffer cases: relative tolerance of float channels
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .compare import ImageMetrics, compare_images, difference_image, load_image
+from .image import write_png_atomic
+from .raster import rasterize
+from .render import render
+
+__all__ = ["GoldenCase", "CaseResult", "load_suite", "update_suite", "check_suite", "render_case"]
+
+_DEFAULTS: dict[str, Any] = {
+    "kind": "image",
+    "width": 256,
+    "height": 192,
+    "spp": 1,
+    "tolerance": 2.0 / 255,
+    "max_frac_over": 0.0005,
+    "min_ssim": 0.995,
+    "rtol": 1e-5,
+    "atol": 1e-6,
+    "style": None,
+    "channels": ["depth", "tri_id", "uv", "duv_dx", "duv_dy", "normal"],
+    "texture_size": None,
+    "description": "",
+}
+_NAME = re.compile(r"^[a-z0-9][a-z0-9_\-]*$")
+
+
+@dataclass(frozen=True)
+class GoldenCase:
+    name: str
+    scene: str
+    params: dict[str, Any] = field(default_factory=dict)
+
+    def __getattr__(self, key: str) -> Any:
+        try:
+            return self.params[key]
+        except KeyError:
+            raise AttributeError(key) from None
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    name: str
+    passed: bool
+    message: str
+    metrics: ImageMetrics | None = None
+
+
+def load_suite(path: str | Path) -> list[GoldenCase]:
+    """Parse ``suite.toml`` into cases (clear ValueError naming the file and key on errors)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"suite: {str(path)!r} does not exist; expected golden/suite.toml")
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: invalid TOML: {exc}") from None
+    unknown = set(data) - {"defaults", "case"}
+    if unknown:
+        raise ValueError(
+            f"{path}: unknown top-level keys {sorted(unknown)}; use [defaults] and [[case]]"
+        )
+    defaults = dict(_DEFAULTS)
+    for key, value in data.get("defaults", {}).items():
+        if key not in _DEFAULTS:
+            raise ValueError(
+                f"{path}: [defaults] unknown key {key!r}; valid keys: {sorted(_DEFAULTS)}"
+            )
+        defaults[key] = value
+    cases, seen = [], set()
+    for i, raw in enumerate(data.get("case", [])):
+        raw = dict(raw)
+        name = raw.pop("name", None)
+        scene = raw.pop("scene", None)
+        if not isinstance(name, str) or not _NAME.match(name):
+            raise ValueError(
+                f"{path}: case #{i + 1}: 'name' must match [a-z0-9][a-z0-9_-]*, got {name!r}"
+            )
+        if name in seen:
+            raise ValueError(f"{path}: case {name!r} is listed twice")
+        seen.add(name)
+        if not isinstance(scene, str):
+            raise ValueError(
+                f"{path}: case {name!r}: 'scene' (a built-in name or .toml path) is required"
+            )
+        for key in raw:
+            if key not in _DEFAULTS:
+                raise ValueError(
+                    f"{path}: case {name!r}: unknown key {key!r}; valid keys: {sorted(_DEFAULTS)}"
+                )
+        params = {**defaults, **raw}
+        if params["kind"] not in ("image", "gbuffer"):
+            raise ValueError(
+                f"{path}: case {name!r}: kind must be 'image' or 'gbuffer', got {params['kind']!r}"
+            )
+        if scene.endswith(".toml"):
+            scene = str((path.parent / scene).resolve())
+        cases.append(GoldenCase(name, scene, params))
+    if not cases:
+        raise ValueError(f"{path}: the suite has no [[case]] entries")
+    return cases
+
+
+def render_case(case: GoldenCase) -> np.ndarray | dict[str, np.ndarray]:
+    """Render one case: (H, W, 4) uint8 sRGB for images, dict of float32 channels for G-buffers."""
+    if case.kind == "gbuffer":
+        from .scenes import load_scene
+
+        scene = load_scene(case.scene)
+        extra = {"texture_size": tuple(case.texture_size)} if case.texture_size else {}
+        gb = rasterize(
+            scene, scene.camera, case.width, case.height, case.channels, case.spp, **extra
+        )
+        return {k: np.asarray(gb[k]) for k in gb}
+    return render(case.scene, case.style, case.width, case.height, case.spp).to_srgb8()
+
+
+def _files(root: Path, case: GoldenCase) -> Path:
+    return root / (f"{case.name}.npz" if case.kind == "gbuffer" else f"{case.name}.png")
+
+
+def update_suite(suite_path: str | Path, *, only: list[str] | None = None, log=print) -> list[Path]:
+    """Render every case (or those named in ``only``) and write the golden files."""
+    suite_path = Path(suite_path)
+    root = suite_path.parent
+    written = []
+    for case in _select(load_suite(suite_path), only):
+        result = render_case(case)
+        target = _files(root, case)
+        if case.kind == "gbuffer":
+            tmp = target.with_suffix(".tmp.npz")
+            np.savez_compressed(tmp, **result)
+            tmp.replace(target)
+        else:
+            write_png_atomic(target, result)
+        written.append(target)
+        log(f"wrote {target}")
+    return written
+
+
+def _select(cases: list[GoldenCase], only: list[str] | None) -> list[GoldenCase]:
+    if not only:
+        return cases
+    names = {c.name for c in cases}
+    unknown = [n for n in only if n not in names]
+    if unknown:
+        raise ValueError(f"only: unknown case names {unknown}; the suite has {sorted(names)}")
+    return [c for c in cases if c.name in only]
+
+
+def _check_gbuffer(case: GoldenCase, target: Path, got: dict[str, np.ndarray]) -> CaseResult:
+    with np.load(target) as ref:
+        ref = {k: ref[k] for k in ref.files}
+    if set(ref) != set(got):
+        return CaseResult(
+            case.name, False, f"channels differ: golden {sorted(ref)}, got {sorted(got)}"
+        )
+    worst = []
+    for k in sorted(ref):
+        a, b = ref[k], got[k]
+        if a.shape != b.shape:
+            return CaseResult(case.name, False, f"{k}: shape {b.shape} != golden {a.shape}")
+        if a.dtype.kind in "iu":
+            bad = float(np.mean(a != b))
+            if bad > case.max_frac_over:
+                worst.append(f"{k}: {bad:.4%} of samples differ")
+        else:
+            finite = np.isfinite(a) & np.isfinite(b)
+            if np.any(np.isfinite(a) != np.isfinite(b)):
+                worst.append(f"{k}: finite/inf pattern differs")
+            close = np.isclose(b[finite], a[finite], rtol=case.rtol, atol=case.atol)
+            bad = float(np.mean(~close)) if close.size else 0.0
+            if bad > case.max_frac_over:
+                worst.append(f"{k}: {bad:.4%} of samples beyond rtol={case.rtol}")
+    if worst:
+        return CaseResult(case.name, False, "; ".join(worst))
+    return CaseResult(case.name, True, "ok")
+
+
+def check_suite(
+    suite_path: str | Path,
+    *,
+    only: list[str] | None = None,
+    failure_dir: str | Path | None = None,
+) -> list[CaseResult]:
+    """Re-render every case and compare with its golden file. Missing golden files fail."""
+    suite_path = Path(suite_path)
+    root = suite_path.parent
+    fail_root = Path(failure_dir) if failure_dir is not None else root / "_failures"
+    results = []
+    for case in _select(load_suite(suite_path), only):
+        target = _files(root, case)
+        if not target.exists():
+            results.append(
+                CaseResult(
+                    case.name, False, f"missing golden file {target}; run `refnpr golden --update`"
+                )
+            )
+            continue
+        got = render_case(case)
+        if case.kind == "gbuffer":
+            results.append(_check_gbuffer(case, target, got))
+            continue
+        ref = load_image(target)
+        cand = got.astype(np.float64) / 255.0
+        m = compare_images(ref, cand, name=case.name, tolerance=case.tolerance)
+        ok = m.passes(max_frac_over=case.max_frac_over, min_ssim=case.min_ssim)
+        if not ok:
+            d = fail_root / case.name
+            write_png_atomic(d / "reference.png", np.rint(ref * 255).astype(np.uint8))
+            write_png_atomic(d / "result.png", got)
+            if m.status == "ok":
+                write_png_atomic(d / "diff.png", difference_image(ref, cand))
+        msg = (
+            f"{m.status}: max_abs={m.max_abs:.4f} rmse={m.rmse:.5f} "
+            f"frac>tol={m.frac_over:.5f} (allowed {case.max_frac_over}) ssim={m.ssim:.4f}"
+        )
+        if not ok:
+            msg += f"; images written to {fail_root / case.name}"
+        results.append(CaseResult(case.name, ok, msg, m))
+    return results

@@ -1,0 +1,5 @@
+"""Shading styles: each composes formulas on a G-buffer and declares the channels it requires."""
+
+from .base import ShadeContext, Style, get_style, list_styles, register, style_from_spec
+
+__all__ = ["ShadeContext", "Style", "get_style", "list_styles", "register", "style_from_spec"]

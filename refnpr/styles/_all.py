@@ -1,0 +1,3 @@
+"""Imports every style module so that each registers itself (used by the registry)."""
+
+from . import smooth, toon  # noqa: F401

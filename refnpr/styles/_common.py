@@ -1,0 +1,85 @@
+"""Helpers shared by styles: colour assembly and parameter checks (imports formulas only)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from refnpr.formulas import lighting
+
+__all__ = [
+    "rgba_from",
+    "check_choice",
+    "check_number",
+    "check_count",
+    "needs_position",
+    "specular_field",
+]
+
+
+def rgba_from(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
+    """(nH, nW, 4) float32 straight-alpha RGBA: ``rgb`` where ``mask``, alpha = mask (or ``alpha``)."""
+    out = np.zeros(mask.shape + (4,), dtype=np.float32)
+    rgb = np.broadcast_to(np.asarray(rgb, dtype=np.float64), mask.shape + (3,))
+    out[..., :3] = np.where(mask[..., None], np.clip(rgb, 0.0, 1.0), 0.0)
+    a = mask.astype(np.float64) if alpha is None else np.where(mask, np.clip(alpha, 0.0, 1.0), 0.0)
+    out[..., 3] = a
+    return out
+
+
+def check_choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
+    if value not in choices:
+        raise ValueError(f"{name}: expected one of {list(choices)}, got {value!r}")
+    return value
+
+
+def check_number(
+    name: str,
+    value: Any,
+    *,
+    lo: float | None = None,
+    hi: float | None = None,
+    lo_open: bool = False,
+) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name}: expected a number, got {type(value).__name__} {value!r}")
+    v = float(value)
+    if not np.isfinite(v):
+        raise ValueError(f"{name}: expected a finite number, got {v}")
+    if lo is not None and (v <= lo if lo_open else v < lo):
+        raise ValueError(f"{name}: expected a value {'>' if lo_open else '>='} {lo}, got {v}")
+    if hi is not None and v > hi:
+        raise ValueError(f"{name}: expected a value <= {hi}, got {v}")
+    return v
+
+
+def check_count(name: str, value: Any, *, lo: int = 1, hi: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}")
+    if value < lo or (hi is not None and value > hi):
+        raise ValueError(
+            f"{name}: expected an integer in [{lo}, {hi if hi else 'inf'}], got {value}"
+        )
+    return int(value)
+
+
+def needs_position(scene: Any, view_dependent: bool) -> bool:
+    """Whether shading needs world positions: for the view vector or for point lights."""
+    return view_dependent or any(light.kind == "point" for light in scene.lights)
+
+
+def specular_field(
+    ctx: Any, n: np.ndarray, light_dir: np.ndarray, v: np.ndarray, model: str = "blinn-phong"
+) -> np.ndarray:
+    """f_s of Veryovka eq. 1 with each object's own shininess (needs ``mesh_id``).
+
+    Evaluated once per distinct exponent; (nH, nW) float64, 0 where empty or shininess <= 0.
+    """
+    shininess = ctx.material_field("shininess")
+    out = np.zeros(n.shape[:-1])
+    for p in np.unique(shininess[shininess > 0]):
+        sel = shininess == p
+        ld = light_dir[sel] if np.ndim(light_dir) > 1 else light_dir
+        out[sel] = lighting.specular(n[sel], ld, v[sel], shininess=float(p), model=model)
+    return out

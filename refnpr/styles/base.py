@@ -1,0 +1,151 @@
+"""What every style shares: the Style interface, the per-frame shading context, the registry.
+
+A style composes formulas on a G-buffer. It declares the channels it ``requires``; the renderer
+rasterizes exactly their union, so a flat toon render never pays for derivatives and a scene
+without textures never interpolates uv.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+__all__ = ["Style", "ShadeContext", "register", "get_style", "list_styles", "style_from_spec"]
+
+
+class Style:
+    """Base class of shading styles.
+
+    Subclasses set ``name`` (registry key) and implement :meth:`requires` and :meth:`shade`.
+    Parameters are keyword arguments of ``__init__`` validated there (clear ``ValueError``).
+    """
+
+    name: ClassVar[str] = ""
+    description: ClassVar[str] = ""
+
+    def requires(self, scene: Any) -> frozenset[str]:
+        """G-buffer channels this style reads for ``scene``."""
+        raise NotImplementedError
+
+    def raster_options(self, scene: Any) -> dict[str, Any]:
+        """Extra keyword arguments for ``rasterize`` (texture_size, line_period, ...)."""
+        return {}
+
+    def shade(self, ctx: ShadeContext) -> np.ndarray:
+        """Per-sample straight-alpha linear RGBA, ``(n H, n W, 4)`` float32; alpha 0 where empty."""
+        raise NotImplementedError
+
+    def params(self) -> dict[str, Any]:
+        """The parameters this instance was built with (for golden metadata and repr)."""
+        return dict(getattr(self, "_params", {}))
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self.params().items())
+        return f"{type(self).__name__}({args})"
+
+
+@dataclass(frozen=True, eq=False)
+class ShadeContext:
+    """Everything a style may read for one frame: the G-buffer and the scene's lights/materials.
+
+    Attributes
+    ----------
+    gb : refnpr.raster.GBuffer
+    scene : refnpr.scenes.Scene
+        Provides ``camera``, ``lights``, ``ambient`` (l_a) and ``objects[i].material``.
+    """
+
+    gb: Any
+    scene: Any
+
+    @property
+    def mask(self) -> np.ndarray:
+        """(nH, nW) bool: samples covered by a triangle (needs ``tri_id`` or ``mesh_id``)."""
+        if "tri_id" in self.gb:
+            return self.gb["tri_id"] >= 0
+        return self.gb["mesh_id"] >= 0
+
+    def view_dir(self) -> np.ndarray:
+        """(nH, nW, 3) float64 unit vectors from the surface towards the eye (needs ``position``)."""
+        v = np.asarray(self.scene.camera.eye, dtype=np.float64) - self.gb["position"]
+        length = np.linalg.norm(v, axis=-1, keepdims=True)
+        return np.divide(v, length, out=np.zeros_like(v), where=length > 0)
+
+    def light_dirs(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per light: (unit direction towards the light, (..., 3) or (3,)), colour (3,).
+
+        Point lights need the ``position`` channel.
+        """
+        out = []
+        for light in self.scene.lights:
+            color = np.asarray(light.color, dtype=np.float64)
+            if light.kind == "point":
+                d = np.asarray(light.position, dtype=np.float64) - self.gb["position"]
+                length = np.linalg.norm(d, axis=-1, keepdims=True)
+                d = np.divide(d, length, out=np.zeros_like(d), where=length > 0)
+            else:
+                d = np.asarray(light.direction, dtype=np.float64)
+                d = d / np.linalg.norm(d)
+            out.append((d, color))
+        return out
+
+    def material_field(self, attr: str) -> np.ndarray:
+        """Per-sample material property ``attr`` of the object each sample shows (needs
+        ``mesh_id``): (nH, nW) for scalars, (nH, nW, C) for tuples; zero where empty."""
+        values = np.array(
+            [np.asarray(getattr(o.material, attr), dtype=np.float64) for o in self.scene.objects]
+        )
+        mesh_id = self.gb["mesh_id"]
+        out = values[np.maximum(mesh_id, 0)]
+        out[mesh_id < 0] = 0.0
+        return out
+
+
+_REGISTRY: dict[str, Callable[..., Style]] = {}
+
+
+def register(cls: type[Style]) -> type[Style]:
+    """Class decorator adding a style to the registry under ``cls.name``."""
+    if not cls.name:
+        raise ValueError(f"{cls.__name__}: a registered style needs a non-empty `name`")
+    _REGISTRY[cls.name] = cls
+    return cls
+
+
+def list_styles() -> dict[str, str]:
+    """Registered style names -> one-line descriptions."""
+    from . import _all  # noqa: F401  (imports every style module so they register)
+
+    return {name: cls.description for name, cls in sorted(_REGISTRY.items())}
+
+
+def get_style(name: str, **params: Any) -> Style:
+    """Instantiate a registered style by name with keyword parameters."""
+    from . import _all  # noqa: F401
+
+    if not isinstance(name, str):
+        raise TypeError(f"style: expected a style name (str), got {type(name).__name__}")
+    if name not in _REGISTRY:
+        raise ValueError(f"style: unknown style {name!r}; available styles: {sorted(_REGISTRY)}")
+    try:
+        return _REGISTRY[name](**params)
+    except TypeError as exc:
+        raise TypeError(f"style {name!r}: {exc}") from None
+
+
+def style_from_spec(spec: Any) -> Style:
+    """A Style from an instance, a name, or a mapping ``{"name": ..., **params}`` (scene files)."""
+    if isinstance(spec, Style):
+        return spec
+    if isinstance(spec, str):
+        return get_style(spec)
+    if isinstance(spec, dict):
+        params = dict(spec)
+        name = params.pop("name", None)
+        if name is None:
+            raise ValueError(f"style: a style table needs a 'name' key, got keys {sorted(spec)}")
+        return get_style(name, **params)
+    raise TypeError(f"style: expected a Style, a name or a table, got {type(spec).__name__}")

@@ -1,0 +1,85 @@
+"""Classic toon shading: Veryovka 2002 eqs. 2-4 (multi-tone step) and Lake et al. 2000's ramp."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from refnpr.formulas import lighting, threshold
+
+from ._common import (
+    check_choice,
+    check_count,
+    check_number,
+    needs_position,
+    rgba_from,
+    specular_field,
+)
+from .base import ShadeContext, Style, register
+
+__all__ = ["ToonStyle"]
+
+
+@register
+class ToonStyle(Style):
+    """Discrete-tone shading.
+
+    ``mode="step"`` (Veryovka eq. 2): ``I = m_a l_a + sum m_d T_n(f_d, t) l_i + sum m_s
+    T_n(f_s, t) l_i`` with the multi-tone step T_n of eq. 4 and a constant threshold t.
+    ``mode="lake"`` (Lake et al. 2000): ``I = m_a l_a + sum m_d ramp(N.L) l_i`` with a hard-edged
+    ramp of ``n + 1`` tones ``0, 1/n, ..., 1`` split at ``(k + t) / n`` (nearest texel lookup).
+
+    Parameters
+    ----------
+    n : int >= 1
+        Steps: the diffuse term takes the n + 1 values k / n.
+    t : float in [0, 1]
+        Threshold within each step (eq. 3's t; 0.5 is Lake's suggestion).
+    mode : {"step", "lake"}
+    specular : bool
+        Thresholded specular term ("step" mode only; needs ``position`` for V).
+    """
+
+    name = "toon"
+    description = "n-tone toon shading (Veryovka eqs. 2-4 step, or Lake et al. 2000 ramp)"
+
+    def __init__(
+        self, *, n: int = 2, t: float = 0.5, mode: str = "step", specular: bool = True
+    ) -> None:
+        self.n = check_count("n", n, lo=1, hi=256)
+        self.t = check_number("t", t, lo=0.0, hi=1.0)
+        self.mode = check_choice("mode", mode, ("step", "lake"))
+        if specular not in (True, False):
+            raise TypeError(f"specular: expected a bool, got {specular!r}")
+        self.specular = bool(specular) and self.mode == "step"
+        self._params = {"n": self.n, "t": self.t, "mode": self.mode, "specular": self.specular}
+
+    def requires(self, scene: Any) -> frozenset[str]:
+        req = {"normal", "mesh_id"}
+        if needs_position(scene, self.specular):
+            req.add("position")
+        return frozenset(req)
+
+    def shade(self, ctx: ShadeContext) -> np.ndarray:
+        mask = ctx.mask
+        n = ctx.gb["normal"].astype(np.float64)
+        m_a = ctx.material_field("ambient")
+        m_d = ctx.material_field("diffuse")
+        m_s = ctx.material_field("specular")
+        rgb = m_a * np.asarray(ctx.scene.ambient, dtype=np.float64)  # eq. 2: ambient kept
+        if self.mode == "lake":
+            bounds = (np.arange(self.n) + self.t) / self.n
+            ramp = lighting.toon_ramp_texture(bounds, np.arange(self.n + 1) / self.n, size=1024)
+        v = ctx.view_dir() if self.specular else None
+        for light_dir, color in ctx.light_dirs():
+            f_d = lighting.diffuse(n, light_dir)
+            if self.mode == "lake":
+                tone = lighting.toon_ramp(f_d, ramp)
+            else:
+                tone = threshold.step_n(f_d, self.t, self.n)  # eq. 4 applied in eq. 2
+            rgb = rgb + m_d * tone[..., None] * color
+            if self.specular:
+                f_s = specular_field(ctx, n, light_dir, v)
+                rgb = rgb + m_s * threshold.step_n(f_s, self.t, self.n)[..., None] * color
+        return rgba_from(rgb, mask)
