@@ -1,0 +1,67 @@
+"""The comparison tool a backend uses against the golden images."""
+
+import json
+
+import numpy as np
+import pytest
+
+from refnpr.compare import compare_dirs, compare_images, format_table, load_image
+from refnpr.image import write_png_atomic
+
+
+def _img(seed: int, shape=(24, 32)) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    a = rng.integers(0, 256, shape + (4,), dtype=np.uint8)
+    a[..., 3] = 255
+    return a
+
+
+def test_identical_images_have_zero_error():
+    a = _img(0).astype(float) / 255
+    m = compare_images(a, a, name="x")
+    assert (m.max_abs, m.rmse, m.frac_over) == (0.0, 0.0, 0.0)
+    assert m.ssim == pytest.approx(1.0)
+
+
+def test_metrics_against_naive_computation():
+    a = _img(1).astype(float) / 255
+    b = a.copy()
+    b[3, 4, 0] = 1.0 - b[3, 4, 0]  # one pixel flipped in red
+    b[10, 10, :3] += 1 / 255  # one pixel off by one code value (under tolerance)
+    b = np.clip(b, 0, 1)
+    m = compare_images(a, b, tolerance=2 / 255)
+    diff = np.abs(b - a)
+    assert m.max_abs == pytest.approx(diff.max())
+    assert m.rmse == pytest.approx(np.sqrt((diff**2).mean()))
+    assert m.frac_over == pytest.approx(1 / (24 * 32))
+    assert m.ssim < 1.0
+
+
+def test_compare_dirs_reports_missing_and_size(tmp_path):
+    ref, cand, out = tmp_path / "ref", tmp_path / "cand", tmp_path / "out"
+    write_png_atomic(ref / "same.png", _img(2))
+    write_png_atomic(ref / "absent.png", _img(3))
+    write_png_atomic(ref / "small.png", _img(4))
+    write_png_atomic(cand / "same.png", _img(2))
+    write_png_atomic(cand / "small.png", _img(4, (12, 16)))
+    results = {m.name: m for m in compare_dirs(ref, cand, out_dir=out)}
+    assert results["same"].status == "ok" and results["same"].max_abs == 0
+    assert results["absent"].status == "missing"
+    assert results["small"].status == "size"
+    assert (out / "same.diff.png").exists()
+    report = json.loads((out / "report.json").read_text())
+    assert {r["name"] for r in report} == {"same", "absent", "small"}
+    assert "absent" in format_table(list(results.values()))
+
+
+def test_rgb_and_gray_pngs_load_as_rgba(tmp_path):
+    write_png_atomic(tmp_path / "g.png", np.full((2, 3), 128, np.uint8))
+    g = load_image(tmp_path / "g.png")
+    assert (
+        g.shape == (2, 3, 4) and np.all(g[..., 3] == 1) and g[0, 0, 0] == pytest.approx(128 / 255)
+    )
+
+
+def test_not_a_directory(tmp_path):
+    with pytest.raises(ValueError, match="candidate_dir: .* is not a directory"):
+        compare_dirs(tmp_path, tmp_path / "nope")

@@ -1,0 +1,89 @@
+"""The golden suite itself (every case must match) and the harness's behaviour."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from refnpr.golden import check_suite, load_suite, update_suite
+
+SUITE = Path(__file__).resolve().parents[2] / "golden" / "suite.toml"
+
+
+@pytest.mark.parametrize("case", [c.name for c in load_suite(SUITE)])
+def test_golden_case_matches(case, tmp_path):
+    (result,) = check_suite(SUITE, only=[case], failure_dir=tmp_path)
+    assert result.passed, result.message
+
+
+_MINI = """
+[defaults]
+width = 24
+height = 16
+
+[[case]]
+name = "a"
+scene = "sphere"
+style = {{ name = "toon", n = {n} }}
+
+[[case]]
+name = "g"
+kind = "gbuffer"
+scene = "sphere"
+channels = ["depth", "tri_id"]
+"""
+
+
+def test_missing_golden_fails_never_skips(tmp_path):
+    suite = tmp_path / "suite.toml"
+    suite.write_text(_MINI.format(n=2))
+    results = check_suite(suite)
+    assert [r.passed for r in results] == [False, False]
+    assert "missing golden file" in results[0].message
+
+
+def test_update_then_check_passes_and_mismatch_writes_images(tmp_path):
+    suite = tmp_path / "suite.toml"
+    suite.write_text(_MINI.format(n=2))
+    update_suite(suite, log=lambda *_: None)
+    assert all(r.passed for r in check_suite(suite))
+    suite.write_text(_MINI.format(n=5))  # the style changed: the image must no longer match
+    res = {r.name: r for r in check_suite(suite, failure_dir=tmp_path / "fail")}
+    assert not res["a"].passed and res["g"].passed
+    for f in ("reference.png", "result.png", "diff.png"):
+        assert (tmp_path / "fail" / "a" / f).exists()
+
+
+def test_gbuffer_mismatch_detected(tmp_path):
+    suite = tmp_path / "suite.toml"
+    suite.write_text(_MINI.format(n=2))
+    update_suite(suite, only=["g"], log=lambda *_: None)
+    with np.load(tmp_path / "g.npz") as f:
+        data = {k: f[k] for k in f.files}
+    data["depth"] = data["depth"] * 1.001
+    np.savez_compressed(tmp_path / "g.npz", **data)
+    (r,) = check_suite(suite, only=["g"])
+    assert not r.passed and "depth" in r.message
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("[[case]]\nname = 'Bad Name'\nscene = 'sphere'\n", r"'name' must match"),
+        ("[[case]]\nname = 'x'\nscene = 'sphere'\nwidht = 3\n", r"case 'x': unknown key 'widht'"),
+        ("[defaults]\nwidth = 3\n", r"the suite has no \[\[case\]\] entries"),
+        ("[[case]]\nname = 'x'\n", r"case 'x': 'scene' .* is required"),
+    ],
+)
+def test_suite_errors(tmp_path, text, match):
+    suite = tmp_path / "suite.toml"
+    suite.write_text(text)
+    with pytest.raises(ValueError, match=match):
+        load_suite(suite)
+
+
+def test_only_unknown_name(tmp_path):
+    suite = tmp_path / "suite.toml"
+    suite.write_text(_MINI.format(n=2))
+    with pytest.raises(ValueError, match=r"only: unknown case names \['zzz'\]"):
+        check_suite(suite, only=["zzz"])
