@@ -1,0 +1,172 @@
+"""Mip pyramids (GL-style level sizes) and CLAHE pyramids (Veryovka 2002 sec. 3.1).
+
+Texture space convention (shared by every sampler in refnpr): a texture is an array
+``(rows, cols)`` or ``(rows, cols, C)``; ``u`` runs along columns and ``v`` along rows, texel
+``(row j, col i)`` covers ``u in [i/cols, (i+1)/cols)``, ``v in [j/rows, (j+1)/rows)`` and its
+centre is at ``((i + 0.5)/cols, (j + 0.5)/rows)``: the OpenGL convention for an image uploaded
+with its row 0 first. Wrapping is GL_REPEAT.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["MipPyramid", "build_pyramid", "clahe_pyramid", "rank_equalize", "as_texture"]
+
+
+def as_texture(image, *, name: str = "image") -> np.ndarray:
+    """``image`` as a float32 texture in [0, 1]: uint8/uint16/bool scaled, floats checked."""
+    a = np.asarray(image)
+    if a.ndim not in (2, 3) or a.shape[0] < 1 or a.shape[1] < 1:
+        raise ValueError(
+            f"{name}: expected a (rows, cols) or (rows, cols, C) image, got shape {a.shape}"
+        )
+    if a.dtype == np.bool_:
+        return a.astype(np.float32)
+    if a.dtype == np.uint8:
+        return a.astype(np.float32) / 255.0
+    if a.dtype == np.uint16:
+        return a.astype(np.float32) / 65535.0
+    if a.dtype.kind != "f":
+        raise TypeError(f"{name}: expected uint8, uint16, bool or float pixels, got {a.dtype}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains NaN or inf")
+    if a.min() < 0.0 or a.max() > 1.0:
+        raise ValueError(
+            f"{name}: float pixels must lie in [0, 1], got [{a.min()}, {a.max()}]; rescale first"
+        )
+    return a.astype(np.float32)
+
+
+def _box_weights(n: int, m: int) -> np.ndarray:
+    """(m, n) weights of the exact box filter from n texels to m: output texel i averages the
+    input interval [i n/m, (i+1) n/m) (2x2 boxes when n = 2 m)."""
+    r = n / m
+    lo = np.arange(m)[:, None] * r
+    j = np.arange(n)[None, :]
+    overlap = np.clip(np.minimum(j + 1, lo + r) - np.maximum(j, lo), 0.0, None)
+    return overlap / r
+
+
+def _downsample(level: np.ndarray) -> np.ndarray:
+    """Next mip level, GL size rule max(1, floor(n / 2)) per axis, exact box filter."""
+    h, w = level.shape[:2]
+    wr = _box_weights(h, max(1, h // 2))
+    wc = _box_weights(w, max(1, w // 2))
+    a = np.tensordot(wr, level.astype(np.float64), axes=(1, 0))
+    a = np.moveaxis(np.tensordot(wc, a, axes=(1, 1)), 0, 1)
+    return a.astype(np.float32)
+
+
+@dataclass(frozen=True, eq=False)
+class MipPyramid:
+    """A mip pyramid: ``levels[k]`` has GL size ``max(1, floor(size_0 / 2**k))``, down to 1x1.
+
+    Attributes
+    ----------
+    levels : tuple of (rows_k, cols_k[, C]) float32 arrays in [0, 1]
+    """
+
+    levels: tuple[np.ndarray, ...]
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(cols, rows) of level 0: the texture size the ``lod`` channel is computed for."""
+        return (int(self.levels[0].shape[1]), int(self.levels[0].shape[0]))
+
+    @property
+    def n_levels(self) -> int:
+        return len(self.levels)
+
+    @property
+    def channels(self) -> int:
+        return 1 if self.levels[0].ndim == 2 else int(self.levels[0].shape[2])
+
+    def packed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(texels (N, C) float32, offsets (L,) int64, shapes (L, 2) int64) for the kernels."""
+        flat = [lv.reshape(lv.shape[0] * lv.shape[1], -1) for lv in self.levels]
+        offsets = np.cumsum([0] + [f.shape[0] for f in flat[:-1]]).astype(np.int64)
+        shapes = np.array([lv.shape[:2] for lv in self.levels], dtype=np.int64)
+        return np.ascontiguousarray(np.concatenate(flat), dtype=np.float32), offsets, shapes
+
+
+def build_pyramid(image) -> MipPyramid:
+    """Box-filtered mip pyramid of ``image`` ((rows, cols[, C]); uint8/uint16/bool/float)."""
+    level = as_texture(image)
+    levels = [level]
+    while level.shape[0] > 1 or level.shape[1] > 1:
+        level = _downsample(level)
+        levels.append(level)
+    return MipPyramid(tuple(levels))
+
+
+def _clahe(level: np.ndarray, window: int, clip_limit: float, nbins: int) -> np.ndarray:
+    from skimage.exposure import equalize_adapthist
+
+    h, w = level.shape[:2]
+    if h < 2 or w < 2:
+        return np.full_like(level, 0.5)  # a single texel: the median threshold
+    k = (min(window, h), min(window, w))
+    pad = ((k[0], k[0]), (k[1], k[1])) + (((0, 0),) if level.ndim == 3 else ())
+    tiled = np.pad(level, pad, mode="wrap")  # textures repeat: equalize with periodic context
+    eq = equalize_adapthist(tiled, kernel_size=k, clip_limit=clip_limit, nbins=nbins)
+    return eq[k[0] : k[0] + h, k[1] : k[1] + w].astype(np.float32)
+
+
+def rank_equalize(level: np.ndarray) -> np.ndarray:
+    """Monotone map of a level onto exactly uniform values ``(rank + 0.5) / N`` (stable ties),
+    so that thresholding against it preserves mean tone exactly; local order (minima, maxima)
+    is unchanged."""
+    flat = level.ravel()
+    order = np.argsort(flat, kind="stable")
+    ranks = np.empty(flat.size, dtype=np.float64)
+    ranks[order] = (np.arange(flat.size) + 0.5) / flat.size
+    return ranks.reshape(level.shape).astype(np.float32)
+
+
+def clahe_pyramid(
+    image, *, window: int = 16, clip_limit: float = 0.01, nbins: int = 256, uniform: bool = True
+) -> MipPyramid:
+    """Mip pyramid with CLAHE applied to every level (Veryovka 2002 sec. 3.1).
+
+    Each level is equalized with scikit-image's ``equalize_adapthist`` (kernel ``window`` texels,
+    or the level size if smaller; periodic padding so the texture still tiles), which makes
+    threshold values approximately uniform and homogeneous at every scale, so thresholding keeps
+    the mean tone while features stay sharp across mip levels.
+
+    Parameters
+    ----------
+    image : (rows, cols) array
+        Gray texture (uint8/uint16/bool or float in [0, 1]).
+    window : int >= 2
+        CLAHE window w in texels (the paper's w; smaller gives softer textures).
+    clip_limit : float in (0, 1]
+        CLAHE clip limit (scikit-image's normalized units).
+    nbins : int >= 2
+    uniform : bool
+        Follow CLAHE by :func:`rank_equalize` on each level. CLAHE only *approximates* a uniform
+        distribution (with the default clip limit the brick texture's mean is about 0.39, not
+        0.5), which darkens or lightens thresholded tone; the rank map makes it exact while
+        keeping CLAHE's local contrast and the alignment of minima and maxima across levels.
+        ``False`` keeps the paper's CLAHE output as is.
+    """
+    if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 2:
+        raise ValueError(f"window: expected an integer >= 2 (texels), got {window!r}")
+    if not isinstance(clip_limit, (int, float)) or not 0.0 < clip_limit <= 1.0:
+        raise ValueError(f"clip_limit: expected a number in (0, 1], got {clip_limit!r}")
+    if isinstance(nbins, bool) or not isinstance(nbins, (int, np.integer)) or nbins < 2:
+        raise ValueError(f"nbins: expected an integer >= 2, got {nbins!r}")
+    if uniform not in (True, False):
+        raise TypeError(f"uniform: expected a bool, got {uniform!r}")
+    base = build_pyramid(image)
+    if base.channels != 1:
+        raise ValueError(
+            f"image: CLAHE threshold textures are gray, got {base.channels} channels; "
+            "convert with skimage.color.rgb2gray first"
+        )
+    levels = [_clahe(lv, int(window), float(clip_limit), int(nbins)) for lv in base.levels]
+    if uniform:
+        levels = [rank_equalize(lv) for lv in levels]
+    return MipPyramid(tuple(levels))

@@ -1,0 +1,92 @@
+"""Texture sampling at an explicit LOD (GL_REPEAT wrapping, GL texel-centre convention).
+
+See :mod:`refnpr.texture.pyramid` for the texture-space convention (u along columns, v along
+rows, texel centres at (i + 0.5) / size).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import _kernels as K
+from .pyramid import MipPyramid
+
+__all__ = ["sample_trilinear", "sample_level", "level_weights"]
+
+
+def _uv_and_shape(uv, name: str = "uv") -> tuple[np.ndarray, tuple[int, ...]]:
+    a = np.asarray(uv)
+    if a.dtype.kind not in "fiu":
+        raise TypeError(f"{name}: expected a float array, got dtype {a.dtype}")
+    if a.ndim < 1 or a.shape[-1] != 2:
+        raise ValueError(f"{name}: expected shape (..., 2), got {a.shape}")
+    flat = np.ascontiguousarray(a.reshape(-1, 2), dtype=np.float64)
+    if not np.all(np.isfinite(flat)):
+        raise ValueError(f"{name}: contains NaN or inf; mask empty samples before sampling")
+    return flat, a.shape[:-1]
+
+
+def _check_pyramid(pyramid) -> None:
+    if not isinstance(pyramid, MipPyramid):
+        raise TypeError(
+            f"pyramid: expected refnpr.texture.MipPyramid (build_pyramid / clahe_pyramid), "
+            f"got {type(pyramid).__name__}"
+        )
+
+
+def _finish(out: np.ndarray, shape: tuple[int, ...], channels: int, dtype) -> np.ndarray:
+    out = out.reshape(shape + ((channels,) if channels > 1 else ()))
+    return out.astype(dtype, copy=False)
+
+
+def sample_trilinear(pyramid: MipPyramid, uv, lod, *, dtype=np.float32) -> np.ndarray:
+    """Trilinear (GL_LINEAR_MIPMAP_LINEAR) samples of a pyramid.
+
+    Parameters
+    ----------
+    pyramid : MipPyramid
+    uv : (..., 2) float
+        Texture coordinates (wrapped, GL_REPEAT).
+    lod : (...) float
+        Level of detail lambda (the rasterizer's ``lod`` channel), clamped to [0, L - 1].
+
+    Returns
+    -------
+    (...) or (..., C) float32 (or ``dtype``)
+    """
+    _check_pyramid(pyramid)
+    flat, shape = _uv_and_shape(uv)
+    lam = np.asarray(lod, dtype=np.float64)
+    if lam.shape != shape:
+        raise ValueError(f"lod: expected shape {shape} (uv's leading shape), got {lam.shape}")
+    if not np.all(np.isfinite(lam)):
+        raise ValueError("lod: contains NaN or inf")
+    texels, offsets, shapes = pyramid.packed()
+    out = np.empty((flat.shape[0], texels.shape[1]), dtype=np.float64)
+    K.sample_trilinear(texels, offsets, shapes, flat, np.ascontiguousarray(lam.ravel()), out)
+    return _finish(out, shape, texels.shape[1], dtype)
+
+
+def sample_level(pyramid: MipPyramid, uv, level, *, dtype=np.float32) -> np.ndarray:
+    """Bilinear samples of integer mip ``level`` (scalar or (...) int array, clamped to the
+    pyramid): the per-level lookups Veryovka's two-level filtered thresholding weights."""
+    _check_pyramid(pyramid)
+    flat, shape = _uv_and_shape(uv)
+    lv = np.asarray(level)
+    if lv.dtype.kind not in "iu":
+        raise TypeError(f"level: expected integer level indices, got dtype {lv.dtype}")
+    lv = np.ascontiguousarray(np.broadcast_to(lv, shape).ravel(), dtype=np.int64)
+    texels, offsets, shapes = pyramid.packed()
+    out = np.empty((flat.shape[0], texels.shape[1]), dtype=np.float64)
+    K.sample_level(texels, offsets, shapes, flat, lv, out)
+    return _finish(out, shape, texels.shape[1], dtype)
+
+
+def level_weights(pyramid: MipPyramid, lod) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The two levels trilinear filtering blends and their weights: (k0, k1, w1) with
+    lambda clamped to [0, L - 1], k0 = floor, k1 = min(k0 + 1, L - 1), w1 = frac."""
+    _check_pyramid(pyramid)
+    lam = np.clip(np.asarray(lod, dtype=np.float64), 0.0, pyramid.n_levels - 1)
+    k0 = np.floor(lam).astype(np.int64)
+    k1 = np.minimum(k0 + 1, pyramid.n_levels - 1)
+    return k0, k1, lam - k0

@@ -1,0 +1,125 @@
+"""Mip pyramids, CLAHE pyramids and samplers against naive loops."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from refnpr.texture import (
+    build_pyramid,
+    clahe_pyramid,
+    level_weights,
+    load_texture,
+    rank_equalize,
+    sample_level,
+    sample_trilinear,
+)
+
+
+def naive_bilinear(tex: np.ndarray, u: float, v: float) -> np.ndarray:
+    """GL_LINEAR + GL_REPEAT by the book (OpenGL 4.6 sec. 8.14.2), one sample at a time."""
+    rows, cols = tex.shape[:2]
+    x, y = u * cols - 0.5, v * rows - 0.5
+    i0, j0 = math.floor(x), math.floor(y)
+    a, b = x - i0, y - j0
+    acc = 0.0
+    for dj, wy in ((0, 1 - b), (1, b)):
+        for di, wx in ((0, 1 - a), (1, a)):
+            acc = acc + wx * wy * tex[(j0 + dj) % rows, (i0 + di) % cols].astype(np.float64)
+    return acc
+
+
+def test_level_sizes_follow_gl_rule():
+    p = build_pyramid(np.zeros((37, 100), np.float32))
+    sizes = [lv.shape for lv in p.levels]
+    assert sizes[0] == (37, 100) and sizes[-1] == (1, 1)
+    for (h0, w0), (h1, w1) in zip(sizes, sizes[1:], strict=False):
+        assert (h1, w1) == (max(1, h0 // 2), max(1, w0 // 2))
+
+
+@given(st.integers(1, 40), st.integers(1, 40), st.integers(0, 2**31 - 1))
+def test_box_filter_preserves_mean(h, w, seed):
+    img = np.random.default_rng(seed).random((h, w)).astype(np.float32)
+    p = build_pyramid(img)
+    for lv in p.levels:
+        assert lv.mean() == pytest.approx(img.mean(), abs=1e-5)
+
+
+def test_bilinear_matches_naive_loop():
+    rng = np.random.default_rng(1)
+    tex = rng.random((8, 12, 3)).astype(np.float32)
+    p = build_pyramid(tex)
+    uv = rng.uniform(-2, 3, (200, 2))
+    got = sample_level(p, uv, 0)
+    want = np.array([naive_bilinear(tex, u, v) for u, v in uv])
+    np.testing.assert_allclose(got, want, atol=1e-6)
+
+
+def test_trilinear_blends_two_levels_and_clamps():
+    rng = np.random.default_rng(2)
+    p = build_pyramid(rng.random((16, 16)).astype(np.float32))
+    uv = rng.random((50, 2))
+    lod = rng.uniform(-3, 8, 50)
+    got = sample_trilinear(p, uv, lod)
+    k0, k1, f = level_weights(p, lod)
+    a = np.array([naive_bilinear(p.levels[k], *t) for k, t in zip(k0, uv, strict=True)])
+    b = np.array([naive_bilinear(p.levels[k], *t) for k, t in zip(k1, uv, strict=True)])
+    np.testing.assert_allclose(got, (1 - f) * a + f * b, atol=1e-6)
+    assert np.all(k0 >= 0) and np.all(k1 <= p.n_levels - 1)
+
+
+def test_texel_centre_returns_the_texel():
+    tex = np.arange(12, dtype=np.float32).reshape(3, 4) / 12
+    p = build_pyramid(tex)
+    uv = np.array([[(2 + 0.5) / 4, (1 + 0.5) / 3]])
+    assert sample_level(p, uv, 0)[0] == pytest.approx(tex[1, 2])
+
+
+def test_rank_equalize_is_uniform_and_monotone():
+    x = np.random.default_rng(3).random((32, 32)) ** 3
+    r = rank_equalize(x)
+    assert r.mean() == pytest.approx(0.5, abs=1e-6)
+    order = np.argsort(x, axis=None)
+    assert np.all(np.diff(r.ravel()[order]) > 0)
+
+
+def test_clahe_pyramid_is_uniform_per_level_and_paper_mode_is_not():
+    brick = load_texture("brick")
+    exact = clahe_pyramid(brick, window=16)
+    for lv in exact.levels:
+        if lv.size >= 64:
+            hist, _ = np.histogram(lv, bins=8, range=(0, 1))
+            assert hist.min() >= 0.95 * hist.max()  # uniform within rank ties
+    paper = clahe_pyramid(brick, window=16, uniform=False)
+    assert abs(paper.levels[0].mean() - 0.5) > 0.05  # CLAHE alone only approximates uniformity
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "exc", "match"),
+    [
+        ({"window": 1}, ValueError, r"window: expected an integer >= 2"),
+        ({"clip_limit": 0.0}, ValueError, r"clip_limit: expected a number in \(0, 1\]"),
+        ({"uniform": "yes"}, TypeError, r"uniform: expected a bool"),
+    ],
+)
+def test_clahe_bad_parameters(kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        clahe_pyramid(np.zeros((8, 8), np.float32), **kwargs)
+
+
+def test_sampling_errors():
+    p = build_pyramid(np.zeros((4, 4), np.float32))
+    with pytest.raises(ValueError, match=r"uv: expected shape \(\.\.\., 2\)"):
+        sample_trilinear(p, np.zeros((3, 3)), np.zeros(3))
+    with pytest.raises(ValueError, match="uv: contains NaN"):
+        sample_trilinear(p, np.full((1, 2), np.nan), np.zeros(1))
+    with pytest.raises(ValueError, match=r"lod: expected shape \(2,\)"):
+        sample_trilinear(p, np.zeros((2, 2)), np.zeros(3))
+    with pytest.raises(TypeError, match="pyramid: expected refnpr.texture.MipPyramid"):
+        sample_trilinear(np.zeros((4, 4)), np.zeros((1, 2)), np.zeros(1))
+    with pytest.raises(ValueError, match="texture: 'nope' is neither a built-in texture"):
+        load_texture("nope")
+    with pytest.raises(ValueError, match=r"float pixels must lie in \[0, 1\]"):
+        build_pyramid(np.full((2, 2), 2.0))
