@@ -10,6 +10,8 @@
 
 Suite format::
 
+    include = ["veryovka.toml"]  # optional: files of more [[case]] tables (same defaults)
+
     [defaults]              # any case key; the values below are the built-in defaults
     width = 256
     height = 192
@@ -97,11 +99,25 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
         data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: invalid TOML: {exc}") from None
-    unknown = set(data) - {"defaults", "case"}
+    unknown = set(data) - {"defaults", "case", "include"}
     if unknown:
         raise ValueError(
-            f"{path}: unknown top-level keys {sorted(unknown)}; use [defaults] and [[case]]"
+            f"{path}: unknown top-level keys {sorted(unknown)}; use include, [defaults], [[case]]"
         )
+    raw_cases = list(data.get("case", []))
+    for inc in data.get("include", []):
+        inc_path = path.parent / inc
+        if not inc_path.is_file():
+            raise ValueError(
+                f"{path}: include {inc!r} does not exist (paths are relative to the suite)"
+            )
+        try:
+            inc_data = tomllib.loads(inc_path.read_text())
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"{inc_path}: invalid TOML: {exc}") from None
+        if set(inc_data) - {"case"}:
+            raise ValueError(f"{inc_path}: an included file holds only [[case]] tables")
+        raw_cases += list(inc_data.get("case", []))
     defaults = dict(_DEFAULTS)
     for key, value in data.get("defaults", {}).items():
         if key not in _DEFAULTS:
@@ -110,7 +126,7 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
             )
         defaults[key] = value
     cases, seen = [], set()
-    for i, raw in enumerate(data.get("case", [])):
+    for i, raw in enumerate(raw_cases):
         raw = dict(raw)
         name = raw.pop("name", None)
         scene = raw.pop("scene", None)

@@ -1,3 +1,9 @@
-"""Imports every style module so that each registers itself (used by the registry)."""
+"""Imports every public style module of this package so that each registers itself."""
 
-from . import smooth, toon  # noqa: F401
+import importlib
+import pkgutil
+from pathlib import Path
+
+for _info in pkgutil.iter_modules([str(Path(__file__).parent)]):
+    if not _info.name.startswith("_") and _info.name != "base":
+        importlib.import_module(f"refnpr.styles.{_info.name}")

@@ -87,3 +87,13 @@ def test_only_unknown_name(tmp_path):
     suite.write_text(_MINI.format(n=2))
     with pytest.raises(ValueError, match=r"only: unknown case names \['zzz'\]"):
         check_suite(suite, only=["zzz"])
+
+
+def test_include_adds_cases_and_missing_include_fails(tmp_path):
+    (tmp_path / "more.toml").write_text("[[case]]\nname = 'b'\nscene = 'sphere'\n")
+    suite = tmp_path / "suite.toml"
+    suite.write_text("include = ['more.toml']\n" + _MINI.format(n=2))
+    assert [c.name for c in load_suite(suite)] == ["a", "g", "b"]
+    suite.write_text("include = ['gone.toml']\n" + _MINI.format(n=2))
+    with pytest.raises(ValueError, match="include 'gone.toml' does not exist"):
+        load_suite(suite)
