@@ -147,5 +147,9 @@ def style_from_spec(spec: Any) -> Style:
         name = params.pop("name", None)
         if name is None:
             raise ValueError(f"style: a style table needs a 'name' key, got keys {sorted(spec)}")
-        return get_style(name, **params)
+        contours = params.pop("contours", None) if name != "contoured" else None
+        style = get_style(name, **params)
+        if contours not in (None, False):
+            return get_style("contoured", base=style, contours=contours)
+        return style
     raise TypeError(f"style: expected a Style, a name or a table, got {type(spec).__name__}")

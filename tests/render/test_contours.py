@@ -1,0 +1,98 @@
+"""The contour layer: edge tables, silhouette placement against the analytic outline, hiding."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from refnpr.raster import Camera, Mesh, rasterize
+from refnpr.scenes import Light, Material, Scene, SceneObject, uv_sphere
+from refnpr.styles import ShadeContext, get_style
+from refnpr.styles.contours import ContourLayer, edge_table
+
+
+def _scene(mesh, eye=(0.0, 0.0, 5.0)):
+    cam = Camera.look_at(eye, (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 40.0, 0.1, 100.0)
+    return Scene(
+        objects=(SceneObject(mesh, np.eye(4), Material(), "m"),),
+        camera=cam,
+        lights=(Light(),),
+        name="t",
+    )
+
+
+def _cube() -> Mesh:
+    tm = trimesh.creation.box(extents=(1.6, 1.6, 1.6))
+    return Mesh(tm.vertices, tm.faces, normals=tm.vertex_normals, name="cube")
+
+
+def test_cube_edge_table():
+    m = _cube()
+    t = edge_table(m.positions, m.faces)
+    assert len(t.edges) == 18  # 12 cube edges + 6 face diagonals
+    assert np.all(t.faces[:, 1] >= 0)  # closed
+    np.testing.assert_allclose(np.sort(t.dihedral_deg), [0.0] * 6 + [90.0] * 12, atol=1e-9)
+
+
+def test_uv_seams_are_not_boundaries():
+    s = uv_sphere(1.0, 32, 16)
+    t = edge_table(s.positions, s.faces)
+    assert np.all(t.faces[:, 1] >= 0)
+
+
+def _coverage(scene, layer, size=(160, 160), spp=1):
+    gb = rasterize(scene, scene.camera, *size, ("depth",), spp)
+    return layer.coverage(ShadeContext(gb, scene)), gb
+
+
+def test_sphere_silhouette_lies_on_the_projected_outline():
+    scene = _scene(uv_sphere(1.0, 128, 64))
+    cov, gb = _coverage(scene, ContourLayer(width=2.0))
+    # analytic outline: a sphere of radius 1 at distance 5 subtends sin(a) = 1/5
+    f = 1.0 / np.tan(np.radians(20.0))
+    r_px = np.tan(np.arcsin(1 / 5)) * f * 80  # NDC radius * half height
+    y, x = np.mgrid[0:160, 0:160] + 0.5
+    dist = np.hypot(x - 80, y - 80)
+    assert cov[np.abs(dist - r_px) < 0.4].mean() > 0.9
+    assert cov[dist < r_px - 3].max() == 0.0  # no lines inside (smooth surface, no creases)
+    assert cov[dist > r_px + 3].max() == 0.0
+
+
+def test_hidden_cube_edges_are_removed():
+    scene = _scene(_cube(), eye=(3.0, 2.5, 4.0))
+    layer = ContourLayer(width=1.5, crease_angle=45.0, silhouettes=False)
+    cov, gb = _coverage(scene, layer, size=(200, 200))
+    vp = gb.view_projection
+
+    def px(p):
+        c = vp @ np.append(p, 1.0)
+        return (c[0] / c[3] + 1) * 100, (1 - c[1] / c[3]) * 100
+
+    front = px(np.array([0.8, 0.8, 0.0]))  # middle of the edge nearest the eye (visible)
+    back = px(np.array([-0.8, -0.8, 0.0]))  # middle of the edge farthest away (hidden)
+    assert cov[int(front[1]), int(front[0])] > 0.9
+    assert cov[int(back[1]), int(back[0])] == 0.0
+
+
+def test_contoured_wraps_any_style_and_adds_depth():
+    scene = _scene(uv_sphere())
+    style = get_style(
+        "contoured", base={"name": "toon", "specular": False}, contours={"width": 3.0}
+    )
+    assert style.requires(scene) == {"normal", "mesh_id", "depth"}
+    from refnpr.render import render
+
+    img = render(scene, {"name": "toon", "contours": True}, 64, 64)
+    assert img.rgba[..., :3].min() == pytest.approx(0.0, abs=1e-6)  # black lines present
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"width": 0.0}, r"width: expected a value > 0.0"),
+        ({"crease_angle": 200.0}, r"crease_angle: expected a value <= 180.0"),
+        ({"color": (2.0, 0.0, 0.0)}, r"color: expected 3 values in \[0, 1\]"),
+    ],
+)
+def test_bad_layer_parameters(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        ContourLayer(**kwargs)
