@@ -1,0 +1,84 @@
+"""Validation of builder and scene parameters (private).
+
+Every check raises ``TypeError`` or ``ValueError`` whose message names the parameter, the value
+received, what was expected and how to fix it.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+__all__ = ["check_int", "check_real", "check_vec", "describe"]
+
+
+def describe(value) -> str:
+    """Short ``repr`` of ``value`` for an error message."""
+    text = repr(value.tolist() if isinstance(value, np.ndarray) else value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def check_int(name: str, value, *, minimum: int | None = None, maximum: int | None = None) -> int:
+    """``value`` as an ``int`` in ``[minimum, maximum]`` (bools and floats are rejected)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(
+            f"{name}: expected an integer, got {type(value).__name__} {describe(value)}"
+        )
+    v = int(value)
+    if minimum is not None and v < minimum:
+        raise ValueError(f"{name}: expected an integer >= {minimum}, got {v}")
+    if maximum is not None and v > maximum:
+        raise ValueError(f"{name}: expected an integer <= {maximum}, got {v}; use a smaller value")
+    return v
+
+
+def check_real(
+    name: str,
+    value,
+    *,
+    positive: bool = False,
+    nonnegative: bool = False,
+) -> float:
+    """``value`` as a finite ``float``; optionally ``> 0`` or ``>= 0``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(
+            f"{name}: expected a real number, got {type(value).__name__} {describe(value)}"
+        )
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: expected a finite number, got {v}")
+    if positive and v <= 0.0:
+        raise ValueError(f"{name}: expected a positive number, got {v}")
+    if nonnegative and v < 0.0:
+        raise ValueError(f"{name}: expected a number >= 0, got {v}")
+    return v
+
+
+def check_vec(
+    name: str,
+    value,
+    n: int,
+    *,
+    broadcast_scalar: bool = False,
+    nonnegative: bool = False,
+    positive: bool = False,
+) -> tuple[float, ...]:
+    """``value`` as a tuple of ``n`` finite floats.
+
+    With ``broadcast_scalar=True`` a single number ``x`` stands for ``(x,) * n``.
+    """
+    if broadcast_scalar and isinstance(value, numbers.Real) and not isinstance(value, bool):
+        value = (value,) * n
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
+        hint = " (or a single number)" if broadcast_scalar else ""
+        raise TypeError(f"{name}: expected a list of {n} numbers{hint}, got {describe(value)}")
+    items = list(value)
+    if len(items) != n:
+        raise ValueError(f"{name}: expected {n} numbers, got {len(items)}: {describe(value)}")
+    out = tuple(
+        check_real(f"{name}[{i}]", x, nonnegative=nonnegative, positive=positive)
+        for i, x in enumerate(items)
+    )
+    return out

@@ -1,0 +1,280 @@
+"""The scene data model: meshes with transforms and materials, a camera, lights.
+
+World space is right-handed with +y up (the built-in meshes stand on y = 0). The renderer
+and the CLI read these frozen dataclasses; :mod:`refnpr.scenes.toml_format` builds them from
+scene files.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..raster import Camera, Mesh
+from ._params import check_real, check_vec
+
+__all__ = ["Material", "Light", "SceneObject", "Scene", "transform_matrix"]
+
+LIGHT_KINDS = ("directional", "point")
+
+
+@dataclass(frozen=True)
+class Material:
+    """Material terms of Veryovka 2002 eq. 1 plus the texture a style may use.
+
+    Attributes
+    ----------
+    ambient, diffuse, specular : tuple of 3 float
+        m_a, m_d, m_s (>= 0, RGB). A single number stands for a grey.
+    shininess : float
+        Specular exponent (> 0).
+    texture : str or None
+        Name of a built-in texture or a file path (a threshold texture or screen); styles decide
+        how to use it. Paths in scene files are resolved against the file's directory.
+    uv_scale : tuple of 2 float
+        Multiplies uv before texture lookup (> 0). A single number scales both.
+    """
+
+    ambient: tuple[float, float, float] = (0.15, 0.15, 0.15)
+    diffuse: tuple[float, float, float] = (0.8, 0.8, 0.8)
+    specular: tuple[float, float, float] = (0.3, 0.3, 0.3)
+    shininess: float = 32.0
+    texture: str | None = None
+    uv_scale: tuple[float, float] = (1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        for name in ("ambient", "diffuse", "specular"):
+            value = check_vec(name, getattr(self, name), 3, broadcast_scalar=True, nonnegative=True)
+            object.__setattr__(self, name, value)
+        object.__setattr__(
+            self, "shininess", check_real("shininess", self.shininess, positive=True)
+        )
+        texture = self.texture
+        if isinstance(texture, Path):
+            texture = str(texture)
+        if texture is not None and (not isinstance(texture, str) or not texture):
+            raise TypeError(
+                f"texture: expected a texture name or a file path (non-empty str) or None, "
+                f"got {texture!r}"
+            )
+        object.__setattr__(self, "texture", texture)
+        uv_scale = check_vec("uv_scale", self.uv_scale, 2, broadcast_scalar=True, positive=True)
+        object.__setattr__(self, "uv_scale", uv_scale)
+
+
+@dataclass(frozen=True)
+class Light:
+    """A light source of Veryovka 2002 eq. 1.
+
+    Attributes
+    ----------
+    kind : {"directional", "point"}
+    direction : tuple of 3 float
+        Unit vector *towards* the light (directional lights); normalized on construction.
+    position : tuple of 3 float or None
+        World position (point lights; required for them, must be None for directional ones).
+    color : tuple of 3 float
+        Light intensity l_i (RGB, >= 0).
+    """
+
+    kind: str = "directional"
+    direction: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    position: tuple[float, float, float] | None = None
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        if self.kind not in LIGHT_KINDS:
+            raise ValueError(
+                f"kind: unknown light kind {self.kind!r}; expected one of {LIGHT_KINDS}"
+            )
+        d = check_vec("direction", self.direction, 3)
+        length = math.sqrt(sum(x * x for x in d))
+        if length == 0.0:
+            raise ValueError(
+                "direction: must not be the zero vector; give the direction to the light"
+            )
+        object.__setattr__(self, "direction", tuple(x / length for x in d))
+        if self.kind == "point":
+            if self.position is None:
+                raise ValueError("position: a point light needs a position [x, y, z]")
+            object.__setattr__(self, "position", check_vec("position", self.position, 3))
+        elif self.position is not None:
+            raise ValueError(
+                f"position: a directional light has no position (got {self.position!r}); "
+                "use kind='point' or give only a direction"
+            )
+        object.__setattr__(
+            self,
+            "color",
+            check_vec("color", self.color, 3, broadcast_scalar=True, nonnegative=True),
+        )
+
+
+def transform_matrix(
+    translate=(0.0, 0.0, 0.0), rotate_deg=(0.0, 0.0, 0.0), scale=1.0
+) -> np.ndarray:
+    """Object-to-world matrix ``T @ Rz @ Ry @ Rx @ S``.
+
+    Parameters
+    ----------
+    translate : 3 floats
+    rotate_deg : 3 floats
+        Rotations about x, then y, then z (degrees, counter-clockwise looking down the axis).
+    scale : float or 3 floats
+        Uniform or per-axis scale (non-zero).
+
+    Returns
+    -------
+    (4, 4) float64
+    """
+    t = check_vec("translate", translate, 3)
+    rx, ry, rz = (math.radians(a) for a in check_vec("rotate_deg", rotate_deg, 3))
+    s = check_vec("scale", scale, 3, broadcast_scalar=True)
+    if any(x == 0.0 for x in s):
+        raise ValueError(f"scale: must be non-zero on every axis, got {list(s)}")
+    cx, sx = math.cos(rx), math.sin(rx)
+    cy, sy = math.cos(ry), math.sin(ry)
+    cz, sz = math.cos(rz), math.sin(rz)
+    r_x = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    r_y = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    r_z = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+    m = np.eye(4)
+    m[:3, :3] = r_z @ r_y @ r_x @ np.diag(s)
+    m[:3, 3] = t
+    return m
+
+
+def _as_transform(value) -> np.ndarray:
+    try:
+        m = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"transform: expected a (4, 4) array of numbers, got {value!r}") from exc
+    if m.shape != (4, 4) or not np.all(np.isfinite(m)):
+        raise ValueError(f"transform: expected a finite (4, 4) matrix, got shape {m.shape}")
+    if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
+        raise ValueError(f"transform: the last row must be (0, 0, 0, 1), got {m[3].tolist()}")
+    if abs(np.linalg.det(m[:3, :3])) < 1e-300:
+        raise ValueError("transform: the 3x3 part is singular; use a non-zero scale")
+    m.setflags(write=False)
+    return m
+
+
+@dataclass(frozen=True, eq=False)
+class SceneObject:
+    """A mesh placed in the scene.
+
+    Attributes
+    ----------
+    mesh : Mesh
+        In object space.
+    transform : (4, 4) float64
+        Object-to-world affine matrix (read-only copy).
+    material : Material
+    name : str
+        Defaults to the mesh's name.
+    """
+
+    mesh: Mesh
+    transform: np.ndarray = field(default_factory=lambda: np.eye(4))
+    material: Material = field(default_factory=Material)
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.mesh, Mesh):
+            raise TypeError(f"mesh: expected a refnpr Mesh, got {type(self.mesh).__name__}")
+        object.__setattr__(self, "transform", _as_transform(self.transform))
+        if not isinstance(self.material, Material):
+            raise TypeError(f"material: expected a Material, got {type(self.material).__name__}")
+        if not isinstance(self.name, str):
+            raise TypeError(f"name: expected a str, got {type(self.name).__name__}")
+        if not self.name:
+            object.__setattr__(self, "name", self.mesh.name)
+
+    def world_mesh(self) -> Mesh:
+        """The mesh in world space (the mesh itself when the transform is the identity).
+
+        Computed once per object and memoized (meshes are immutable)."""
+        cached = self.__dict__.get("_world_mesh")
+        if cached is None:
+            identity = np.array_equal(self.transform, np.eye(4))
+            cached = self.mesh if identity else self.mesh.transformed(self.transform)
+            object.__setattr__(self, "_world_mesh", cached)
+        return cached
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """Objects, a camera and lights: everything a render needs besides the style.
+
+    Attributes
+    ----------
+    objects : tuple of SceneObject
+    camera : Camera
+    lights : tuple of Light
+    ambient : tuple of 3 float
+        Ambient light intensity l_a of Veryovka eq. 1 (>= 0).
+    background : tuple of 4 float
+        RGBA clear colour in [0, 1].
+    name : str
+    style : dict
+        Optional default style from the scene file, e.g. ``{"name": "toon", "n": 3}``; the
+        renderer interprets it (empty if the file has none).
+    """
+
+    objects: tuple[SceneObject, ...]
+    camera: Camera
+    lights: tuple[Light, ...] = (Light(),)
+    ambient: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    background: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    name: str = "scene"
+    style: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        objects = tuple(self.objects)
+        if not objects:
+            raise ValueError("objects: a scene needs at least one object")
+        for i, obj in enumerate(objects):
+            if not isinstance(obj, SceneObject):
+                raise TypeError(f"objects[{i}]: expected a SceneObject, got {type(obj).__name__}")
+        object.__setattr__(self, "objects", objects)
+        if not isinstance(self.camera, Camera):
+            raise TypeError(
+                f"camera: expected a Camera (Camera.look_at(...)), got {type(self.camera).__name__}"
+            )
+        lights = tuple(self.lights)
+        for i, light in enumerate(lights):
+            if not isinstance(light, Light):
+                raise TypeError(f"lights[{i}]: expected a Light, got {type(light).__name__}")
+        object.__setattr__(self, "lights", lights)
+        ambient = check_vec("ambient", self.ambient, 3, broadcast_scalar=True, nonnegative=True)
+        object.__setattr__(self, "ambient", ambient)
+        background = check_vec("background", self.background, 4)
+        if not all(0.0 <= c <= 1.0 for c in background):
+            raise ValueError(
+                f"background: RGBA components must lie in [0, 1], got {list(background)}"
+            )
+        object.__setattr__(self, "background", background)
+        if not isinstance(self.name, str):
+            raise TypeError(f"name: expected a str, got {type(self.name).__name__}")
+        if not isinstance(self.style, dict):
+            raise TypeError(f"style: expected a dict, got {type(self.style).__name__}")
+        object.__setattr__(self, "style", dict(self.style))
+
+    def world_meshes(self) -> list[Mesh]:
+        """Each object's mesh transformed to world space, in object order."""
+        return [obj.world_mesh() for obj in self.objects]
+
+    def with_camera(self, camera: Camera) -> Scene:
+        """A copy with another camera."""
+        return dataclasses.replace(self, camera=camera)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World-space axis-aligned bounding box ``(lo, hi)``, each (3,) float64."""
+        meshes = self.world_meshes()
+        lo = np.min([m.positions.min(axis=0) for m in meshes], axis=0)
+        hi = np.max([m.positions.max(axis=0) for m in meshes], axis=0)
+        return lo, hi

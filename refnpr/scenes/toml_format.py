@@ -1,0 +1,279 @@
+"""Scene files (TOML): reading built-in and user scenes.
+
+A scene file has a few top-level keys and tables (unknown keys are errors)::
+
+    name = "teapot"                        # optional; default: the file name
+    description = "Newell's teapot ..."    # optional; one line, shown by list_scenes()
+    ambient = [1.0, 1.0, 1.0]              # optional; l_a of Veryovka eq. 1 (or one number)
+    background = [1.0, 1.0, 1.0, 1.0]      # optional; RGBA in [0, 1] (RGB means alpha 1)
+
+    [camera]                               # required
+    eye = [6.0, 4.5, 8.0]                  # required
+    target = [0.0, 1.2, 0.0]               # required
+    up = [0.0, 1.0, 0.0]                   # optional (default +y)
+    fov_y = 35.0                           # optional, degrees (default 45)
+    near = 0.1                             # optional (default 0.1)
+    far = 100.0                            # optional (default 100)
+
+    [style]                                # optional; passed to the renderer as a dict
+    name = "toon"
+    n = 3
+
+    [[light]]                              # zero or more; none -> one default directional light
+    kind = "directional"                   # "directional" (default) or "point"
+    direction = [1.0, 1.0, 0.5]            # towards the light (directional)
+    # position = [4.0, 6.0, 3.0]           # point lights only
+    color = [1.0, 1.0, 1.0]                # optional (or one number)
+
+    [[object]]                             # one or more
+    name = "teapot"                        # optional; default: the mesh's name
+    mesh = "teapot"                        # a built-in mesh (see MESH_BUILDERS) ...
+    level = 10                             # ... and its builder's parameters
+    # path = "bunny.obj"                   # ... or a mesh file, relative to this file
+    # uv_projection = "box"                # optional: planar | box | spherical | cylindrical
+    transform = { translate = [0, 0, 0], rotate_deg = [0, 30, 0], scale = 1.0 }
+    # transform = { matrix = [[1,0,0,0], [0,1,0,0], [0,0,1,0], [0,0,0,1]] }   # alternatively
+
+    [object.material]                      # optional; Material fields
+    ambient = [0.15, 0.15, 0.15]           # m_a (or one number)
+    diffuse = [0.8, 0.8, 0.8]              # m_d
+    specular = [0.3, 0.3, 0.3]             # m_s
+    shininess = 32.0
+    texture = "brick"                      # a built-in texture name, or a path (has a suffix or
+                                           # a slash) relative to this file
+    uv_scale = [4.0, 4.0]                  # or one number
+
+``transform`` applies ``scale``, then the rotations about x, y, z (degrees), then ``translate``
+(:func:`~refnpr.scenes.transform_matrix`). A mesh file with several geometries (glTF) becomes
+several objects named ``name[i]`` sharing the transform and material.
+
+Errors are :class:`SceneFileError` (a ``ValueError``) whose message starts with the file and the
+table, and names the key: ``teapot.toml: [[object]] #1 'teapot': level: expected an integer ...``.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import fields
+from importlib import resources
+from pathlib import Path
+
+from ..raster import Camera
+from .registry import mesh_from_spec
+from .scene import Light, Material, Scene, SceneObject, transform_matrix
+
+__all__ = ["SceneFileError", "parse_scene", "load_scene", "list_scenes", "builtin_scene_path"]
+
+_TOP_KEYS = ("name", "description", "ambient", "background", "camera", "style", "light", "object")
+_CAMERA_KEYS = ("eye", "target", "up", "fov_y", "near", "far")
+_LIGHT_KEYS = ("kind", "direction", "position", "color")
+_MATERIAL_KEYS = tuple(f.name for f in fields(Material))
+_TRANSFORM_KEYS = ("translate", "rotate_deg", "scale", "matrix")
+_OBJECT_KEYS = ("name", "transform", "material")  # plus the mesh spec's keys
+
+
+class SceneFileError(ValueError):
+    """A scene file (or dict) that cannot be turned into a Scene; the message names file and key."""
+
+
+@contextmanager
+def _where(source: str, where: str) -> Iterator[None]:
+    """Re-raise ValueError/TypeError/OSError (a missing mesh file) from the block as
+    SceneFileError prefixed with the location."""
+    try:
+        yield
+    except SceneFileError:
+        raise
+    except (ValueError, TypeError, OSError) as exc:
+        raise SceneFileError(f"{source}: {where}: {exc}") from exc
+
+
+def _table(source: str, where: str, value, keys: tuple[str, ...] | None) -> dict:
+    if not isinstance(value, Mapping):
+        raise SceneFileError(
+            f"{source}: {where}: expected a table, got {type(value).__name__} {value!r}"
+        )
+    if keys is not None:
+        for key in value:
+            if key not in keys:
+                raise SceneFileError(
+                    f"{source}: {where}: unknown key {key!r}; valid keys: {', '.join(keys)}"
+                )
+    return dict(value)
+
+
+def _array_of_tables(source: str, key: str, value) -> list:
+    if not isinstance(value, list):
+        raise SceneFileError(
+            f"{source}: {key}: expected an array of tables ([[{key}]]), got {type(value).__name__}"
+        )
+    return value
+
+
+def _material(source: str, where: str, value, base_dir: Path) -> Material:
+    spec = _table(source, where, value, _MATERIAL_KEYS)
+    texture = spec.get("texture")
+    if isinstance(texture, str) and ("/" in texture or "\\" in texture or Path(texture).suffix):
+        path = base_dir / texture
+        if not path.is_file():
+            raise SceneFileError(
+                f"{source}: {where}: texture: file {str(path)!r} not found (a texture with a "
+                "suffix or a slash is a path relative to the scene file; built-in texture names "
+                "have neither)"
+            )
+        spec["texture"] = str(path)
+    with _where(source, where):
+        return Material(**spec)
+
+
+def _transform(source: str, where: str, value):
+    spec = _table(source, where, value, _TRANSFORM_KEYS)
+    with _where(source, where):
+        if "matrix" in spec:
+            if len(spec) > 1:
+                raise ValueError("matrix: give either `matrix` or translate/rotate_deg/scale")
+            return spec["matrix"]
+        return transform_matrix(**spec)
+
+
+def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None = None) -> Scene:
+    """Build a Scene from parsed TOML (the format of this module's docstring).
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed file (``tomllib.load``) or an equivalent dict.
+    base_dir : str or Path
+        Directory that relative mesh and texture paths are resolved against.
+    source : str, optional
+        File name used in error messages (default ``"<scene dict>"``).
+
+    Raises
+    ------
+    SceneFileError
+        A ``ValueError`` naming ``source``, the table and the key.
+    """
+    src = "<scene dict>" if source is None else str(source)
+    base = Path(base_dir)
+    top = _table(src, "top level", data, _TOP_KEYS)
+    if "camera" not in top:
+        raise SceneFileError(
+            f"{src}: missing the [camera] table; add one with eye = [x, y, z] and "
+            "target = [x, y, z] (optional: up, fov_y, near, far)"
+        )
+    cam = _table(src, "[camera]", top["camera"], _CAMERA_KEYS)
+    for key in ("eye", "target"):
+        if key not in cam:
+            raise SceneFileError(f"{src}: [camera]: missing key {key!r} (3 numbers)")
+    with _where(src, "[camera]"):
+        camera = Camera.look_at(**cam)
+    lights = []
+    for i, spec in enumerate(_array_of_tables(src, "light", top.get("light", [{}]))):
+        where = f"[[light]] #{i + 1}"
+        spec = _table(src, where, spec, _LIGHT_KEYS)
+        with _where(src, where):
+            lights.append(Light(**spec))
+    if "object" not in top:
+        raise SceneFileError(f"{src}: no [[object]] tables; a scene needs at least one object")
+    objects = []
+    for i, spec in enumerate(_array_of_tables(src, "object", top["object"])):
+        where = f"[[object]] #{i + 1}"
+        spec = _table(src, where, spec, None)
+        label = spec.get("name", spec.get("mesh", spec.get("path")))
+        if isinstance(label, str):
+            where += f" {label!r}"
+        name = spec.pop("name", None)
+        if name is not None and not isinstance(name, str):
+            raise SceneFileError(f"{src}: {where}: name: expected a string, got {name!r}")
+        transform = _transform(src, f"{where}: transform", spec.pop("transform", {}))
+        material = _material(src, f"{where}: material", spec.pop("material", {}), base)
+        with _where(src, where):
+            meshes = mesh_from_spec(spec, base_dir=base)
+        single = not isinstance(meshes, list)
+        for j, mesh in enumerate([meshes] if single else meshes):
+            obj_name = (name or mesh.name) if single else f"{name or 'object'}[{j}]"
+            with _where(src, where):
+                objects.append(SceneObject(mesh, transform, material, obj_name))
+    if not objects:
+        raise SceneFileError(f"{src}: no [[object]] tables; a scene needs at least one object")
+    style = _table(src, "[style]", top.get("style", {}), None)
+    if "name" in style and not isinstance(style["name"], str):
+        raise SceneFileError(f"{src}: [style]: name: expected a string, got {style['name']!r}")
+    name = top.get("name", Path(src).stem if source is not None else "scene")
+    if not isinstance(top.get("description", ""), str):
+        raise SceneFileError(f"{src}: description: expected a string")
+    background = top.get("background", (1.0, 1.0, 1.0, 1.0))
+    if isinstance(background, list) and len(background) == 3:
+        background = [*background, 1.0]
+    with _where(src, "top level"):
+        return Scene(
+            objects=tuple(objects),
+            camera=camera,
+            lights=tuple(lights),
+            ambient=top.get("ambient", (1.0, 1.0, 1.0)),
+            background=background,
+            name=name,
+            style=style,
+        )
+
+
+def _data_dir() -> Path:
+    return Path(str(resources.files(__package__).joinpath("data")))
+
+
+def _read(path: Path, source: str) -> dict:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneFileError(f"{source}: invalid TOML: {exc}") from exc
+
+
+def list_scenes() -> dict[str, str]:
+    """Built-in scenes: name -> one-line description, sorted by name."""
+    out = {}
+    for path in sorted(_data_dir().glob("*.toml")):
+        out[path.stem] = str(_read(path, path.name).get("description", ""))
+    return out
+
+
+def builtin_scene_path(name: str) -> Path:
+    """Path of the TOML file of built-in scene ``name`` (ValueError listing the names if unknown)."""
+    path = _data_dir() / f"{name}.toml"
+    if not isinstance(name, str) or "/" in name or "\\" in name or not path.is_file():
+        raise ValueError(
+            f"scene: unknown built-in scene {name!r}; valid names: {', '.join(list_scenes())} "
+            "(or give the path of a .toml scene file)"
+        )
+    return path
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """Load a built-in scene by name (see :func:`list_scenes`) or a scene file by path.
+
+    A ``Path``, or a string that ends in ``.toml`` or contains a slash, is a file path;
+    any other string is a built-in name.
+
+    Raises
+    ------
+    ValueError
+        For an unknown built-in name (listing the valid names) or an invalid file
+        (:class:`SceneFileError`, naming the file and the key).
+    FileNotFoundError
+        If a scene file path does not exist.
+    """
+    if isinstance(name_or_path, Path) or (
+        isinstance(name_or_path, str)
+        and (name_or_path.endswith(".toml") or "/" in name_or_path or "\\" in name_or_path)
+    ):
+        path = Path(name_or_path)
+        if not path.is_file():
+            raise FileNotFoundError(f"scene: file {str(path)!r} does not exist")
+        return parse_scene(_read(path, str(path)), path.parent, source=str(path))
+    if not isinstance(name_or_path, str):
+        raise TypeError(
+            f"name_or_path: expected a scene name or a path, got {type(name_or_path).__name__}"
+        )
+    path = builtin_scene_path(name_or_path)
+    return parse_scene(_read(path, path.name), path.parent, source=path.name)

@@ -1,0 +1,89 @@
+"""Plane, room and terrain: orientation, welded corners, tiled uv, analytic normals."""
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from refnpr.scenes import plane, room, terrain, terrain_height
+
+
+def test_plane_faces_up_and_tiles(checks):
+    m = plane(6.0, 4.0, tile=0.5, segments=3)
+    assert m.n_faces == 2 * 3 * 3
+    assert np.allclose(checks.face_normals(m), [0.0, 1.0, 0.0])
+    checks.assert_normals_match_winding(m, min_dot=0.999)
+    # uv = world distance / tile: u grows with x, v grows towards -z
+    assert np.allclose(m.uv[:, 0], (m.positions[:, 0] + 3.0) / 0.5)
+    assert np.allclose(m.uv[:, 1], (2.0 - m.positions[:, 2]) / 0.5)
+    assert m.uv.max(axis=0).tolist() == [12.0, 8.0]
+
+
+@given(
+    width=st.floats(0.1, 50.0),
+    depth=st.floats(0.1, 50.0),
+    height=st.floats(0.1, 50.0),
+    segments=st.integers(1, 9),
+)
+def test_room_corners_weld_exactly(checks, width, depth, height, segments):
+    m = room(width, depth, height, tile=1.0, segments=segments)
+    assert m.n_faces == 3 * 2 * segments**2
+    tm = checks.weld_exact(m)
+    counts = checks.edge_use(tm)
+    # the three shared corner edges weld; the open outline has 6 sides of `segments` edges
+    assert counts.max() == 2 and np.sum(counts == 1) == 6 * segments
+    assert tm.is_winding_consistent
+    checks.assert_normals_match_winding(m, min_dot=0.999)
+
+
+def test_room_faces_inward_and_tiled_uv():
+    m = room(8.0, 6.0, 4.0, tile=2.0, segments=2)
+    n, p = m.normals, m.positions
+    floor = np.all(n == [0.0, 1.0, 0.0], axis=1)
+    back = np.all(n == [0.0, 0.0, 1.0], axis=1)
+    left = np.all(n == [1.0, 0.0, 0.0], axis=1)
+    assert (floor | back | left).all()
+    assert np.all(p[floor, 1] == 0.0) and np.all(p[back, 2] == -3.0) and np.all(p[left, 0] == -4.0)
+    # tiled uv: distance / tile along each rectangle
+    assert np.allclose(m.uv[back], np.stack([p[back, 0] + 4.0, p[back, 1]], axis=1) / 2.0)
+    assert np.allclose(m.uv[left], np.stack([3.0 - p[left, 2], p[left, 1]], axis=1) / 2.0)
+    assert m.uv[floor].max(axis=0).tolist() == [4.0, 3.0]
+
+
+def test_terrain_normals_match_finite_differences(checks):
+    size, height = 10.0, 1.0
+    m = terrain(size, n=64, height=height, octaves=4, seed=3)
+    checks.assert_normals_match_winding(m, min_dot=0.5)
+    x, z = m.positions[:, 0], m.positions[:, 2]
+    h = 1e-5
+    kw = dict(size=size, height=height, octaves=4, seed=3)
+    hx = (terrain_height(x + h, z, **kw)[0] - terrain_height(x - h, z, **kw)[0]) / (2 * h)
+    hz = (terrain_height(x, z + h, **kw)[0] - terrain_height(x, z - h, **kw)[0]) / (2 * h)
+    fd = np.stack([-hx, np.ones_like(hx), -hz], axis=1)
+    fd /= np.linalg.norm(fd, axis=1, keepdims=True)
+    assert np.allclose(m.normals, fd, atol=1e-7)
+    assert np.all(np.abs(m.positions[:, 1]) <= height)
+    assert m.uv.min() == 0.0 and m.uv.max() == 1.0
+    assert np.allclose(m.uv[:, 0], x / size + 0.5) and np.allclose(m.uv[:, 1], 0.5 - z / size)
+
+
+def test_terrain_seeded():
+    a, b, c = terrain(n=16, seed=1), terrain(n=16, seed=1), terrain(n=16, seed=2)
+    assert np.array_equal(a.positions, b.positions)
+    assert not np.array_equal(a.positions, c.positions)
+    assert terrain(n=16, height=0.0).positions[:, 1].max() == 0.0
+
+
+@pytest.mark.parametrize(
+    "call, exc, match",
+    [
+        (lambda: plane(width=-1.0), ValueError, "width: expected a positive number, got -1.0"),
+        (lambda: room(segments=0), ValueError, "segments: expected an integer >= 1, got 0"),
+        (lambda: room(tile="1"), TypeError, "tile: expected a real number, got str"),
+        (lambda: terrain(seed=-1), ValueError, "seed: expected an integer >= 0, got -1"),
+        (lambda: terrain(octaves=0), ValueError, "octaves: expected an integer >= 1, got 0"),
+    ],
+)
+def test_flat_validation(call, exc, match):
+    with pytest.raises(exc, match=match):
+        call()
