@@ -190,39 +190,75 @@ def _lam_rows(c0, c1, c2, nw, nh):
 
 
 @pnjit
-def setup_triangles(clip, faces, width, height, guard, cull, n, coords, status, qplane):
-    """Per triangle: trivial reject, snapped screen coordinates (fast path) and the depth plane.
-
-    status[t]: 0 rejected, 1 one primitive in coords[t] (1/256 px), 2 needs clipping.
-    qplane[t] = (a, b, c): Q = 1/w = a sx + b sy + c on the sample grid (exact vertices).
+def transform_vertices(positions, vp, width, height, guard, clip, snapped, outcode):
+    """Vertex stage: clip = VP (p, 1) with a fixed evaluation order (no BLAS, no FMA
+    contraction), the clip-plane outcode bits, and for vertices inside every plane the position
+    snapped to 1/256 px (the same ``_snap`` the clipper uses, so shared vertices agree bitwise).
     """
     half_w = 0.5 * width
     half_h = 0.5 * height
+    for i in prange(positions.shape[0]):
+        x = positions[i, 0]
+        y = positions[i, 1]
+        z = positions[i, 2]
+        for r in range(4):
+            clip[i, r] = ((vp[r, 0] * x + vp[r, 1] * y) + vp[r, 2] * z) + vp[r, 3]
+        c = clip[i]
+        code = 0
+        for p in range(N_PLANES):
+            if _plane_dist(p, c[0], c[1], c[2], c[3], guard) < 0.0:
+                code |= 1 << p
+        outcode[i] = code
+        if code == 0:
+            _snap(c, c[3], half_w, half_h, snapped[i], 0)
+        else:
+            snapped[i, 0] = 0
+            snapped[i, 1] = 0
+
+
+@pnjit
+def setup_triangles(clip, snapped, outcode, faces, n, width, height, cull, coords, status, qplane):
+    """Per triangle: trivial reject, snapped screen coordinates (fast path) and the depth plane.
+
+    status[t]: 0 rejected (outside a plane, zero area, culled, or covering no sample centre),
+    1 one primitive in coords[t] (1/256 px), 2 needs clipping.
+    qplane[t] = (a, b, c): Q = 1/w = a sx + b sy + c on the sample grid (exact vertices).
+    """
     nw = n * width
     nh = n * height
     for t in prange(faces.shape[0]):
-        c0 = clip[faces[t, 0]]
-        c1 = clip[faces[t, 1]]
-        c2 = clip[faces[t, 2]]
+        i0 = faces[t, 0]
+        i1 = faces[t, 1]
+        i2 = faces[t, 2]
         status[t] = 0
-        reject, any_out = _outcode_reject(c0, c1, c2, guard)
-        if reject:
-            continue
-        det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(c0, c1, c2, nw, nh)
+        o0 = outcode[i0]
+        o1 = outcode[i1]
+        o2 = outcode[i2]
+        if (o0 & o1 & o2) != 0:
+            continue  # all three vertices outside one plane
+        clipped = (o0 | o1 | o2) != 0
+        if not clipped:
+            row = coords[t]
+            row[0] = snapped[i0, 0]
+            row[1] = snapped[i0, 1]
+            row[2] = snapped[i1, 0]
+            row[3] = snapped[i1, 1]
+            row[4] = snapped[i2, 0]
+            row[5] = snapped[i2, 1]
+            if not _keep(_signed_area(row), cull):
+                continue
+            sx0, sx1, sy0, sy1 = _sample_bbox(row, n, nw, nh)
+            if sx0 > sx1 or sy0 > sy1:
+                continue  # covers no sample centre
+        det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(
+            clip[i0], clip[i1], clip[i2], nw, nh
+        )
         if det == 0.0 or not math.isfinite(det):
             continue  # the triangle's plane passes through the eye: it projects to a line
         qplane[t, 0] = l00 + l10 + l20
         qplane[t, 1] = l01 + l11 + l21
         qplane[t, 2] = l02 + l12 + l22
-        if any_out:
-            status[t] = 2
-            continue
-        row = coords[t]
-        _snap(c0, c0[3], half_w, half_h, row, 0)
-        _snap(c1, c1[3], half_w, half_h, row, 2)
-        _snap(c2, c2[3], half_w, half_h, row, 4)
-        if _keep(_signed_area(row), cull):
-            status[t] = 1
+        status[t] = 2 if clipped else 1
 
 
 @njit
@@ -616,7 +652,7 @@ def interp_normal(tri_id, lam, faces, normals, out):
 @pnjit
 def resolve_coverage(tri_id, n, coverage):
     """coverage[y, x] = fraction of the n x n samples of pixel (x, y) covered by a triangle."""
-    inv = 1.0 / (n * n)
+    nn = float(n * n)
     for y in prange(coverage.shape[0]):
         for x in range(coverage.shape[1]):
             k = 0
@@ -624,4 +660,4 @@ def resolve_coverage(tri_id, n, coverage):
                 for i in range(n):
                     if tri_id[y * n + j, x * n + i] >= 0:
                         k += 1
-            coverage[y, x] = k * inv
+            coverage[y, x] = k / nn  # correctly rounded k / n^2

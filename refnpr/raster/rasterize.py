@@ -225,7 +225,11 @@ def rasterize(
         faces = np.concatenate([m.faces + o for m, o in zip(meshes, offsets[:-1], strict=True)])
     first_tri = np.cumsum([0] + [m.n_faces for m in meshes]).astype(np.int64)
     vp = camera.projection_matrix(width, height) @ camera.view_matrix()
-    clip = np.ascontiguousarray(positions @ vp[:, :3].T + vp[:, 3])  # (N, 4) clip coordinates
+    n_verts = positions.shape[0]
+    clip = np.empty((n_verts, 4), dtype=np.float64)
+    snapped = np.empty((n_verts, 2), dtype=np.int32)
+    outcode = np.empty(n_verts, dtype=np.uint8)
+    K.transform_vertices(positions, vp, width, height, guard, clip, snapped, outcode)
     timings: dict[str, float] = {"vertex": time.perf_counter() - t_start}
 
     # ---- triangle setup, clipping, binning ---------------------------------------------------
@@ -235,7 +239,7 @@ def rasterize(
     status = np.empty(m_tris, dtype=np.int8)
     qplane = np.empty((m_tris, 3), dtype=np.float64)
     cull = int(cull_backfaces)
-    K.setup_triangles(clip, faces, width, height, guard, cull, n, coords, status, qplane)
+    K.setup_triangles(clip, snapped, outcode, faces, n, width, height, cull, coords, status, qplane)
     todo = np.flatnonzero(status == 2)
     sub, sub_parent, sub_first = K.clip_triangles(
         clip, faces, todo, width, height, guard, cull, max(1, todo.size * (K.MAX_POLY - 2))
