@@ -1,0 +1,1 @@
+"""refnpr.formulas."""

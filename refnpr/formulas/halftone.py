@@ -1,0 +1,358 @@
+"""Freudenberg, Masuch, Strothotte 2002, *Real-Time Halftoning: A Primitive For
+Non-Photorealistic Shading* (Eurographics Workshop on Rendering 2002).
+
+Thresholding a target intensity against a halftone screen held in texture space (sec. 3), stroke
+maps that store ordered stroke layers in one screen (sec. 4.2), a 1D engraving screen (sec. 4.1),
+indication mapping and per-stroke lighting (sec. 5).
+
+Conventions (see ``docs/paper-notes.md``, "Freudenberg et al. 2002"): screens, intensities and
+outputs are in [0, 1] with 0 = black and 1 = white. A screen value g is drawn black while
+``g + intensity <= 1``, so darker screen values stay black up to lighter intensities. Inputs are
+finite reals whose shapes broadcast; float32 in -> float32 out, else float64.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._shading_checks import broadcast, check_range, frac, real, trailing, unit_vectors
+from ._validate import check_int, check_scalar, describe, result_dtype
+
+__all__ = [
+    "binary_threshold",
+    "smooth_threshold",
+    "smooth_threshold_tone",
+    "stroke_levels",
+    "encode_stroke_map",
+    "decode_stroke_map",
+    "layer_onsets",
+    "apply_indication",
+    "stroke_lighting",
+    "engraving_screen",
+    "engraving_ramp",
+]
+
+_PROFILES = ("ramp", "triangle")
+
+
+def _pair(screen, intensity) -> tuple[np.ndarray, np.ndarray, np.dtype]:
+    dt = result_dtype(screen, intensity)
+    scr = real("screen", screen, dt)
+    x = real("intensity", intensity, dt)
+    broadcast(screen=scr, intensity=x)
+    return scr, x, dt
+
+
+def binary_threshold(screen, intensity) -> np.ndarray:
+    """Binary threshold of Freudenberg sec. 3.1 in its register-combiner (mux) form.
+
+    ``tmp = screen + (intensity - 0.5)``; ``out = mux(tmp, 0, 1) = 0 if tmp <= 0.5 else 1``, i.e.
+    white where ``screen + intensity > 1``. With a screen uniform on [0, 1] the white fraction is
+    the intensity.
+
+    Parameters
+    ----------
+    screen : array_like in [0, 1]
+        Halftone screen sampled at the pixel (texture ``tex``).
+    intensity : array_like
+        Target intensity (``col``); broadcasts against ``screen``.
+
+    Returns
+    -------
+    ndarray of 0.0 / 1.0; float64, or float32 if the inputs are float32.
+    """
+    scr, x, dt = _pair(screen, intensity)
+    tmp = scr + (x - 0.5)  # sec. 3.1: add(tex, col - 0.5)
+    return np.asarray(tmp > 0.5, dtype=dt)  # sec. 3.1: mux(tmp, 0, 1)
+
+
+def smooth_threshold(screen, intensity, c: float = 4.0, *, centred: bool = False) -> np.ndarray:
+    """Smooth threshold of Freudenberg sec. 3.2: ``clip(1 - c (1 - screen - intensity), 0, 1)``.
+
+    A ramp of slope c instead of a step (antialiased strokes). The paper's form is one-sided: black
+    at ``screen + intensity <= 1 - 1/c``, white at ``>= 1``; the grey ramp lies where the binary
+    threshold is black, so the mean output exceeds the intensity by 1/(2c) (lighter; see
+    :func:`smooth_threshold_tone`). ``centred=True`` centres the ramp on the binary threshold,
+    ``clip(1/2 - c (1 - screen - intensity), 0, 1)``, which has no tone bias. Both tend to
+    :func:`binary_threshold` as c grows.
+
+    Parameters
+    ----------
+    screen : array_like in [0, 1]
+        Halftone screen.
+    intensity : array_like
+        Target intensity; broadcasts against ``screen``.
+    c : float > 0
+        Slope (the paper uses 4).
+    centred : bool, keyword-only
+        Use the centred variant.
+
+    Returns
+    -------
+    ndarray in [0, 1]; float64, or float32 if the inputs are float32. Float32 results are within
+    4e-7 max(c, 1) (1 + |intensity|) of float64 on the same inputs (the ramp scales the rounding
+    of ``1 - screen - intensity`` by c).
+    """
+    c = check_scalar("c", c, lo=0, lo_open=True, hint="c is the slope of the ramp, e.g. 4.0")
+    scr, x, dt = _pair(screen, intensity)
+    tmp = (1 - scr - x) * c  # sec. 3.2: add(1 - tex, -col) * C
+    top = 0.5 if centred else 1.0
+    return np.asarray(np.clip(top - tmp, 0, 1), dtype=dt)  # sec. 3.2: 1 - tmp, clamped
+
+
+def smooth_threshold_tone(intensity, c: float = 4.0, *, centred: bool = False) -> np.ndarray:
+    """Mean output of :func:`smooth_threshold` over a screen uniform on [0, 1] (tone curve).
+
+    z = screen + I - 1 is uniform on [I - 1, I]; E is the mean of the clamped ramp over it.
+    One-sided (the paper's): ``E = I + 1/(2c)`` for I in [0, 1 - 1/c] and ``I + (1 - I) -
+    c (1 - I)^2 / 2`` above, so the bias E - I is 1/(2c) (lighter) over most of the range.
+    Centred: ``E = I`` for I in [1/(2c), 1 - 1/(2c)].
+
+    Parameters
+    ----------
+    intensity : array_like
+        Target intensity.
+    c : float > 0
+        Slope.
+    centred : bool, keyword-only
+        Tone curve of the centred variant.
+
+    Returns
+    -------
+    ndarray in [0, 1]; float64, or float32 if ``intensity`` is float32.
+    """
+    c = check_scalar("c", c, lo=0, lo_open=True, hint="c is the slope of the ramp, e.g. 4.0")
+    dt = result_dtype(intensity)
+    x = real("intensity", intensity, np.dtype(np.float64))
+    off = 0.5 if centred else 1.0  # ramp clip(off + c z, 0, 1) runs over z in [lo, hi]
+    lo, hi = -off / c, (1 - off) / c
+    # z = screen + I - 1 is uniform on [I - 1, I]: white part + ramp part (midpoint x length)
+    white = np.clip(x - np.maximum(x - 1, hi), 0, None)
+    p = np.clip(x - 1, lo, hi)
+    q = np.clip(x, lo, hi)
+    ramp = (q - p) * (off + c * (p + q) / 2)
+    return np.asarray(np.clip(white + ramp, 0, 1), dtype=dt)
+
+
+def stroke_levels(m: int) -> np.ndarray:
+    """Default grey levels of m stroke layers: ``g_i = i / m`` (layer 0 black).
+
+    Layer i then appears below the intensity 1 - i/m, so m layers split the tone range evenly.
+
+    Returns
+    -------
+    (m,) float64 ndarray
+    """
+    m = check_int("m", m, lo=1)
+    return np.arange(m) / m
+
+
+def _levels(levels, m: int) -> np.ndarray:
+    if levels is None:
+        return stroke_levels(m)
+    g = real("levels", levels, np.dtype(np.float64))
+    if g.shape != (m,):
+        raise ValueError(f"levels: expected {m} grey levels (one per layer), got shape {g.shape}")
+    if np.any(np.diff(g) <= 0) or g[0] < 0 or g[-1] >= 1:
+        raise ValueError(
+            f"levels: expected strictly increasing values in [0, 1), got {g.tolist()}; "
+            "layer 0 is the darkest (usually 0) and each later layer lighter"
+        )
+    return g
+
+
+def encode_stroke_map(layers, *, levels=None) -> np.ndarray:
+    """Stroke-map encoding of Freudenberg sec. 4.2 (Fig. 3).
+
+    Layer i (ink coverage, 1 = ink) is encoded with the grey range [g_i, 1]: its ink colour is
+    g_i (layer 0 unscaled, black ink ranging to white; later layers compressed towards white). The
+    layers are drawn over a white screen from the last (lightest) to the first (darkest) with
+    alpha compositing, ``screen = (1 - alpha_i) screen + alpha_i g_i``, so darker layers lie on
+    top.
+
+    Parameters
+    ----------
+    layers : (m, ...) array or sequence of m (...) arrays, values in [0, 1]
+        Ink coverage of each stroke layer (antialiased strokes have fractional coverage); layer 0
+        is the darkest, drawn in the lightest regions already.
+    levels : (m,) increasing values in [0, 1), keyword-only
+        Ink grey of each layer; default :func:`stroke_levels`.
+
+    Returns
+    -------
+    (...) ndarray screen in [0, 1]; float64, or float32 if the layers are float32.
+    """
+    if isinstance(layers, (list, tuple)):
+        if not layers:
+            raise ValueError("layers: got no stroke layers; pass at least one")
+        dt = result_dtype(*layers)
+        arrs = [real(f"layers[{i}]", a, dt) for i, a in enumerate(layers)]
+        broadcast(**{f"layers[{i}]": a for i, a in enumerate(arrs)})
+    else:
+        dt = result_dtype(layers)
+        stack = real("layers", layers, dt)
+        if stack.ndim == 0 or stack.shape[0] == 0:
+            raise ValueError(
+                f"layers: expected shape (m, ...) with m >= 1 layers, got {stack.shape}"
+            )
+        arrs = list(stack)
+    for i, a in enumerate(arrs):
+        check_range(f"layers[{i}]", a, 0.0, 1.0, "a layer holds ink coverage (0 = none, 1 = ink)")
+    g = _levels(levels, len(arrs))
+    screen = np.ones(np.broadcast_shapes(*(a.shape for a in arrs)), dtype=dt)
+    for i in range(len(arrs) - 1, -1, -1):  # sec. 4.2: lightest layer first, darkest last
+        screen = (1 - arrs[i]) * screen + arrs[i] * dt.type(g[i])
+    return np.asarray(screen, dtype=dt)
+
+
+def decode_stroke_map(screen, intensity, *, c: float | None = None, centred: bool = False):
+    """Stroke-map decoding by threshold (Freudenberg sec. 4.2, Fig. 4).
+
+    :func:`binary_threshold` (``c=None``) or :func:`smooth_threshold` with slope c. Layer i, ink
+    grey g_i, is drawn black where ``g_i + intensity <= 1``: in the lightest regions only the
+    darkest layer shows, and every layer visible at some intensity stays visible at all darker
+    intensities (the output is non-decreasing in the intensity).
+
+    Parameters
+    ----------
+    screen : (...) array in [0, 1]
+        Stroke map (e.g. from :func:`encode_stroke_map`).
+    intensity : (...) array
+        Target intensity.
+    c : float > 0 or None, keyword-only
+        Smooth-threshold slope; None for the binary threshold.
+    centred : bool, keyword-only
+        Centred smooth threshold.
+
+    Returns
+    -------
+    (...) ndarray in [0, 1]; float64, or float32 if the inputs are float32.
+    """
+    if c is None:
+        return binary_threshold(screen, intensity)
+    return smooth_threshold(screen, intensity, c, centred=centred)
+
+
+def layer_onsets(levels) -> np.ndarray:
+    """Intensity at and below which each stroke layer is drawn: ``1 - g_i`` (binary threshold).
+
+    Parameters
+    ----------
+    levels : (m,) increasing values in [0, 1)
+        Ink greys of the layers (e.g. :func:`stroke_levels`).
+
+    Returns
+    -------
+    (m,) float64 ndarray, decreasing.
+    """
+    arr = real("levels", levels, np.dtype(np.float64))
+    if arr.ndim != 1 or arr.size == 0:
+        raise ValueError(f"levels: expected a 1-D sequence of grey levels, got shape {arr.shape}")
+    return 1 - _levels(arr, arr.size)
+
+
+def apply_indication(intensity, indication) -> np.ndarray:
+    """Indication mapping of Freudenberg sec. 5.1: ``clip(intensity + indication, 0, 1)``.
+
+    The signed indication map offsets the target intensity: 0 leaves the default lighting,
+    positive values lighten (fading strokes out), negative values darken.
+
+    Parameters
+    ----------
+    intensity : array_like
+        Target intensity.
+    indication : array_like in [-1, 1]
+        Signed indication value (a low-resolution map sampled at the pixel); broadcasts.
+
+    Returns
+    -------
+    ndarray in [0, 1]; float64, or float32 if the inputs are float32.
+    """
+    dt = result_dtype(intensity, indication)
+    x = real("intensity", intensity, dt)
+    ind = real("indication", indication, dt)
+    check_range("indication", ind, -1.0, 1.0, "the indication map holds signed values in [-1, 1]")
+    broadcast(intensity=x, indication=ind)
+    return np.asarray(np.clip(x + ind, 0, 1), dtype=dt)  # sec. 5.1
+
+
+def stroke_lighting(
+    normal_map, light, *, encoded: bool = True, normalize: bool = False
+) -> np.ndarray:
+    """Individual stroke lighting of Freudenberg sec. 5.2: DOT3 bump mapping of a stroke normal map.
+
+    ``clip(N . L, 0, 1)`` with N from the normal map (``2 rgb - 1`` when ``encoded``) and L the
+    unit direction to the light in the same (tangent) space. Used as (or multiplied into) the
+    target intensity, it thins a stroke on its lit side and keeps it on the shadowed side, so a
+    stroke's width depends on the light direction.
+
+    Parameters
+    ----------
+    normal_map : (..., 3) array
+        Per-pixel stroke normals, RGB-encoded in [0, 1] if ``encoded`` else components in [-1, 1].
+    light : (..., 3) array
+        Direction to the light (normalized here; a zero vector gives 0).
+    encoded : bool, keyword-only
+        Decode ``2 rgb - 1`` first (the DOT3 texture encoding).
+    normalize : bool, keyword-only
+        Renormalize the decoded normals (DOT3 hardware does not, the default).
+
+    Returns
+    -------
+    (...) ndarray in [0, 1]; float64, or float32 if the inputs are float32.
+    """
+    dt = result_dtype(normal_map, light)
+    nm = real("normal_map", normal_map, dt)
+    li = real("light", light, dt)
+    trailing("normal_map", nm, 3, "a normal per pixel")
+    trailing("light", li, 3, "a light direction")
+    broadcast(normal_map=nm, light=li)
+    n = 2 * nm - 1 if encoded else nm  # sec. 5.2: DOT3 expansion
+    if normalize:
+        n = unit_vectors(n)
+    li = unit_vectors(li)
+    return np.asarray(np.clip(np.sum(n * li, axis=-1), 0, 1), dtype=dt)  # sec. 5.2
+
+
+def _profile(profile: str) -> str:
+    if profile not in _PROFILES:
+        raise ValueError(f"profile: expected one of {_PROFILES}, got {describe(profile)}")
+    return profile
+
+
+def engraving_screen(v, *, profile: str = "ramp") -> np.ndarray:
+    """1D engraving screen of Freudenberg sec. 4.1 as a function of the line coordinate v.
+
+    ``"ramp"``: the grey ramp of the paper's Fig. 2 repeated along v, ``Frac(v)``: lines grow from
+    one side as the tone darkens. ``"triangle"``: ``|2 Frac(v) - 1|``, lines centred at
+    Frac(v) = 1/2 that swell symmetrically (engraving). Both are uniform over a period, so
+    thresholding preserves tone.
+
+    Parameters
+    ----------
+    v : array_like
+        Line coordinate (period 1; lines are iso-lines of v).
+    profile : {"ramp", "triangle"}, keyword-only
+
+    Returns
+    -------
+    ndarray in [0, 1]; float64, or float32 if ``v`` is float32.
+    """
+    profile = _profile(profile)
+    dt = result_dtype(v)
+    f = frac(real("v", v, dt))
+    out = f if profile == "ramp" else np.abs(2 * f - 1)
+    return np.asarray(out, dtype=dt)
+
+
+def engraving_ramp(size: int = 256, *, profile: str = "ramp") -> np.ndarray:
+    """The 1D engraving screen as a texture of ``size`` texels (values at texel centres).
+
+    Sample it with linear filtering and repeat wrapping along v.
+
+    Returns
+    -------
+    (size,) float64 ndarray in [0, 1]
+    """
+    size = check_int("size", size, lo=1)
+    return engraving_screen((np.arange(size) + 0.5) / size, profile=_profile(profile))
