@@ -41,7 +41,9 @@ def as_float(name: str, value, *, finite: bool = False) -> np.ndarray:
         raise TypeError(f"{name}: expected a real number or array, got {describe(value)}")
     arr = np.asarray(value)
     if arr.dtype.kind == "c":
-        raise TypeError(f"{name}: expected real values, got complex {describe(value)}; take .real first")
+        raise TypeError(
+            f"{name}: expected real values, got complex {describe(value)}; take .real first"
+        )
     if arr.dtype.kind not in "biuf":
         raise TypeError(
             f"{name}: expected a real number or numeric array, got {describe(value)}; "
@@ -91,15 +93,16 @@ def check_scalar(
     v = float(value)
     if not np.isfinite(v):
         raise ValueError(f"{name}: must be finite, got {v}")
-    bad = (
-        (lo is not None and (v <= lo if lo_open else v < lo))
-        or (hi is not None and (v >= hi if hi_open else v > hi))
+    bad = (lo is not None and (v <= lo if lo_open else v < lo)) or (
+        hi is not None and (v >= hi if hi_open else v > hi)
     )
     if bad:
         left = "(" if lo_open else "["
         right = ")" if hi_open else "]"
         interval = f"{left}{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}{right}"
-        raise ValueError(f"{name}: expected a value in {interval}, got {v}" + (f"; {hint}" if hint else ""))
+        raise ValueError(
+            f"{name}: expected a value in {interval}, got {v}" + (f"; {hint}" if hint else "")
+        )
     return v
 
 
