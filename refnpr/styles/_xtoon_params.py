@@ -1,0 +1,164 @@
+"""Validation of the X-Toon style's parameters (clear errors naming the parameter and the fix)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from refnpr.raster import Camera
+
+__all__ = [
+    "DETAILS",
+    "number",
+    "vec3",
+    "camera_spec",
+    "unit_map",
+    "WeightSpec",
+    "weight_spec",
+]
+
+#: Attribute maps (X-Toon sec. 3 and sec. 5) and what each needs.
+DETAILS = ("depth", "focus", "orientation", "highlight", "flow", "map", "none")
+
+_CAMERA_KEYS = ("eye", "target", "up", "fov_y", "near", "far")
+
+
+def number(
+    name: str,
+    value: Any,
+    *,
+    lo: float | None = None,
+    lo_open: bool = False,
+    hi: float | None = None,
+    hint: str = "",
+) -> float:
+    """``value`` as a finite float in the given range, else a ValueError/TypeError naming it."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name}: expected a number, got {type(value).__name__} {value!r}")
+    v = float(value)
+    bad = not np.isfinite(v)
+    bad |= lo is not None and (v <= lo if lo_open else v < lo)
+    bad |= hi is not None and v > hi
+    if bad:
+        lo_txt = "" if lo is None else f"{'>' if lo_open else '>='} {lo:g}"
+        hi_txt = "" if hi is None else f"<= {hi:g}"
+        rng = " and ".join(t for t in (lo_txt, hi_txt) if t) or "finite"
+        raise ValueError(
+            f"{name}: expected a value {rng}, got {v!r}" + (f"; {hint}" if hint else "")
+        )
+    return v
+
+
+def vec3(name: str, value: Any) -> tuple[float, float, float]:
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: expected 3 finite numbers [x, y, z], got {value!r}")
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def camera_spec(name: str, value: Any) -> Camera:
+    """A Camera from a Camera or a table ``{eye, target, up?, fov_y?, near?, far?}``."""
+    if isinstance(value, Camera):
+        return value
+    if not isinstance(value, Mapping):
+        raise TypeError(
+            f"{name}: expected a refnpr Camera or a table {{eye = [...], target = [...], "
+            f"up = [...], fov_y = ...}}, got {type(value).__name__} {value!r}"
+        )
+    extra = set(value) - set(_CAMERA_KEYS)
+    missing = {"eye", "target"} - set(value)
+    if extra or missing:
+        raise ValueError(
+            f"{name}: camera table keys must be among {list(_CAMERA_KEYS)} and include eye and "
+            f"target; got {sorted(value)}"
+        )
+    try:
+        return Camera.look_at(**dict(value))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name}: {exc}") from None
+
+
+def unit_map(name: str, value: Any) -> np.ndarray:
+    """A per-pixel map in [0, 1]: a 2D array or an image path (read as grey, no sRGB decoding)."""
+    if isinstance(value, str) or hasattr(value, "__fspath__"):
+        from refnpr.texture import load_texture
+
+        try:
+            value = load_texture(value, gray=True)
+        except ValueError as exc:
+            raise ValueError(f"{name}: {exc}") from None
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"{name}: expected a 2D array of values in [0, 1], got {value!r}") from exc
+    if a.ndim != 2:
+        raise ValueError(
+            f"{name}: expected a 2D per-pixel map (H, W) or per-sample map (n H, n W), got shape "
+            f"{a.shape}"
+        )
+    if not np.all(np.isfinite(a)) or a.min() < 0.0 or a.max() > 1.0:
+        raise ValueError(
+            f"{name}: values must be finite and lie in [0, 1], got range [{np.nanmin(a)}, "
+            f"{np.nanmax(a)}]; rescale the map"
+        )
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class WeightSpec:
+    """The shape-abstraction weight: ``kind`` is "global", "detail", "texture" or "map"."""
+
+    kind: str
+    value: float = 1.0
+    texture: np.ndarray | None = None
+    uv_scale: tuple[float, float] = (1.0, 1.0)
+    summary: Any = None
+
+
+def weight_spec(value: Any) -> WeightSpec:
+    """Parse ``shape_weight``: a number in [0, 1], "detail", {"texture": ..., "uv_scale": ...} or
+    a 2D array in [0, 1]."""
+    name = "shape_weight"
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+        w = number(
+            name,
+            value,
+            lo=0.0,
+            hi=1.0,
+            hint="0 keeps the mesh normals, 1 uses the abstracted shape's normals (X-Toon sec. 4)",
+        )
+        return WeightSpec("global", w, summary=w)
+    if isinstance(value, str):
+        if value == "detail":
+            return WeightSpec("detail", summary="detail")
+        raise ValueError(
+            f"{name}: the only string accepted is 'detail' (w = 1 - D of the detail map), got "
+            f"{value!r}"
+        )
+    if isinstance(value, Mapping):
+        extra = set(value) - {"texture", "uv_scale"}
+        if "texture" not in value or extra:
+            raise ValueError(
+                f"{name}: a weight texture table is {{texture = <built-in name or image path>, "
+                f"uv_scale = 1.0}}, got keys {sorted(value)}"
+            )
+        tex = unit_map(f"{name}['texture']", value["texture"])
+        s = value.get("uv_scale", 1.0)
+        s = (s, s) if np.isscalar(s) else tuple(s)
+        if len(s) != 2:
+            raise ValueError(f"{name}['uv_scale']: expected one or two numbers, got {s!r}")
+        su, sv = (number(f"{name}['uv_scale']", x, lo=0.0, lo_open=True) for x in s)
+        return WeightSpec("texture", texture=tex, uv_scale=(su, sv), summary=dict(value))
+    if isinstance(value, (np.ndarray, Sequence)):
+        arr = unit_map(name, value)
+        return WeightSpec("map", texture=arr, summary=f"array{arr.shape}")
+    raise TypeError(
+        f"{name}: expected a number in [0, 1], 'detail' (w = 1 - D), a table {{texture = ...}} or "
+        f"a 2D array in [0, 1], got {value!r}"
+    )
