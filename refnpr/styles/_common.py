@@ -9,6 +9,7 @@ import numpy as np
 from refnpr.formulas import lighting
 
 __all__ = [
+    "scatter_rgba",
     "rgba_from",
     "check_choice",
     "check_number",
@@ -16,6 +17,15 @@ __all__ = [
     "needs_position",
     "specular_field",
 ]
+
+
+def scatter_rgba(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
+    """(nH, nW, 4) float32 straight-alpha RGBA from colours ``rgb (K, 3)`` of the K samples where
+    ``mask`` is true (alpha 1 there, or ``alpha (K,)``); zero elsewhere."""
+    out = np.zeros(mask.shape + (4,), dtype=np.float32)
+    out[mask, :3] = np.clip(rgb, 0.0, 1.0)
+    out[mask, 3] = 1.0 if alpha is None else np.clip(alpha, 0.0, 1.0)
+    return out
 
 
 def rgba_from(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
@@ -70,13 +80,20 @@ def needs_position(scene: Any, view_dependent: bool) -> bool:
 
 
 def specular_field(
-    ctx: Any, n: np.ndarray, light_dir: np.ndarray, v: np.ndarray, model: str = "blinn-phong"
+    ctx: Any,
+    n: np.ndarray,
+    light_dir: np.ndarray,
+    v: np.ndarray,
+    model: str = "blinn-phong",
+    mask: np.ndarray | None = None,
 ) -> np.ndarray:
     """f_s of Veryovka eq. 1 with each object's own shininess (needs ``mesh_id``).
 
     Evaluated once per distinct exponent; (nH, nW) float64, 0 where empty or shininess <= 0.
+    With ``mask``, ``n``, ``v`` (and a per-sample ``light_dir``) hold only the K masked samples
+    and the result is (K,).
     """
-    shininess = ctx.material_field("shininess")
+    shininess = ctx.material_field("shininess", mask)
     out = np.zeros(n.shape[:-1])
     for p in np.unique(shininess[shininess > 0]):
         sel = shininess == p

@@ -68,22 +68,23 @@ class ShadeContext:
             return self.gb["tri_id"] >= 0
         return self.gb["mesh_id"] >= 0
 
-    def view_dir(self) -> np.ndarray:
-        """(nH, nW, 3) float64 unit vectors from the surface towards the eye (needs ``position``)."""
-        v = np.asarray(self.scene.camera.eye, dtype=np.float64) - self.gb["position"]
+    def view_dir(self, mask: np.ndarray | None = None) -> np.ndarray:
+        """Unit vectors from the surface towards the eye (needs ``position``): (nH, nW, 3)
+        float64, or (K, 3) at the K samples where ``mask`` is true."""
+        pos = self.gb["position"] if mask is None else self.gb["position"][mask]
+        v = np.asarray(self.scene.camera.eye, dtype=np.float64) - pos
         length = np.linalg.norm(v, axis=-1, keepdims=True)
         return np.divide(v, length, out=np.zeros_like(v), where=length > 0)
 
-    def light_dirs(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Per light: (unit direction towards the light, (..., 3) or (3,)), colour (3,).
-
-        Point lights need the ``position`` channel.
-        """
+    def light_dirs(self, mask: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per light: (unit direction towards the light: (3,) for directional lights, (nH, nW, 3)
+        or (K, 3) with ``mask`` for point lights), colour (3,). Point lights need ``position``."""
         out = []
         for light in self.scene.lights:
             color = np.asarray(light.color, dtype=np.float64)
             if light.kind == "point":
-                d = np.asarray(light.position, dtype=np.float64) - self.gb["position"]
+                pos = self.gb["position"] if mask is None else self.gb["position"][mask]
+                d = np.asarray(light.position, dtype=np.float64) - pos
                 length = np.linalg.norm(d, axis=-1, keepdims=True)
                 d = np.divide(d, length, out=np.zeros_like(d), where=length > 0)
             else:
@@ -92,13 +93,16 @@ class ShadeContext:
             out.append((d, color))
         return out
 
-    def material_field(self, attr: str) -> np.ndarray:
-        """Per-sample material property ``attr`` of the object each sample shows (needs
-        ``mesh_id``): (nH, nW) for scalars, (nH, nW, C) for tuples; zero where empty."""
+    def material_field(self, attr: str, mask: np.ndarray | None = None) -> np.ndarray:
+        """Material property ``attr`` of the object each sample shows (needs ``mesh_id``):
+        (nH, nW) for scalars, (nH, nW, C) for tuples, zero where empty; or (K[, C]) at the
+        samples where ``mask`` is true."""
         values = np.array(
             [np.asarray(getattr(o.material, attr), dtype=np.float64) for o in self.scene.objects]
         )
         mesh_id = self.gb["mesh_id"]
+        if mask is not None:
+            return values[np.maximum(mesh_id[mask], 0)]
         out = values[np.maximum(mesh_id, 0)]
         out[mesh_id < 0] = 0.0
         return out

@@ -8,7 +8,7 @@ import numpy as np
 
 from refnpr.formulas import lighting
 
-from ._common import check_choice, needs_position, rgba_from, specular_field
+from ._common import check_choice, needs_position, scatter_rgba, specular_field
 from .base import ShadeContext, Style, register
 
 __all__ = ["SmoothStyle"]
@@ -43,18 +43,16 @@ class SmoothStyle(Style):
         return frozenset(req)
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        mask = ctx.mask
-        n = ctx.gb["normal"].astype(np.float64)
-        v = ctx.view_dir() if self.specular else None
-        m_a = ctx.material_field("ambient")
-        m_d = ctx.material_field("diffuse")
-        m_s = ctx.material_field("specular")
-        l_a = np.asarray(ctx.scene.ambient, dtype=np.float64)
-        rgb = m_a * l_a  # eq. 1: ambient
-        for light_dir, color in ctx.light_dirs():
+        mask = ctx.mask  # shade only covered samples: (K, ...) arrays below
+        n = ctx.gb["normal"][mask].astype(np.float64)
+        v = ctx.view_dir(mask) if self.specular else None
+        m_d = ctx.material_field("diffuse", mask)
+        m_s = ctx.material_field("specular", mask)
+        rgb = ctx.material_field("ambient", mask) * np.asarray(ctx.scene.ambient, float)  # eq. 1
+        for light_dir, color in ctx.light_dirs(mask):
             f_d = lighting.diffuse(n, light_dir)  # eq. 1: f_d
-            rgb = rgb + m_d * f_d[..., None] * color
+            rgb = rgb + m_d * f_d[:, None] * color
             if self.specular:
-                f_s = specular_field(ctx, n, light_dir, v, self.model)
-                rgb = rgb + m_s * f_s[..., None] * color  # eq. 1: f_s
-        return rgba_from(rgb, mask)
+                f_s = specular_field(ctx, n, light_dir, v, self.model, mask)
+                rgb = rgb + m_s * f_s[:, None] * color  # eq. 1: f_s
+        return scatter_rgba(rgb, mask)

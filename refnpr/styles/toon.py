@@ -13,7 +13,7 @@ from ._common import (
     check_count,
     check_number,
     needs_position,
-    rgba_from,
+    scatter_rgba,
     specular_field,
 )
 from .base import ShadeContext, Style, register
@@ -62,24 +62,23 @@ class ToonStyle(Style):
         return frozenset(req)
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        mask = ctx.mask
-        n = ctx.gb["normal"].astype(np.float64)
-        m_a = ctx.material_field("ambient")
-        m_d = ctx.material_field("diffuse")
-        m_s = ctx.material_field("specular")
-        rgb = m_a * np.asarray(ctx.scene.ambient, dtype=np.float64)  # eq. 2: ambient kept
+        mask = ctx.mask  # shade only covered samples: (K, ...) arrays below
+        n = ctx.gb["normal"][mask].astype(np.float64)
+        m_d = ctx.material_field("diffuse", mask)
+        m_s = ctx.material_field("specular", mask)
+        rgb = ctx.material_field("ambient", mask) * np.asarray(ctx.scene.ambient, float)  # eq. 2
         if self.mode == "lake":
             bounds = (np.arange(self.n) + self.t) / self.n
             ramp = lighting.toon_ramp_texture(bounds, np.arange(self.n + 1) / self.n, size=1024)
-        v = ctx.view_dir() if self.specular else None
-        for light_dir, color in ctx.light_dirs():
+        v = ctx.view_dir(mask) if self.specular else None
+        for light_dir, color in ctx.light_dirs(mask):
             f_d = lighting.diffuse(n, light_dir)
             if self.mode == "lake":
                 tone = lighting.toon_ramp(f_d, ramp)
             else:
                 tone = threshold.step_n(f_d, self.t, self.n)  # eq. 4 applied in eq. 2
-            rgb = rgb + m_d * tone[..., None] * color
+            rgb = rgb + m_d * tone[:, None] * color
             if self.specular:
-                f_s = specular_field(ctx, n, light_dir, v)
-                rgb = rgb + m_s * threshold.step_n(f_s, self.t, self.n)[..., None] * color
-        return rgba_from(rgb, mask)
+                f_s = specular_field(ctx, n, light_dir, v, mask=mask)
+                rgb = rgb + m_s * threshold.step_n(f_s, self.t, self.n)[:, None] * color
+        return scatter_rgba(rgb, mask)
