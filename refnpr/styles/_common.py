@@ -98,5 +98,7 @@ def specular_field(
     for p in np.unique(shininess[shininess > 0]):
         sel = shininess == p
         ld = light_dir[sel] if np.ndim(light_dir) > 1 else light_dir
-        out[sel] = lighting.specular(n[sel], ld, v[sel], shininess=float(p), model=model)
+        out[sel] = lighting.specular(
+            n[sel], ld, v[sel], shininess=float(p), model=model, normalize=False
+        )
     return out

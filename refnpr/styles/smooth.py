@@ -50,7 +50,7 @@ class SmoothStyle(Style):
         m_s = ctx.material_field("specular", mask)
         rgb = ctx.material_field("ambient", mask) * np.asarray(ctx.scene.ambient, float)  # eq. 1
         for light_dir, color in ctx.light_dirs(mask):
-            f_d = lighting.diffuse(n, light_dir)  # eq. 1: f_d
+            f_d = lighting.diffuse(n, light_dir, normalize=False)  # eq. 1: f_d (unit inputs)
             rgb = rgb + m_d * f_d[:, None] * color
             if self.specular:
                 f_s = specular_field(ctx, n, light_dir, v, self.model, mask)

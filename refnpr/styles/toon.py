@@ -72,7 +72,7 @@ class ToonStyle(Style):
             ramp = lighting.toon_ramp_texture(bounds, np.arange(self.n + 1) / self.n, size=1024)
         v = ctx.view_dir(mask) if self.specular else None
         for light_dir, color in ctx.light_dirs(mask):
-            f_d = lighting.diffuse(n, light_dir)
+            f_d = lighting.diffuse(n, light_dir, normalize=False)  # unit inputs
             if self.mode == "lake":
                 tone = lighting.toon_ramp(f_d, ramp)
             else:
