@@ -217,12 +217,16 @@ def transform_vertices(positions, vp, width, height, guard, clip, snapped, outco
 
 
 @pnjit
-def setup_triangles(clip, snapped, outcode, faces, n, width, height, cull, coords, status, qplane):
+def setup_triangles(
+    clip, snapped, outcode, faces, n, width, height, cull, coords, bbox, status, qplane
+):
     """Per triangle: trivial reject, snapped screen coordinates (fast path) and the depth plane.
 
     status[t]: 0 rejected (outside a plane, zero area, culled, or covering no sample centre),
-    1 one primitive in coords[t] (1/256 px), 2 needs clipping.
-    qplane[t] = (a, b, c): Q = 1/w = a sx + b sy + c on the sample grid (exact vertices).
+    1 one primitive: coords[t] (1/256 px, vertices 1 and 2 swapped if needed so the signed area
+    is positive) and bbox[t] = (sx0, sx1, sy0, sy1), its inclusive sample range; 2 needs
+    clipping. qplane[t] = (a, b, c): Q = 1/w = a sx + b sy + c on the sample grid (exact
+    vertices).
     """
     nw = n * width
     nh = n * height
@@ -245,11 +249,18 @@ def setup_triangles(clip, snapped, outcode, faces, n, width, height, cull, coord
             row[3] = snapped[i1, 1]
             row[4] = snapped[i2, 0]
             row[5] = snapped[i2, 1]
-            if not _keep(_signed_area(row), cull):
+            area = _signed_area(row)
+            if not _keep(area, cull):
                 continue
+            if area < 0:  # canonical orientation: interior where all edge functions are >= 0
+                row[2], row[3], row[4], row[5] = row[4], row[5], row[2], row[3]
             sx0, sx1, sy0, sy1 = _sample_bbox(row, n, nw, nh)
             if sx0 > sx1 or sy0 > sy1:
                 continue  # covers no sample centre
+            bbox[t, 0] = sx0
+            bbox[t, 1] = sx1
+            bbox[t, 2] = sy0
+            bbox[t, 3] = sy1
         det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(
             clip[i0], clip[i1], clip[i2], nw, nh
         )
@@ -292,15 +303,19 @@ def lam_for_marked(clip, faces, mark, n, width, height, lam):
 
 
 @njit
-def clip_triangles(clip, faces, todo, width, height, guard, cull, max_out):
+def clip_triangles(clip, faces, todo, width, height, guard, cull, n, max_out):
     """Clip the triangles listed in ``todo`` (status 2); fan-triangulate and snap the result.
 
-    Returns (sub_coords (K, 6) int32, sub_parent (K,) int64, first (len(todo)+1,) int64), in the
-    order of ``todo`` so the output is deterministic.
+    Returns (sub_coords (K, 6) int32 in canonical orientation, sub_bbox (K, 4) int32, sub_parent
+    (K,) int64, first (len(todo)+1,) int64), in the order of ``todo`` (deterministic). Pieces
+    that cover no sample centre are dropped.
     """
+    nw = n * width
+    nh = n * height
     half_w = 0.5 * width
     half_h = 0.5 * height
     sub = np.empty((max_out, 6), dtype=np.int32)
+    sub_bbox = np.empty((max_out, 4), dtype=np.int32)
     parent = np.empty(max_out, dtype=np.int64)
     first = np.zeros(todo.shape[0] + 1, dtype=np.int64)
     poly = np.empty((MAX_POLY + 1, 4))
@@ -323,13 +338,24 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, max_out):
             c[3] = pts[2 * j + 1]
             c[4] = pts[2 * j + 2]
             c[5] = pts[2 * j + 3]
-            if _keep(_signed_area(c), cull):
-                for q in range(6):
-                    sub[k, q] = c[q]
-                parent[k] = t
-                k += 1
+            area = _signed_area(c)
+            if not _keep(area, cull):
+                continue
+            if area < 0:
+                c[2], c[3], c[4], c[5] = pts[2 * j + 2], pts[2 * j + 3], pts[2 * j], pts[2 * j + 1]
+            sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
+            if sx0 > sx1 or sy0 > sy1:
+                continue
+            for q in range(6):
+                sub[k, q] = c[q]
+            sub_bbox[k, 0] = sx0
+            sub_bbox[k, 1] = sx1
+            sub_bbox[k, 2] = sy0
+            sub_bbox[k, 3] = sy1
+            parent[k] = t
+            k += 1
     first[todo.shape[0]] = k
-    return sub[:k].copy(), parent[:k].copy(), first
+    return sub[:k].copy(), sub_bbox[:k].copy(), parent[:k].copy(), first
 
 
 @njit(inline="always")
@@ -352,7 +378,7 @@ def _sample_bbox(c, n, nw, nh):
 
 @njit(inline="always")
 def _prim(ref, coords, sub):
-    """Snapped coords of a primitive reference: ref < M is a whole triangle, else sub-primitive."""
+    """Row of a per-primitive array: ref < M is a whole triangle's row, else a clipped piece's."""
     m = coords.shape[0]
     if ref < m:
         return coords[ref]
@@ -360,7 +386,7 @@ def _prim(ref, coords, sub):
 
 
 @pnjit
-def bin_count(status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, tiles_x, counts):
+def bin_count(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts):
     """counts[c, tile] = how many primitives of triangle chunk c touch each tile.
 
     Primitives are whole triangles (status 1) or the fan pieces of clipped ones (status 2, listed
@@ -381,18 +407,15 @@ def bin_count(status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, til
                 first, last = m + sub_first[cur], m + sub_first[cur + 1]
                 cur += 1
             for ref in range(first, last):
-                sx0, sx1, sy0, sy1 = _sample_bbox(_prim(ref, coords, sub), n, nw, nh)
-                if sx0 > sx1 or sy0 > sy1:
-                    continue
+                b = _prim(ref, bbox, sub_bbox)
+                sx0, sx1, sy0, sy1 = b[0], b[1], b[2], b[3]
                 for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
                     for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
                         counts[c, ty * tiles_x + tx] += 1
 
 
 @pnjit
-def bin_fill(
-    status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, tiles_x, offsets, lists
-):
+def bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, offsets, lists):
     """Write primitive references into per-tile lists (same traversal as bin_count), so every
     tile's list is in increasing triangle order whatever the thread count."""
     m = status.shape[0]
@@ -411,9 +434,8 @@ def bin_fill(
                 first, last = m + sub_first[cur], m + sub_first[cur + 1]
                 cur += 1
             for ref in range(first, last):
-                sx0, sx1, sy0, sy1 = _sample_bbox(_prim(ref, coords, sub), n, nw, nh)
-                if sx0 > sx1 or sy0 > sy1:
-                    continue
+                b = _prim(ref, bbox, sub_bbox)
+                sx0, sx1, sy0, sy1 = b[0], b[1], b[2], b[3]
                 for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
                     for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
                         k = ty * tiles_x + tx
@@ -425,10 +447,10 @@ def bin_fill(
 def _edge_setup(c, n, ia, ib):
     """Edge a->b of the canonical (area > 0) triangle: E(sx, sy) = A sx + B sy + C (int64), with
     the top-left bias folded into C so that a sample is inside where E >= 0 for all three edges."""
-    ax = c[2 * ia] * 2 * n
-    ay = c[2 * ia + 1] * 2 * n
-    bx = c[2 * ib] * 2 * n
-    by = c[2 * ib + 1] * 2 * n
+    ax = np.int64(c[2 * ia]) * 2 * n
+    ay = np.int64(c[2 * ia + 1]) * 2 * n
+    bx = np.int64(c[2 * ib]) * 2 * n
+    by = np.int64(c[2 * ib + 1]) * 2 * n
     dx = bx - ax
     dy = by - ay
     # Top-left rule for y-down screens with the interior where E > 0: left edges go up
@@ -437,23 +459,30 @@ def _edge_setup(c, n, ia, ib):
     return -dy * 512, dx * 512, dx * (256 - ay) - dy * (256 - ax) - bias
 
 
-@njit(inline="always")
-def _canonical(src, dst):
-    """Copy snapped coords (as int64) so that the signed area is positive (swap vertices 1, 2)."""
-    for q in range(6):
-        dst[q] = src[q]
-    if _signed_area(dst) < 0:
-        dst[2], dst[3], dst[4], dst[5] = src[4], src[5], src[2], src[3]
-
-
 @pnjit
 def raster_visibility(
-    coords, sub, sub_parent, qplane, tile_first, tile_lists, n, nw, nh, tile, tiles_x, tri_id
+    coords,
+    bbox,
+    sub,
+    sub_bbox,
+    sub_parent,
+    qplane,
+    q_lo,
+    q_hi,
+    tile_first,
+    tile_lists,
+    n,
+    nw,
+    nh,
+    tile,
+    tiles_x,
+    tri_id,
 ):
     """Depth-tested visibility, one tile per task: tri_id (nH, nW) int32 gets the nearest parent
     triangle index (-1 where empty). Depth is Q = 1/w of the exact vertices (larger is nearer);
     ties keep the earlier primitive (lists are in increasing triangle order), so the result is
-    independent of the thread count and of the tile size."""
+    independent of the thread count and of the tile size. Samples whose exact Q lies outside
+    [q_lo, q_hi] (beyond the far/near plane, with a relative slack) are not covered."""
     m = coords.shape[0]
     n_tiles = tile_first.shape[0] - 1
     for k in prange(n_tiles):
@@ -465,16 +494,15 @@ def raster_visibility(
         y1 = min(y0 + tile, nh)
         qbuf = np.full((y1 - y0, x1 - x0), -np.inf)
         ibuf = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
-        c = np.empty(6, dtype=np.int64)
         for e in range(tile_first[k], tile_first[k + 1]):
             ref = tile_lists[e]
             t = ref if ref < m else sub_parent[ref - m]
-            _canonical(_prim(ref, coords, sub), c)
-            sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
-            sx0 = max(sx0, x0)
-            sy0 = max(sy0, y0)
-            sx1 = min(sx1, x1 - 1)
-            sy1 = min(sy1, y1 - 1)
+            c = _prim(ref, coords, sub)
+            b = _prim(ref, bbox, sub_bbox)
+            sx0 = max(np.int64(b[0]), x0)
+            sx1 = min(np.int64(b[1]), x1 - 1)
+            sy0 = max(np.int64(b[2]), y0)
+            sy1 = min(np.int64(b[3]), y1 - 1)
             A0, B0, C0 = _edge_setup(c, n, 1, 2)
             A1, B1, C1 = _edge_setup(c, n, 2, 0)
             A2, B2, C2 = _edge_setup(c, n, 0, 1)
@@ -488,7 +516,9 @@ def raster_visibility(
                 for sx in range(sx0, sx1 + 1):
                     if (e0 | e1 | e2) >= 0:
                         q = qa * sx + qb * sy + qc
-                        if q > qbuf[sy - y0, sx - x0]:
+                        # per-sample depth clip (as GL's): snapping may cover a sample whose
+                        # exact point lies beyond the near/far plane (there Q -> 0 at a horizon)
+                        if q > qbuf[sy - y0, sx - x0] and q_lo <= q <= q_hi:
                             qbuf[sy - y0, sx - x0] = q
                             ibuf[sy - y0, sx - x0] = t
                     e0 += A0
@@ -500,7 +530,9 @@ def raster_visibility(
 
 
 @pnjit
-def raster_count(coords, sub, tile_first, tile_lists, n, nw, nh, tile, tiles_x, count):
+def raster_count(
+    coords, bbox, sub, sub_bbox, tile_first, tile_lists, n, nw, nh, tile, tiles_x, count
+):
     """Debug: count[sy, sx] = how many primitives claim each sample (no depth test)."""
     n_tiles = tile_first.shape[0] - 1
     for k in prange(n_tiles):
@@ -510,10 +542,10 @@ def raster_count(coords, sub, tile_first, tile_lists, n, nw, nh, tile, tiles_x, 
         y0 = ty * tile
         x1 = min(x0 + tile, nw)
         y1 = min(y0 + tile, nh)
-        c = np.empty(6, dtype=np.int64)
         for e in range(tile_first[k], tile_first[k + 1]):
-            _canonical(_prim(tile_lists[e], coords, sub), c)
-            sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
+            c = _prim(tile_lists[e], coords, sub)
+            b = _prim(tile_lists[e], bbox, sub_bbox)
+            sx0, sx1, sy0, sy1 = np.int64(b[0]), np.int64(b[1]), np.int64(b[2]), np.int64(b[3])
             A0, B0, C0 = _edge_setup(c, n, 1, 2)
             A1, B1, C1 = _edge_setup(c, n, 2, 0)
             A2, B2, C2 = _edge_setup(c, n, 0, 1)

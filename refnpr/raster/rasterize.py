@@ -24,6 +24,8 @@ _MAX_GUARD = 16.0
 #: Sample-space coordinates in units of 1/(512 n) px must stay below this for int64 edge math.
 _FIXED_LIMIT = 2.0**30
 _LOD_FLOOR = 2.0**-64
+#: Relative slack of the per-sample near/far depth clip (Q = 1/w in [1/far, 1/near]).
+_DEPTH_CLIP_SLACK = 1e-6
 
 
 def _meshes_of(obj) -> list[Mesh]:
@@ -236,13 +238,16 @@ def rasterize(
     t0 = time.perf_counter()
     m_tris = faces.shape[0]
     coords = np.empty((m_tris, 6), dtype=np.int32)
+    bbox = np.empty((m_tris, 4), dtype=np.int32)
     status = np.empty(m_tris, dtype=np.int8)
     qplane = np.empty((m_tris, 3), dtype=np.float64)
     cull = int(cull_backfaces)
-    K.setup_triangles(clip, snapped, outcode, faces, n, width, height, cull, coords, status, qplane)
+    K.setup_triangles(
+        clip, snapped, outcode, faces, n, width, height, cull, coords, bbox, status, qplane
+    )
     todo = np.flatnonzero(status == 2)
-    sub, sub_parent, sub_first = K.clip_triangles(
-        clip, faces, todo, width, height, guard, cull, max(1, todo.size * (K.MAX_POLY - 2))
+    sub, sub_bbox, sub_parent, sub_first = K.clip_triangles(
+        clip, faces, todo, width, height, guard, cull, n, max(1, todo.size * (K.MAX_POLY - 2))
     )
     timings["setup"] = time.perf_counter() - t0
 
@@ -253,22 +258,35 @@ def rasterize(
     n_tiles = tiles_x * tiles_y
     chunk = max(1, -(-m_tris // _BIN_CHUNKS))
     counts = np.zeros((_BIN_CHUNKS, n_tiles), dtype=np.int64)
-    K.bin_count(status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, tiles_x, counts)
+    K.bin_count(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts)
     # tile-major, chunk-minor: a tile's list is its chunks' lists in chunk (= triangle) order
     starts = np.concatenate([[0], np.cumsum(counts.T.ravel())])
     offsets = np.ascontiguousarray(starts[:-1].reshape(n_tiles, _BIN_CHUNKS).T)
     tile_first = np.ascontiguousarray(starts[::_BIN_CHUNKS])  # (n_tiles + 1,)
     lists = np.empty(int(starts[-1]), dtype=np.int64)
-    K.bin_fill(
-        status, coords, todo, sub_first, sub, chunk, n, nw, nh, shift, tiles_x, offsets, lists
-    )
+    K.bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, offsets, lists)
     timings["bin"] = time.perf_counter() - t0
 
     # ---- visibility ------------------------------------------------------------------------
     t0 = time.perf_counter()
     tri_id = np.empty((nh, nw), dtype=np.int32)
     K.raster_visibility(
-        coords, sub, sub_parent, qplane, tile_first, lists, n, nw, nh, tile, tiles_x, tri_id
+        coords,
+        bbox,
+        sub,
+        sub_bbox,
+        sub_parent,
+        qplane,
+        (1.0 - _DEPTH_CLIP_SLACK) / camera.far,
+        (1.0 + _DEPTH_CLIP_SLACK) / camera.near,
+        tile_first,
+        lists,
+        n,
+        nw,
+        nh,
+        tile,
+        tiles_x,
+        tri_id,
     )
     timings["visibility"] = time.perf_counter() - t0
 
@@ -279,7 +297,7 @@ def rasterize(
         out["tri_id"] = tri_id
     if "coverage_count" in wanted:
         cc = np.zeros((nh, nw), dtype=np.int32)
-        K.raster_count(coords, sub, tile_first, lists, n, nw, nh, tile, tiles_x, cc)
+        K.raster_count(coords, bbox, sub, sub_bbox, tile_first, lists, n, nw, nh, tile, tiles_x, cc)
         out["coverage_count"] = cc
     if "mesh_id" in wanted:
         mesh_id = np.searchsorted(first_tri, tri_id, side="right").astype(np.int32) - 1
