@@ -1,0 +1,222 @@
+"""Mesa llvmpipe peer: the full refnpr G-buffer rendered by OpenGL 4.5 (moderngl, EGL, headless).
+
+The peer draws one indexed triangle mesh with the camera's ``projection @ view`` matrix used
+verbatim in the vertex shader and writes, per fragment, into float32 multiple render targets:
+
+====================  =========  ==========================================================
+attachment            format     value
+====================  =========  ==========================================================
+0  ``depth``          R32F       ``1 / gl_FragCoord.w`` = w_clip, the view-axis distance
+1  ``tri_id``         R32F       ``float(gl_PrimitiveID)`` (exact below 2**24 triangles)
+2  ``uv``             RG32F      perspective-correct uv
+3  ``duv_dx``         RG32F      ``dFdx(uv)`` (GL's own derivative, per 2x2 quad)
+4  ``duv_dy``         RG32F      ``dFdy(uv)`` (GL's window y points *up*)
+5  ``normal``         RGBA32F    ``normalize(n)``, read back as 3 components
+====================  =========  ==========================================================
+
+plus a 24-bit depth renderbuffer with ``GL_LESS`` (the first-drawn, i.e. lower, triangle wins a
+tie, as in refnpr). Every attachment is cleared to -1 (so ``tri_id`` is -1 where empty).
+
+Timings: ``render`` is clear + draw + ``glFinish``; ``readback`` is one ``glReadPixels`` per
+attachment into host memory. The vertex and index buffers are uploaded once (``setup``), like a
+GPU backend that keeps its mesh resident. Arrays come back in GL's window orientation (row 0 is the
+*bottom* row); :func:`to_refnpr_convention` flips them to refnpr's (row 0 on top, d/dy downward).
+
+Needs ``moderngl`` and a working EGL (on Debian: libegl1, libgl1-mesa-dri, libegl-mesa0). Set
+``LP_NUM_THREADS`` before the first context is created to choose llvmpipe's thread count.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["GLPeer", "GLUnavailable", "open_peer", "to_refnpr_convention", "ATTACHMENTS"]
+
+#: (channel name, texture components, components read back)
+ATTACHMENTS: tuple[tuple[str, int, int], ...] = (
+    ("depth", 1, 1),
+    ("tri_id", 1, 1),
+    ("uv", 2, 2),
+    ("duv_dx", 2, 2),
+    ("duv_dy", 2, 2),
+    ("normal", 4, 3),
+)
+
+VERTEX_SHADER = """
+#version 450 core
+uniform mat4 u_view_projection;   // camera.projection_matrix(W, H) @ camera.view_matrix()
+in vec3 in_position;
+in vec3 in_normal;
+in vec2 in_uv;
+out vec3 v_normal;
+out vec2 v_uv;
+void main() {
+    v_normal = in_normal;
+    v_uv = in_uv;
+    gl_Position = u_view_projection * vec4(in_position, 1.0);
+}
+"""
+
+FRAGMENT_SHADER = """
+#version 450 core
+in vec3 v_normal;
+in vec2 v_uv;
+layout(location = 0) out float out_depth;
+layout(location = 1) out float out_tri_id;
+layout(location = 2) out vec2 out_uv;
+layout(location = 3) out vec2 out_duv_dx;
+layout(location = 4) out vec2 out_duv_dy;
+layout(location = 5) out vec4 out_normal;
+void main() {
+    out_depth = 1.0 / gl_FragCoord.w;       // w_clip: view-axis distance
+    out_tri_id = float(gl_PrimitiveID);
+    out_uv = v_uv;
+    out_duv_dx = dFdx(v_uv);
+    out_duv_dy = dFdy(v_uv);                // window y is bottom-up in GL
+    out_normal = vec4(normalize(v_normal), 0.0);
+}
+"""
+
+
+class GLUnavailable(RuntimeError):
+    """No headless OpenGL 4.5 context could be made (moderngl or EGL missing, or too old a GL)."""
+
+
+@dataclass
+class GLPeer:
+    """A ready-to-draw llvmpipe pipeline for one mesh at one image size."""
+
+    ctx: object
+    fbo: object
+    vao: object
+    program: object
+    width: int
+    height: int
+    setup_s: float
+
+    @property
+    def renderer(self) -> str:
+        return str(self.ctx.info.get("GL_RENDERER", "?"))
+
+    @property
+    def version(self) -> str:
+        return str(self.ctx.info.get("GL_VERSION", "?"))
+
+    def render(self) -> float:
+        """Clear, draw and ``glFinish``; returns seconds."""
+        t0 = time.perf_counter()
+        self.fbo.use()
+        self.fbo.clear(-1.0, -1.0, -1.0, -1.0, depth=1.0)
+        self.vao.render()
+        self.ctx.finish()
+        return time.perf_counter() - t0
+
+    def readback(self) -> tuple[dict[str, np.ndarray], float]:
+        """``glReadPixels`` of every attachment; returns ({name: (H, W[, C]) float32}, seconds).
+
+        Arrays are in GL window orientation (row 0 = bottom row).
+        """
+        out: dict[str, np.ndarray] = {}
+        t0 = time.perf_counter()
+        for i, (name, _, comps) in enumerate(ATTACHMENTS):
+            raw = self.fbo.read(components=comps, attachment=i, dtype="f4")
+            shape = (self.height, self.width) if comps == 1 else (self.height, self.width, comps)
+            out[name] = np.frombuffer(raw, dtype=np.float32).reshape(shape)
+        return out, time.perf_counter() - t0
+
+    def release(self) -> None:
+        for obj in (self.vao, self.fbo, self.program):
+            obj.release()
+        self.ctx.release()
+
+
+def open_peer(
+    positions: np.ndarray,
+    faces: np.ndarray,
+    normals: np.ndarray,
+    uv: np.ndarray,
+    view_projection: np.ndarray,
+    width: int,
+    height: int,
+) -> GLPeer:
+    """Make an EGL context, upload the mesh and build the MRT framebuffer.
+
+    Parameters
+    ----------
+    positions, normals : (N, 3) float
+    faces : (M, 3) int
+    uv : (N, 2) float
+    view_projection : (4, 4) float64
+        ``projection_matrix(width, height) @ view_matrix()`` (row-major numpy; uploaded transposed
+        because GL matrices are column-major).
+    width, height : int
+
+    Raises
+    ------
+    GLUnavailable
+        With the reason, if moderngl is missing or no EGL/GL 4.5 context can be created.
+    """
+    t0 = time.perf_counter()
+    try:
+        import moderngl
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise GLUnavailable(f"moderngl is not installed ({exc}); pip install moderngl") from exc
+    try:
+        ctx = moderngl.create_standalone_context(backend="egl", require=450)
+    except Exception as exc:  # moderngl raises plain Exception for EGL failures
+        raise GLUnavailable(
+            f"no EGL OpenGL 4.5 context ({type(exc).__name__}: {exc}); on Debian install "
+            "libegl1 libgl1-mesa-dri libegl-mesa0"
+        ) from exc
+    prog = ctx.program(vertex_shader=VERTEX_SHADER, fragment_shader=FRAGMENT_SHADER)
+    prog["u_view_projection"].write(np.asarray(view_projection, dtype="f4").T.copy().tobytes())
+    verts = np.hstack(
+        [
+            np.asarray(positions, dtype="f4"),
+            np.asarray(normals, dtype="f4"),
+            np.asarray(uv, dtype="f4"),
+        ]
+    )
+    vbo = ctx.buffer(np.ascontiguousarray(verts).tobytes())
+    ibo = ctx.buffer(np.ascontiguousarray(faces, dtype="u4").tobytes())
+    vao = ctx.vertex_array(
+        prog,
+        [(vbo, "3f 3f 2f", "in_position", "in_normal", "in_uv")],
+        index_buffer=ibo,
+        index_element_size=4,
+    )
+    size = (int(width), int(height))
+    colors = [ctx.renderbuffer(size, components=c, dtype="f4") for _, c, _ in ATTACHMENTS]
+    fbo = ctx.framebuffer(color_attachments=colors, depth_attachment=ctx.depth_renderbuffer(size))
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.depth_func = "<"
+    ctx.disable(moderngl.CULL_FACE)
+    fbo.use()
+    fbo.viewport = (0, 0, size[0], size[1])
+    peer = GLPeer(ctx, fbo, vao, prog, size[0], size[1], 0.0)
+    peer.render()  # llvmpipe JIT-compiles the shaders on the first draw: keep that out of the runs
+    peer.readback()
+    peer.setup_s = time.perf_counter() - t0
+    return peer
+
+
+def to_refnpr_convention(gl: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Flip GL readbacks to refnpr's convention: row 0 on top, ``duv_dy`` downward, int tri ids.
+
+    ``depth`` becomes +inf where empty, ``tri_id`` int32 with -1 where empty.
+    """
+    out = {k: np.ascontiguousarray(v[::-1]) for k, v in gl.items()}
+    tri = np.rint(out["tri_id"]).astype(np.int32)
+    empty = tri < 0
+    tri[empty] = -1
+    out["tri_id"] = tri
+    if "duv_dy" in out:
+        out["duv_dy"] = -out["duv_dy"]  # GL's dFdy is along +y of the window = upward on screen
+    if "depth" in out:
+        depth = out["depth"].copy()
+        depth[empty] = np.inf
+        out["depth"] = depth
+    return out
