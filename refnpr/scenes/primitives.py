@@ -128,7 +128,8 @@ def icosphere(subdivisions: int = 3, radius: float = 1.0) -> Mesh:
         Normals = unit positions. uv as :func:`spherical_uv`; triangles that straddle the u seam
         use duplicated vertices with u + 1, so u lies in [0, 1 + w) with w below one triangle's
         width in u (wrap-around sampling sees no jump). The poles are split per triangle with u at
-        the triangle's centre.
+        the triangle's centre. Vertices are numbered in order of first use by the faces (good
+        locality for per-triangle vertex gathers).
     """
     subdivisions = check_int("subdivisions", subdivisions, minimum=0, maximum=9)
     radius = check_real("radius", radius, positive=True)
@@ -140,7 +141,15 @@ def icosphere(subdivisions: int = 3, radius: float = 1.0) -> Mesh:
     source, u, faces = split_u_seam(uv[:, 0], faces, pole)
     unit_pos = verts[source]
     uv = np.stack([u, uv[source, 1]], axis=1)
-    return Mesh(unit_pos * radius, faces, unit_pos, uv, name="icosphere")
+    # Number vertices in order of first use by the faces: subdivision appends midpoints far from
+    # their triangles' other corners, and renderers gather per-triangle vertex data by index.
+    _, first_use = np.unique(faces.ravel(), return_index=True)
+    order = np.argsort(first_use, kind="stable")
+    renumber = np.empty_like(order)
+    renumber[order] = np.arange(order.size)
+    return Mesh(
+        unit_pos[order] * radius, renumber[faces], unit_pos[order], uv[order], name="icosphere"
+    )
 
 
 def torus(R: float = 1.0, r: float = 0.35, n_u: int = 64, n_v: int = 32) -> Mesh:
