@@ -216,60 +216,101 @@ def transform_vertices(positions, vp, width, height, guard, clip, snapped, outco
             snapped[i, 1] = 0
 
 
+@njit(inline="always")
+def _count_tiles(sx0, sx1, sy0, sy1, shift, tiles_x, counts_row):
+    for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
+        for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
+            counts_row[ty * tiles_x + tx] += 1
+
+
 @pnjit
 def setup_triangles(
-    clip, snapped, outcode, faces, n, width, height, cull, coords, bbox, status, qplane
+    clip,
+    snapped,
+    outcode,
+    faces,
+    n,
+    width,
+    height,
+    cull,
+    chunk,
+    shift,
+    tiles_x,
+    coords,
+    bbox,
+    status,
+    qplane,
+    counts,
 ):
-    """Per triangle: trivial reject, snapped screen coordinates (fast path) and the depth plane.
+    """Per triangle: trivial reject, snapped screen coordinates (fast path), the depth plane, and
+    the first binning pass (tile counts), in one pass over chunks of ``chunk`` triangles.
 
     status[t]: 0 rejected (outside a plane, zero area, culled, or covering no sample centre),
     1 one primitive: coords[t] (1/256 px, vertices 1 and 2 swapped if needed so the signed area
     is positive) and bbox[t] = (sx0, sx1, sy0, sy1), its inclusive sample range; 2 needs
-    clipping. qplane[t] = (a, b, c): Q = 1/w = a sx + b sy + c on the sample grid (exact
-    vertices).
+    clipping (counted later by ``bin_count_clipped``). qplane[t] = (a, b, c): Q = 1/w =
+    a sx + b sy + c on the sample grid (exact vertices). counts[c, tile] += 1 for every tile a
+    status-1 triangle of chunk c touches.
     """
     nw = n * width
     nh = n * height
-    for t in prange(faces.shape[0]):
-        i0 = faces[t, 0]
-        i1 = faces[t, 1]
-        i2 = faces[t, 2]
-        status[t] = 0
-        o0 = outcode[i0]
-        o1 = outcode[i1]
-        o2 = outcode[i2]
-        if (o0 & o1 & o2) != 0:
-            continue  # all three vertices outside one plane
-        clipped = (o0 | o1 | o2) != 0
-        if not clipped:
-            row = coords[t]
-            row[0] = snapped[i0, 0]
-            row[1] = snapped[i0, 1]
-            row[2] = snapped[i1, 0]
-            row[3] = snapped[i1, 1]
-            row[4] = snapped[i2, 0]
-            row[5] = snapped[i2, 1]
-            area = _signed_area(row)
-            if not _keep(area, cull):
+    m = faces.shape[0]
+    for c in prange(counts.shape[0]):
+        for t in range(c * chunk, min(m, (c + 1) * chunk)):
+            i0 = faces[t, 0]
+            i1 = faces[t, 1]
+            i2 = faces[t, 2]
+            status[t] = 0
+            o0 = outcode[i0]
+            o1 = outcode[i1]
+            o2 = outcode[i2]
+            if (o0 & o1 & o2) != 0:
+                continue  # all three vertices outside one plane
+            clipped = (o0 | o1 | o2) != 0
+            sx0 = sx1 = sy0 = sy1 = 0
+            if not clipped:
+                row = coords[t]
+                row[0] = snapped[i0, 0]
+                row[1] = snapped[i0, 1]
+                row[2] = snapped[i1, 0]
+                row[3] = snapped[i1, 1]
+                row[4] = snapped[i2, 0]
+                row[5] = snapped[i2, 1]
+                area = _signed_area(row)
+                if not _keep(area, cull):
+                    continue
+                if area < 0:  # canonical orientation: interior where all edge functions >= 0
+                    row[2], row[3], row[4], row[5] = row[4], row[5], row[2], row[3]
+                sx0, sx1, sy0, sy1 = _sample_bbox(row, n, nw, nh)
+                if sx0 > sx1 or sy0 > sy1:
+                    continue  # covers no sample centre
+            det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(
+                clip[i0], clip[i1], clip[i2], nw, nh
+            )
+            if det == 0.0 or not math.isfinite(det):
+                continue  # the triangle's plane passes through the eye: it projects to a line
+            qplane[t, 0] = l00 + l10 + l20
+            qplane[t, 1] = l01 + l11 + l21
+            qplane[t, 2] = l02 + l12 + l22
+            if clipped:
+                status[t] = 2
                 continue
-            if area < 0:  # canonical orientation: interior where all edge functions are >= 0
-                row[2], row[3], row[4], row[5] = row[4], row[5], row[2], row[3]
-            sx0, sx1, sy0, sy1 = _sample_bbox(row, n, nw, nh)
-            if sx0 > sx1 or sy0 > sy1:
-                continue  # covers no sample centre
+            status[t] = 1
             bbox[t, 0] = sx0
             bbox[t, 1] = sx1
             bbox[t, 2] = sy0
             bbox[t, 3] = sy1
-        det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(
-            clip[i0], clip[i1], clip[i2], nw, nh
-        )
-        if det == 0.0 or not math.isfinite(det):
-            continue  # the triangle's plane passes through the eye: it projects to a line
-        qplane[t, 0] = l00 + l10 + l20
-        qplane[t, 1] = l01 + l11 + l21
-        qplane[t, 2] = l02 + l12 + l22
-        status[t] = 2 if clipped else 1
+            _count_tiles(sx0, sx1, sy0, sy1, shift, tiles_x, counts[c])
+
+
+@njit
+def bin_count_clipped(todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts):
+    """Add the clipped triangles' pieces to the tile counts of their triangle's chunk."""
+    for i in range(todo.shape[0]):
+        c = todo[i] // chunk
+        for j in range(sub_first[i], sub_first[i + 1]):
+            b = sub_bbox[j]
+            _count_tiles(b[0], b[1], b[2], b[3], shift, tiles_x, counts[c])
 
 
 @njit
@@ -383,35 +424,6 @@ def _prim(ref, coords, sub):
     if ref < m:
         return coords[ref]
     return sub[ref - m]
-
-
-@pnjit
-def bin_count(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts):
-    """counts[c, tile] = how many primitives of triangle chunk c touch each tile.
-
-    Primitives are whole triangles (status 1) or the fan pieces of clipped ones (status 2, listed
-    in ``todo`` with their pieces sub[sub_first[i]:sub_first[i + 1]]).
-    """
-    m = status.shape[0]
-    for c in prange(counts.shape[0]):
-        lo = c * chunk
-        hi = min(m, lo + chunk)
-        cur = np.searchsorted(todo, lo)
-        for t in range(lo, hi):
-            st = status[t]
-            if st == 0:
-                continue
-            if st == 1:
-                first, last = t, t + 1
-            else:
-                first, last = m + sub_first[cur], m + sub_first[cur + 1]
-                cur += 1
-            for ref in range(first, last):
-                b = _prim(ref, bbox, sub_bbox)
-                sx0, sx1, sy0, sy1 = b[0], b[1], b[2], b[3]
-                for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
-                    for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
-                        counts[c, ty * tiles_x + tx] += 1
 
 
 @pnjit

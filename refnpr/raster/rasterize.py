@@ -234,36 +234,52 @@ def rasterize(
     K.transform_vertices(positions, vp, width, height, guard, clip, snapped, outcode)
     timings: dict[str, float] = {"vertex": time.perf_counter() - t_start}
 
-    # ---- triangle setup, clipping, binning ---------------------------------------------------
+    # ---- triangle setup (with the first binning pass), clipping -----------------------------
     t0 = time.perf_counter()
     m_tris = faces.shape[0]
-    coords = np.empty((m_tris, 6), dtype=np.int32)
-    bbox = np.empty((m_tris, 4), dtype=np.int32)
-    status = np.empty(m_tris, dtype=np.int8)
-    qplane = np.empty((m_tris, 3), dtype=np.float64)
-    cull = int(cull_backfaces)
-    K.setup_triangles(
-        clip, snapped, outcode, faces, n, width, height, cull, coords, bbox, status, qplane
-    )
-    todo = np.flatnonzero(status == 2)
-    sub, sub_bbox, sub_parent, sub_first = K.clip_triangles(
-        clip, faces, todo, width, height, guard, cull, n, max(1, todo.size * (K.MAX_POLY - 2))
-    )
-    timings["setup"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
     shift = tile.bit_length() - 1
     tiles_x = -(-nw // tile)
     tiles_y = -(-nh // tile)
     n_tiles = tiles_x * tiles_y
     chunk = max(1, -(-m_tris // _BIN_CHUNKS))
     counts = np.zeros((_BIN_CHUNKS, n_tiles), dtype=np.int64)
-    K.bin_count(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts)
+    coords = np.empty((m_tris, 6), dtype=np.int32)
+    bbox = np.empty((m_tris, 4), dtype=np.int32)
+    status = np.empty(m_tris, dtype=np.int8)
+    qplane = np.empty((m_tris, 3), dtype=np.float64)
+    cull = int(cull_backfaces)
+    K.setup_triangles(
+        clip,
+        snapped,
+        outcode,
+        faces,
+        n,
+        width,
+        height,
+        cull,
+        chunk,
+        shift,
+        tiles_x,
+        coords,
+        bbox,
+        status,
+        qplane,
+        counts,
+    )
+    todo = np.flatnonzero(status == 2)
+    sub, sub_bbox, sub_parent, sub_first = K.clip_triangles(
+        clip, faces, todo, width, height, guard, cull, n, max(1, todo.size * (K.MAX_POLY - 2))
+    )
+    K.bin_count_clipped(todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts)
+    timings["setup"] = time.perf_counter() - t0
+
+    # ---- binning: per-tile primitive lists in triangle order ---------------------------------
+    t0 = time.perf_counter()
     # tile-major, chunk-minor: a tile's list is its chunks' lists in chunk (= triangle) order
     starts = np.concatenate([[0], np.cumsum(counts.T.ravel())])
     offsets = np.ascontiguousarray(starts[:-1].reshape(n_tiles, _BIN_CHUNKS).T)
     tile_first = np.ascontiguousarray(starts[::_BIN_CHUNKS])  # (n_tiles + 1,)
-    lists = np.empty(int(starts[-1]), dtype=np.int64)
+    lists = np.empty(int(starts[-1]), dtype=np.int32 if m_tris + sub.shape[0] < 2**31 else np.int64)
     K.bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, offsets, lists)
     timings["bin"] = time.perf_counter() - t0
 
