@@ -1,0 +1,329 @@
+"""TAMISS benchmark: per-phase times at the paper's Table 1 settings, and stroke jitter.
+
+Usage::
+
+    python benchmarks/bench_tamiss.py                       # full run, writes results/tamiss.json
+    python benchmarks/bench_tamiss.py --quick --json /tmp/t.json   # smoke run, seconds
+
+Sections (``--sections``, comma separated; default all three):
+
+``phases``
+    The ``tamiss_torus_knot`` scene at 1920 x 1200 (the paper's Table 1 resolution), one G-buffer
+    (float64, spp 1), hatching along v with the row period chosen so that about 1k, 4k and 16k
+    strokes are aggregated (the paper's stroke counts; the period is found by a secant search on
+    log(count) vs log(period) and reported). For each: median over ``--runs`` of the wall time of
+    each phase of ``run_pipeline`` -- gather (G-buffer channels to per-sample inputs, including
+    the diffuse tone, plus the two-pass numba fragment kernel), aggregate (exact, float32), fit
+    (four CG iterations, float32, drop rule), extrude (segments and strips) and raster
+    (anti-aliased strips, 4 x 4 sub-samples) -- and the fit's share of the total.
+``hash``
+    The paper's double-hashed aggregation on the same G-buffer with about 4k strokes: for table
+    sizes from a quarter of the stroke count to 8 times it, three frames of a still view routed from an
+    empty table; per frame the strokes delayed (lost the write race for an empty slot), contested
+    (their slot received another stroke's fragments, so not drawn this frame) and lost (no slot
+    within 32 probes).
+``jitter``
+    The ``tamiss_sphere`` scene, the camera orbiting slowly (``--orbit-step`` degrees per frame
+    about the vertical axis through the sphere, ``--frames`` frames, ``--jitter-size``), extent
+    ``range``. For every stroke present in two consecutive frames, with t_e one of its ends
+    (t_min, t_max) in the first frame, its true screen motion is the projection of its texture
+    point at t_e in the two frames (texture -> mesh -> world by point location in the uv chart,
+    then the frames' camera matrices). Reported (pixels, mean and 95th percentile over stroke
+    ends and frame pairs):
+
+    * curve jitter: |(r'(t_e) - r(t_e)) - (P'(t_e) - P(t_e))|, the fitted curve at a fixed t;
+    * endpoint jitter: |(r'(t_e') - r(t_e)) - (P'(t_e) - P(t_e))|, the drawn end (t_e' its
+      new t_min / t_max), which also moves when the gathered t range changes;
+
+    without averaging and with :class:`AggregateHistory` over ``--average`` frames (the paper's
+    proposal, sec. 4.1). Averaging lags true motion by (frames - 1) / 2 frames, constant for a
+    steady orbit, so it cancels in these frame-to-frame differences.
+
+All times are wall-clock ``time.perf_counter`` seconds; nothing here asserts a time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+from refnpr.formulas.tamiss import StrokeHashTable  # noqa: E402
+from refnpr.raster import Camera, rasterize  # noqa: E402
+from refnpr.scenes import load_scene  # noqa: E402
+from refnpr.styles._tamiss_strokes import take_fit  # noqa: E402
+from refnpr.styles.tamiss import (  # noqa: E402
+    AggregateHistory,
+    TamissParams,
+    run_pipeline,
+    stroke_geometry,
+)
+
+CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal"]
+PHASES = ("gather", "aggregate", "fit", "extrude", "raster")
+
+
+def gbuffer(sc, w, h, camera=None):
+    return rasterize(sc, camera, w, h, CHANNELS, 1, dtype=np.float64)
+
+
+def count_strokes(gb, sc, period):
+    p = TamissParams.from_params(directions=["v"], period=period)
+    return len(run_pipeline(gb, sc, p).aggregates)
+
+
+def find_period(gb, sc, target, lo=1.0, hi=64.0):
+    """Period (px) giving about ``target`` aggregated strokes: secant on log count vs log period."""
+    p0, n0 = 8.0, count_strokes(gb, sc, 8.0)
+    p1 = float(np.clip(p0 * np.sqrt(n0 / target), lo, hi))
+    n1 = count_strokes(gb, sc, p1)
+    for _ in range(4):
+        if abs(np.log(n1 / target)) < 0.03 or n1 == n0:
+            break
+        slope = (np.log(n1) - np.log(n0)) / (np.log(p1) - np.log(p0))
+        p2 = float(np.clip(np.exp(np.log(p1) + (np.log(target) - np.log(n1)) / slope), lo, hi))
+        p0, n0, p1 = p1, n1, p2
+        n1 = count_strokes(gb, sc, p1)
+    return p1, n1
+
+
+def bench_phases(args) -> list[dict]:
+    sc = load_scene("tamiss_torus_knot")
+    w, h = args.size
+    t0 = time.perf_counter()
+    gb = gbuffer(sc, w, h)
+    raster_s = time.perf_counter() - t0
+    rows = []
+    scale = (w * h) / (1920 * 1200)
+    for target in args.targets:
+        goal = max(20, int(round(target * scale)))
+        period, _ = find_period(gb, sc, goal)
+        params = TamissParams.from_params(directions=["v"], period=period)
+        run_pipeline(gb, sc, params)  # warm caches
+        runs = []
+        for _ in range(args.runs):
+            r = run_pipeline(gb, sc, params)
+            runs.append(dict(r.timings))
+        med = {k: statistics.median(t[k] for t in runs) for k in (*PHASES, "total")}
+        st = r.stats()
+        rows.append(
+            {
+                "target_strokes": goal,
+                "period_px": period,
+                "strokes": st["strokes"],
+                "drawn": st["drawn"],
+                "fragments": st["fragments"],
+                "median_s": med,
+                "runs_s": runs,
+                "fit_share": med["fit"] / med["total"],
+                "extrude_raster_s": med["extrude"] + med["raster"],
+            }
+        )
+    print(f"\nTAMISS phases, tamiss_torus_knot {w}x{h} (G-buffer {raster_s:.2f} s, not included), "
+          f"median of {args.runs} runs, seconds")  # fmt: skip
+    print(f"{'strokes':>8} {'period':>7} {'frags':>8} " + " ".join(f"{p:>9}" for p in PHASES)
+          + f" {'total':>8} {'fit %':>6}")  # fmt: skip
+    for r in rows:
+        m = r["median_s"]
+        print(f"{r['strokes']:>8} {r['period_px']:>7.2f} {r['fragments']:>8} "
+              + " ".join(f"{m[p]:>9.4f}" for p in PHASES)
+              + f" {m['total']:>8.3f} {100 * r['fit_share']:>6.2f}")  # fmt: skip
+    return rows
+
+
+def bench_hash(args) -> list[dict]:
+    """Double-hashed aggregation: delayed / contested / lost strokes per table size."""
+    sc = load_scene("tamiss_torus_knot")
+    w, h = args.size
+    gb = gbuffer(sc, w, h)
+    goal = max(20, int(round(4000 * (w * h) / (1920 * 1200))))
+    period, n = find_period(gb, sc, goal)
+    params = TamissParams.from_params(directions=["v"], period=period, aggregation="hashed")
+    rows = []
+    for log2 in range(max(4, int(np.log2(n)) - 1), int(np.log2(n)) + 5):
+        table = StrokeHashTable(1 << log2)
+        frames = [run_pipeline(gb, sc, params, table=table).aggregates.hash_stats for _ in range(3)]
+        rows.append({"table_size": 1 << log2, "strokes": n,
+                     "frames": [f.as_dict() for f in frames]})  # fmt: skip
+    print(f"\nDouble hashing, tamiss_torus_knot {w}x{h}, {n} strokes, a still view; frames 1, 2, 3 "
+          "from an empty table: delayed / contested (not drawn this frame) / lost")  # fmt: skip
+    for r in rows:
+        cells = "   ".join(
+            f"{f['n_delayed']:>5} /{f['n_contested']:>5} /{f['n_lost']:>5}" for f in r["frames"]
+        )
+        print(f"table {r['table_size']:>7} (load {n / r['table_size']:5.2f}):   {cells}")
+    return rows
+
+
+def _uv_locator(mesh, chart_uv_scale):
+    """texture (u', v') -> world point on the mesh (piecewise linear), by bucketed point location."""
+    uv = mesh.uv * np.asarray(chart_uv_scale)
+    tri_uv = uv[mesh.faces]  # (F, 3, 2)
+    lo, hi = tri_uv.min(1), tri_uv.max(1)
+    g = 64
+    u0, u1 = uv[:, 0].min(), uv[:, 0].max()
+    v0, v1 = uv[:, 1].min(), uv[:, 1].max()
+    cell = lambda x, a, b: np.clip(((x - a) / (b - a) * g).astype(int), 0, g - 1)  # noqa: E731
+    buckets: dict = {}
+    for f in range(tri_uv.shape[0]):
+        for i in range(cell(lo[f, 0], u0, u1), cell(hi[f, 0], u0, u1) + 1):
+            for j in range(cell(lo[f, 1], v0, v1), cell(hi[f, 1], v0, v1) + 1):
+                buckets.setdefault((i, j), []).append(f)
+
+    def locate(pts):
+        out = np.full((pts.shape[0], 3), np.nan)
+        for k, (u, v) in enumerate(pts):
+            cand = buckets.get((int(cell(np.array(u), u0, u1)), int(cell(np.array(v), v0, v1))))
+            if not cand:
+                continue
+            t = tri_uv[cand]
+            a, b, c = t[:, 0], t[:, 1], t[:, 2]
+            den = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (
+                a[:, 1] - c[:, 1]
+            )
+            w0 = ((b[:, 1] - c[:, 1]) * (u - c[:, 0]) + (c[:, 0] - b[:, 0]) * (v - c[:, 1])) / den
+            w1 = ((c[:, 1] - a[:, 1]) * (u - c[:, 0]) + (a[:, 0] - c[:, 0]) * (v - c[:, 1])) / den
+            w2 = 1 - w0 - w1
+            inside = (w0 >= -1e-9) & (w1 >= -1e-9) & (w2 >= -1e-9)
+            if np.any(inside):
+                i = np.flatnonzero(inside)[0]
+                P = mesh.positions[mesh.faces[cand[i]]]
+                out[k] = w0[i] * P[0] + w1[i] * P[1] + w2[i] * P[2]
+        return out
+
+    return locate
+
+
+def _project(gb, world):
+    P = np.concatenate([world, np.ones((world.shape[0], 1))], 1) @ gb.view_projection.T
+    ndc = P[:, :2] / P[:, 3:]
+    return np.stack([(ndc[:, 0] + 1) / 2 * gb.width, (1 - ndc[:, 1]) / 2 * gb.height], 1)
+
+
+def bench_jitter(args) -> dict:
+    sc = load_scene("tamiss_sphere")
+    w, h = args.jitter_size
+    obj = sc.objects[0]
+    locate = _uv_locator(obj.world_mesh(), obj.material.uv_scale)
+    params = TamissParams.from_params(directions=["u"], period=4.0, extent="range")
+    cam0 = sc.camera
+    eye0 = np.asarray(cam0.eye)
+    target = np.asarray(cam0.target)
+    out = {}
+    for label, hist_frames in (("none", None), (f"average{args.average}", args.average)):
+        history = AggregateHistory(hist_frames) if hist_frames else None
+        frames = []
+        for k in range(args.frames):
+            a = np.radians(args.orbit_step * k)
+            rot = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+            eye = target + rot @ (eye0 - target)
+            cam = Camera.look_at(eye, target, cam0.up, cam0.fov_y, cam0.near, cam0.far)
+            frame_sc = sc.with_camera(cam)
+            gb = gbuffer(frame_sc, w, h)
+            r = run_pipeline(gb, frame_sc, params, history=history)
+            frames.append((gb, r))
+        curve, endpoint = [], []
+        for (gb0, r0), (gb1, r1) in zip(frames[:-1], frames[1:], strict=True):
+            ids = np.intersect1d(r0.stroke_ids[r0.keep], r1.stroke_ids[r1.keep])
+            if ids.size == 0:
+                continue
+            i0 = np.searchsorted(r0.stroke_ids, ids)
+            i1 = np.searchsorted(r1.stroke_ids, ids)
+            f0, f1 = take_fit(r0.fit, i0), take_fit(r1.fit, i1)
+            g = stroke_geometry(ids, params.field)
+            for end in ("t_min", "t_max"):
+                te = np.asarray(getattr(f0, end), dtype=np.float64)
+                te1 = np.asarray(getattr(f1, end), dtype=np.float64)
+                uvp = np.stack([g.p_start + te * g.length, g.q], 1)  # layer "u": (p, q) = uv'
+                world = locate(uvp)
+                ok = np.all(np.isfinite(world), 1)
+                true = _project(gb1, world) - _project(gb0, world)
+                x0, y0 = (
+                    np.asarray(v, np.float64) for v in f0.evaluate(te[:, None].astype(f0.c_x.dtype))
+                )
+                tc = np.clip(te, f1.t_min, f1.t_max)[:, None].astype(f1.c_x.dtype)
+                x1, y1 = (np.asarray(v, np.float64) for v in f1.evaluate(tc))
+                e1x, e1y = (
+                    np.asarray(v, np.float64)
+                    for v in f1.evaluate(te1[:, None].astype(f1.c_x.dtype))
+                )
+                d_curve = np.stack([x1 - x0, y1 - y0], -1)[:, 0] - true
+                d_end = np.stack([e1x - x0, e1y - y0], -1)[:, 0] - true
+                curve.append(np.hypot(*d_curve[ok].T))
+                endpoint.append(np.hypot(*d_end[ok].T))
+        c, e = np.concatenate(curve), np.concatenate(endpoint)
+        out[label] = {
+            "curve_mean_px": float(c.mean()),
+            "curve_p95_px": float(np.percentile(c, 95)),
+            "endpoint_mean_px": float(e.mean()),
+            "endpoint_p95_px": float(np.percentile(e, 95)),
+            "samples": int(c.size),
+        }
+    print(f"\nStroke jitter, tamiss_sphere {w}x{h}, orbit {args.orbit_step} deg/frame, "
+          f"{args.frames} frames, extent range; pixels after removing true motion")  # fmt: skip
+    print(f"{'aggregates':>12} {'curve mean':>11} {'curve p95':>10} {'end mean':>9} "
+          f"{'end p95':>8} {'n':>7}")  # fmt: skip
+    for k, v in out.items():
+        print(f"{k:>12} {v['curve_mean_px']:>11.4f} {v['curve_p95_px']:>10.4f} "
+              f"{v['endpoint_mean_px']:>9.4f} {v['endpoint_p95_px']:>8.4f} {v['samples']:>7}")  # fmt: skip
+    return {"scene": "tamiss_sphere", "size": [w, h], "orbit_step_deg": args.orbit_step,
+            "frames": args.frames, "average_frames": args.average, "results": out}  # fmt: skip
+
+
+def _size(s: str) -> tuple[int, int]:
+    w, h = s.lower().split("x")
+    return int(w), int(h)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="small sizes, one run (smoke test)")
+    ap.add_argument("--sections", default="phases,hash,jitter")
+    ap.add_argument("--size", type=_size, default=None, help="phases image size (1920x1200)")
+    ap.add_argument("--targets", default="1000,4000,16000", help="stroke counts at 1920x1200")
+    ap.add_argument("--runs", type=int, default=None)
+    ap.add_argument("--jitter-size", type=_size, default=None, help="jitter image size (640x480)")
+    ap.add_argument("--frames", type=int, default=None)
+    ap.add_argument("--orbit-step", type=float, default=0.25)
+    ap.add_argument("--average", type=int, default=4)
+    ap.add_argument("--json", default=str(HERE / "results" / "tamiss.json"))
+    args = ap.parse_args(argv)
+    args.size = args.size or ((480, 300) if args.quick else (1920, 1200))
+    args.jitter_size = args.jitter_size or ((240, 180) if args.quick else (640, 480))
+    args.runs = args.runs or (1 if args.quick else 5)
+    args.frames = args.frames or (4 if args.quick else 16)
+    args.targets = [int(x) for x in args.targets.split(",")]
+    sections = {s.strip() for s in args.sections.split(",") if s.strip()}
+    report = {
+        "meta": {
+            "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+            "python": platform.python_version(),
+            "machine": platform.machine(),
+            "cpus": os.cpu_count(),
+            "numba_threads": int(__import__("numba").get_num_threads()),
+            "quick": bool(args.quick),
+        },
+        "phases": bench_phases(args) if "phases" in sections else [],
+        "hash": bench_hash(args) if "hash" in sections else [],
+        "jitter": bench_jitter(args) if "jitter" in sections else {},
+    }
+    path = Path(args.json)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(report, indent=2))
+    print(f"\nwrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
