@@ -1,0 +1,298 @@
+"""Halftone screens of the ``halftone`` style: TOML-friendly specs -> built, mip-mapped screens,
+and sampling at a sample's uv and LOD (Freudenberg et al. 2002, secs. 3-4).
+
+A screen spec is a string or a table (scene files, ``--param``):
+
+* ``"engraving"`` or ``{kind = "engraving", profile = "triangle", angle = 90.0, size = 256}``:
+  the 1D ramp of sec. 4.1 along ``t = u cos(angle) + v sin(angle)`` (so the
+  engraved lines are iso-lines of t; 90 deg: lines of constant v).
+* ``"hatching"``, ``"bricks"`` or ``{kind = "strokes", set = "hatching", ...generator options}``:
+  the built-in procedural stroke sets of :mod:`refnpr.texture.screens` (sec. 4.2);
+  ``{kind = "strokes", layers = ["dark.png", "light.png"], levels = [0.0, 0.5],
+  normal_map = "n.png"}`` reads hand-drawn layers (darkest first).
+* ``"material"``, a built-in texture name (``"brick"``, ``"grass"``, ...) or an image path, or
+  ``{kind = "dither", texture = "brick", window = 16, clip_limit = 0.01, uniform = true}``: a
+  dither screen, the texture through :func:`refnpr.texture.clahe_pyramid` (shared with Veryovka's
+  threshold textures); ``texture = "material"`` (the default) uses each object's own
+  ``material.texture``.
+
+Every kind accepts ``lighting = true|false``: use the set's normal map for individual stroke
+lighting (sec. 5.2) when it has one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from refnpr.texture import (
+    BUILTIN_TEXTURES,
+    MipPyramid,
+    clahe_pyramid,
+    level_weights,
+    load_texture,
+    sample_level,
+    sample_trilinear,
+)
+from refnpr.texture import screens as S
+
+__all__ = [
+    "Screen",
+    "normalize_spec",
+    "has_normal_map",
+    "build_screen",
+    "screen_coords",
+    "screen_lod",
+    "sample_screen",
+    "sample_screen_levels",
+    "tone_luts",
+    "apply_luts",
+]
+
+KINDS = ("engraving", "dither", "strokes")
+STROKE_SETS = {"hatching": S.hatching_set, "bricks": S.brick_set}
+#: Built-in stroke sets that come with a normal map (individual stroke lighting, sec. 5.2).
+SETS_WITH_NORMALS = ("bricks",)
+_ENGRAVING_KEYS = {"profile": "triangle", "angle": 90.0, "size": 256}
+_DITHER_KEYS = {"texture": "material", "window": 16, "clip_limit": 0.01, "uniform": True}
+_STROKE_FILE_KEYS = ("layers", "levels", "normal_map")
+_HOW = (
+    "a screen is 'engraving', 'hatching', 'bricks', 'material', a built-in texture name "
+    f"{list(BUILTIN_TEXTURES)}, an image path, or a table with kind = {list(KINDS)}"
+)
+
+
+@dataclass(frozen=True, eq=False)
+class Screen:
+    """A built halftone screen.
+
+    Attributes
+    ----------
+    kind : {"engraving", "dither", "strokes"}
+    pyramid : MipPyramid
+        Screen values in [0, 1] per level (engraving: ``(1, size_k)`` along t).
+    normals : MipPyramid or None
+        RGB-encoded DOT3 normal map (strokes with lighting only).
+    direction : (2,) float64 or None
+        Engraving only: t = uv . direction.
+    """
+
+    kind: str
+    pyramid: MipPyramid
+    normals: MipPyramid | None = None
+    direction: np.ndarray | None = None
+
+
+def _bad(spec: Any, why: str) -> ValueError:
+    return ValueError(f"screen: {why}, got {spec!r}; {_HOW}")
+
+
+def normalize_spec(spec: Any) -> dict[str, Any]:
+    """A screen spec as a full table (kind and every option), validating keys and values."""
+    if isinstance(spec, str):
+        if spec == "engraving":
+            return {"kind": "engraving", **_ENGRAVING_KEYS, "lighting": True}
+        if spec in STROKE_SETS:
+            return {"kind": "strokes", "set": spec, "lighting": True}
+        if spec == "material" or spec in BUILTIN_TEXTURES or "/" in spec or "." in spec:
+            return normalize_spec({"kind": "dither", "texture": spec})
+        raise _bad(spec, "unknown screen name")
+    if not isinstance(spec, dict):
+        raise TypeError(f"screen: expected a name or a table, got {type(spec).__name__} {spec!r}")
+    spec = dict(spec)
+    kind = spec.pop("kind", None)
+    if kind not in KINDS:
+        raise _bad(kind, f"a screen table needs kind in {list(KINDS)}")
+    lighting = spec.pop("lighting", True)
+    if lighting not in (True, False):
+        raise TypeError(f"screen.lighting: expected a bool, got {lighting!r}")
+    if kind == "engraving":
+        out = _with_defaults("engraving", spec, _ENGRAVING_KEYS)
+        if out["profile"] not in ("ramp", "triangle"):
+            raise ValueError(
+                f"screen.profile: expected 'ramp' or 'triangle', got {out['profile']!r}"
+            )
+        a = out["angle"]
+        if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a):
+            raise TypeError(f"screen.angle: expected a number of degrees, got {a!r}")
+    elif kind == "dither":
+        out = _with_defaults("dither", spec, _DITHER_KEYS)
+        if not isinstance(out["texture"], str) or not out["texture"]:
+            raise TypeError(
+                f"screen.texture: expected 'material', a built-in texture name or an image path, "
+                f"got {out['texture']!r}"
+            )
+    else:
+        if "layers" in spec:
+            unknown = sorted(set(spec) - set(_STROKE_FILE_KEYS))
+            if unknown:
+                raise ValueError(
+                    f"screen.{unknown[0]}: unknown key for file stroke layers; valid keys: "
+                    f"kind, lighting, {', '.join(_STROKE_FILE_KEYS)}"
+                )
+            layers = spec["layers"]
+            if (
+                not isinstance(layers, list)
+                or not layers
+                or not all(isinstance(p, str) for p in layers)
+            ):
+                raise TypeError(
+                    f"screen.layers: expected a list of image paths (darkest layer first), "
+                    f"got {layers!r}"
+                )
+            out = {
+                "layers": list(layers),
+                "levels": spec.get("levels"),
+                "normal_map": spec.get("normal_map"),
+            }
+        else:
+            name = spec.pop("set", "hatching")
+            if name not in STROKE_SETS:
+                raise ValueError(
+                    f"screen.set: expected one of {sorted(STROKE_SETS)} (or give layers = "
+                    f"[paths]), got {name!r}"
+                )
+            out = {"set": name, **spec}  # generator options, validated when built
+    return {"kind": kind, **out, "lighting": bool(lighting)}
+
+
+def has_normal_map(spec: dict[str, Any]) -> bool:
+    """Whether a normalized spec lights its strokes from a normal map (needs a tangent frame)."""
+    if spec["kind"] != "strokes" or not spec["lighting"]:
+        return False
+    if "layers" in spec:
+        return spec["normal_map"] is not None
+    return spec["set"] in SETS_WITH_NORMALS
+
+
+def _with_defaults(kind: str, spec: dict, defaults: dict) -> dict:
+    unknown = sorted(set(spec) - set(defaults))
+    if unknown:
+        raise ValueError(
+            f"screen.{unknown[0]}: unknown key for a {kind} screen; valid keys: kind, lighting, "
+            f"{', '.join(defaults)}"
+        )
+    return {**defaults, **spec}
+
+
+def build_screen(spec: dict[str, Any], material_texture: str | None) -> Screen:
+    """Build the screen of a normalized spec (``material_texture``: the object's texture, used
+    by ``texture = "material"``)."""
+    kind = spec["kind"]
+    if kind == "engraving":
+        pyr = S.engraving_pyramid(spec["size"], profile=spec["profile"])
+        a = math.radians(float(spec["angle"]))
+        return Screen("engraving", pyr, None, np.array([math.cos(a), math.sin(a)]))
+    if kind == "dither":
+        name = spec["texture"]
+        if name == "material":
+            if material_texture is None:
+                raise ValueError(
+                    "screen: texture = 'material' but the object's material has no texture; "
+                    "set material.texture in the scene, or name a texture in the screen spec"
+                )
+            name = material_texture
+        pyr = clahe_pyramid(
+            load_texture(name),
+            window=spec["window"],
+            clip_limit=spec["clip_limit"],
+            uniform=spec["uniform"],
+        )
+        return Screen("dither", pyr)
+    if "layers" in spec:
+        strokes = S.load_stroke_layers(
+            spec["layers"], levels=spec["levels"], normal_map=spec["normal_map"]
+        )
+    else:
+        options = {k: v for k, v in spec.items() if k not in ("kind", "set", "lighting")}
+        try:
+            strokes = STROKE_SETS[spec["set"]](**options)
+        except TypeError as exc:
+            raise TypeError(f"screen ({spec['set']!r} options): {exc}") from None
+    normals = S.normal_pyramid(strokes) if spec["lighting"] else None
+    return Screen("strokes", S.stroke_map_pyramid(strokes), normals)
+
+
+def screen_coords(
+    screen: Screen, uv: np.ndarray, duv_dx: np.ndarray, duv_dy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Texture coordinates of the screen and their screen derivatives, each (N, 2) float64
+    (engraving: ``(t, 0.5)`` with t = uv . direction, sec. 4.1)."""
+    if screen.direction is None:
+        return uv, duv_dx, duv_dy
+    d = screen.direction
+
+    def along(a: np.ndarray, v: float) -> np.ndarray:
+        return np.stack([a @ d, np.full(a.shape[0], v)], axis=-1)
+
+    return along(uv, 0.5), along(duv_dx, 0.0), along(duv_dy, 0.0)
+
+
+def screen_lod(pyramid: MipPyramid, dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
+    """GL isotropic LOD (OpenGL 4.6 sec. 8.14): ``log2 max(|dx * size|, |dy * size|)`` with the
+    derivatives of the texture coordinates (N, 2) scaled to texels of level 0; (N,) float64."""
+    cols, rows = pyramid.size
+    scale = np.array([cols, rows], dtype=np.float64)
+    rho = np.maximum(np.linalg.norm(dx * scale, axis=-1), np.linalg.norm(dy * scale, axis=-1))
+    return np.log2(np.maximum(rho, 1e-30))
+
+
+def sample_screen(pyramid: MipPyramid, coords: np.ndarray, lod: np.ndarray) -> np.ndarray:
+    """Trilinear samples (N,) or (N, C) float64 of ``pyramid`` at ``coords`` (N, 2) and ``lod``."""
+    return sample_trilinear(pyramid, coords, lod, dtype=np.float64)
+
+
+def sample_screen_levels(
+    pyramid: MipPyramid, coords: np.ndarray, lod: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The two bilinear samples that trilinear filtering would blend, their levels and the blend
+    weight: (s0, s1, k0, k1, w1), each (N,)."""
+    k0, k1, w1 = level_weights(pyramid, lod)
+    s0 = sample_level(pyramid, coords, k0, dtype=np.float64)
+    s1 = sample_level(pyramid, coords, k1, dtype=np.float64)
+    return s0, s1, k0, k1, w1
+
+
+#: Bins of the tone look-up tables and sub-texel samples per axis used to build them.
+LUT_BINS = 2048
+LUT_SUBSAMPLES = 4
+
+
+def tone_luts(pyramid: MipPyramid) -> np.ndarray:
+    """Per level, the CDF of the level's *bilinearly interpolated* values, tabulated at
+    ``x = linspace(0, 1, LUT_BINS)``: (L, LUT_BINS) float64.
+
+    Rank equalization makes a level's texels uniform, but bilinear interpolation averages
+    neighbouring texels and compresses the distribution of the values a sampler returns, so the
+    binary threshold then misses the tone by up to ~0.1 at I = 0.1 or 0.9 on coarse noisy levels.
+    Mapping a sample through its level's CDF makes the sampled values uniform again. The CDF is
+    estimated on a regular grid of ``LUT_SUBSAMPLES``^2 points per texel; levels with a single
+    texel keep the identity.
+    """
+    x = np.linspace(0.0, 1.0, LUT_BINS)
+    out = np.empty((pyramid.n_levels, LUT_BINS))
+    q = LUT_SUBSAMPLES
+    for k, lv in enumerate(pyramid.levels):
+        rows, cols = lv.shape[:2]
+        if rows * cols < 2:
+            out[k] = x
+            continue
+        uu = (np.arange(cols * q) + 0.5) / (cols * q)
+        vv = (np.arange(rows * q) + 0.5) / (rows * q)
+        grid = np.stack(np.meshgrid(uu, vv), axis=-1).reshape(-1, 2)
+        vals = np.sort(sample_level(pyramid, grid, k, dtype=np.float64))
+        out[k] = np.searchsorted(vals, x, side="right") / vals.size
+    return out
+
+
+def apply_luts(luts: np.ndarray, values: np.ndarray, level: np.ndarray) -> np.ndarray:
+    """``luts[level](values)`` by linear interpolation; values, level (N,)."""
+    x = np.linspace(0.0, 1.0, luts.shape[1])
+    out = np.empty_like(values)
+    for k in np.unique(level):
+        sel = level == k
+        out[sel] = np.interp(values[sel], x, luts[int(k)])
+    return out
