@@ -576,6 +576,16 @@ def raster_count(
 # ---------------------------------------------------------------------------------------------
 
 
+@njit(inline="always")
+def _lambdas(lam, t, sx, sy):
+    """lambda'_i = b_i / w of triangle t at sample (sx, sy) (affine in the sample position)."""
+    return (
+        lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2],
+        lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2],
+        lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2],
+    )
+
+
 @pnjit
 def interp_depth(tri_id, qplane, depth):
     """depth = w = 1 / Q (eye-space distance along the view axis); +inf where empty."""
@@ -598,9 +608,7 @@ def interp_bary(tri_id, lam, bary):
                 for i in range(3):
                     bary[sy, sx, i] = 0.0
                 continue
-            l0 = lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2]
-            l1 = lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2]
-            l2 = lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2]
+            l0, l1, l2 = _lambdas(lam, t, sx, sy)
             q = l0 + l1 + l2
             bary[sy, sx, 0] = l0 / q
             bary[sy, sx, 1] = l1 / q
@@ -618,9 +626,7 @@ def interp_attr(tri_id, lam, faces, attr, fill, out):
                 for c in range(nc):
                     out[sy, sx, c] = fill
                 continue
-            l0 = lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2]
-            l1 = lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2]
-            l2 = lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2]
+            l0, l1, l2 = _lambdas(lam, t, sx, sy)
             q = l0 + l1 + l2
             i0 = faces[t, 0]
             i1 = faces[t, 1]
@@ -643,9 +649,7 @@ def interp_attr_deriv(tri_id, lam, faces, attr, n, out, out_dx, out_dy):
                     out_dx[sy, sx, c] = 0.0
                     out_dy[sy, sx, c] = 0.0
                 continue
-            l0 = lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2]
-            l1 = lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2]
-            l2 = lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2]
+            l0, l1, l2 = _lambdas(lam, t, sx, sy)
             q = l0 + l1 + l2
             qx = (lam[t, 0, 0] + lam[t, 1, 0] + lam[t, 2, 0]) * n
             qy = (lam[t, 0, 1] + lam[t, 1, 1] + lam[t, 2, 1]) * n
@@ -674,9 +678,7 @@ def interp_normal(tri_id, lam, faces, normals, out):
                 for c in range(3):
                     out[sy, sx, c] = 0.0
                 continue
-            l0 = lam[t, 0, 0] * sx + lam[t, 0, 1] * sy + lam[t, 0, 2]
-            l1 = lam[t, 1, 0] * sx + lam[t, 1, 1] * sy + lam[t, 1, 2]
-            l2 = lam[t, 2, 0] * sx + lam[t, 2, 1] * sy + lam[t, 2, 2]
+            l0, l1, l2 = _lambdas(lam, t, sx, sy)
             i0 = faces[t, 0]
             i1 = faces[t, 1]
             i2 = faces[t, 2]
