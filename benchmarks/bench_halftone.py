@@ -45,6 +45,9 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE))
+
+import _time_error  # noqa: E402
 
 from refnpr.raster import Camera, rasterize  # noqa: E402
 from refnpr.render import render  # noqa: E402
@@ -109,23 +112,6 @@ def _timed(scene, style, w, h, spp, runs):
     return img, times
 
 
-def pareto_front(rows: list[dict]) -> list[str]:
-    """Labels of rows that no other row beats in both time and error (ties count as beaten
-    only when strictly worse in one)."""
-    front = []
-    for r in rows:
-        dominated = any(
-            o is not r
-            and o["median_s"] <= r["median_s"]
-            and o["mae"] <= r["mae"]
-            and (o["median_s"] < r["median_s"] or o["mae"] < r["mae"])
-            for o in rows
-        )
-        if not dominated:
-            front.append(r["method"])
-    return front
-
-
 def section_pareto(w: int, h: int, runs: int, ref_n: int) -> dict:
     out = {}
     for view, (scene_name, _) in VIEWS.items():
@@ -153,12 +139,7 @@ def section_pareto(w: int, h: int, runs: int, ref_n: int) -> dict:
                     "bias": float(np.mean(diff)),
                 }
             )
-        front = pareto_front(rows)
-        for r in rows:
-            r["pareto"] = r["method"] in front
-        target = next(r for r in rows if r["method"] == "binary 4x4")["mae"]
-        reaching = [r for r in rows if r["mae"] <= target]
-        best = min(reaching, key=lambda r: r["median_s"])
+        front, target, best = _time_error.summarize(rows, "median_s", "binary 4x4")
         out[view] = {
             "scene": scene_name,
             "size": [w, h],
@@ -168,7 +149,7 @@ def section_pareto(w: int, h: int, runs: int, ref_n: int) -> dict:
             "rows": rows,
             "pareto_front": front,
             "error_of_4x4": target,
-            "fastest_reaching_4x4_error": best["method"],
+            "fastest_reaching_4x4_error": best,
         }
     return out
 
@@ -313,43 +294,19 @@ def print_tables(report: dict) -> None:
 
 
 def plot(report: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    views = report["pareto"]
-    fig, axes = plt.subplots(1, len(views), figsize=(6 * len(views), 4.5))
-    axes = np.atleast_1d(axes)
-    for ax, (view, sec) in zip(axes, views.items(), strict=True):
-        rows = sec["rows"]
-        for r in rows:
-            ax.scatter(r["median_s"], r["mae"], c="C3" if r["pareto"] else "C0", zorder=3)
-            ax.annotate(
-                r["method"],
-                (r["median_s"], r["mae"]),
-                fontsize=7,
-                xytext=(4, 3),
-                textcoords="offset points",
-            )
-        front = sorted((r for r in rows if r["pareto"]), key=lambda r: r["median_s"])
-        ax.plot(
-            [r["median_s"] for r in front],
-            [r["mae"] for r in front],
-            "C3--",
-            lw=1,
-            label="Pareto front",
-        )
-        ax.axhline(sec["error_of_4x4"], color="gray", lw=0.8, ls=":", label="error of 4x4")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("median render time (s)")
-        ax.set_ylabel(f"MAE vs {sec['reference']}")
-        ax.set_title(f"{view} ({sec['size'][0]}x{sec['size'][1]})")
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    panels = [
+        {
+            "title": f"{view} ({sec['size'][0]}x{sec['size'][1]})",
+            "rows": sec["rows"],
+            "target": sec["error_of_4x4"],
+            "target_label": "error of 4x4",
+            "ylabel": f"MAE vs {sec['reference']}",
+        }
+        for view, sec in report["pareto"].items()
+    ]
+    _time_error.plot_time_vs_error(
+        path, panels, time_key="median_s", xlabel="median render time (s)"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

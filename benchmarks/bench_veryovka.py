@@ -46,6 +46,9 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE))
+
+import _time_error  # noqa: E402
 
 from refnpr.raster import Camera  # noqa: E402
 from refnpr.render import render  # noqa: E402
@@ -82,17 +85,7 @@ def methods(view: str) -> list[tuple[str, dict, int]]:
 
 def pareto_front(rows: list[dict]) -> list[str]:
     """Labels of rows no other row beats in both time and error."""
-    front = []
-    for r in rows:
-        dominated = any(
-            o["time_s"] <= r["time_s"]
-            and o["mae"] <= r["mae"]
-            and (o["time_s"], o["mae"]) != (r["time_s"], r["mae"])
-            for o in rows
-        )
-        if not dominated:
-            front.append(r["method"])
-    return front
+    return _time_error.pareto_front(rows, "time_s")
 
 
 def section_pareto(w: int, h: int, runs: int, ref_n: int) -> dict:
@@ -132,12 +125,7 @@ def section_pareto(w: int, h: int, runs: int, ref_n: int) -> dict:
                     "rmse": float(np.sqrt(np.mean(diff**2))),
                 }
             )
-        front = pareto_front(rows)
-        for r in rows:
-            r["pareto"] = r["method"] in front
-        target = next(r["mae"] for r in rows if r["method"] == "SS 4x4")
-        reaching = [r for r in rows if r["mae"] <= target]
-        best = min(reaching, key=lambda r: r["time_s"])
+        front, target, best = _time_error.summarize(rows, "time_s", "SS 4x4")
         out[view] = {
             "scene": scene_name,
             "style": params,
@@ -146,7 +134,7 @@ def section_pareto(w: int, h: int, runs: int, ref_n: int) -> dict:
             "rows": rows,
             "pareto_front": front,
             "ss4x4_mae": target,
-            "fastest_at_ss4x4_error": best["method"],
+            "fastest_at_ss4x4_error": best,
         }
     return out
 
@@ -293,43 +281,19 @@ def print_tables(report: dict) -> None:
 
 
 def plot(report: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    views = list(report["pareto"])
-    fig, axes = plt.subplots(1, len(views), figsize=(6 * len(views), 4.5))
-    for ax, view in zip(np.atleast_1d(axes), views, strict=True):
-        r = report["pareto"][view]
-        rows = r["rows"]
-        for row in rows:
-            ax.scatter(row["time_s"], row["mae"], c="C3" if row["pareto"] else "C0")
-            ax.annotate(
-                row["method"],
-                (row["time_s"], row["mae"]),
-                fontsize=7,
-                xytext=(3, 3),
-                textcoords="offset points",
-            )
-        front = sorted((x for x in rows if x["pareto"]), key=lambda x: x["time_s"])
-        ax.plot(
-            [x["time_s"] for x in front],
-            [x["mae"] for x in front],
-            "C3--",
-            lw=1,
-            label="Pareto front",
-        )
-        ax.axhline(r["ss4x4_mae"], color="gray", lw=0.8, ls=":", label="SS 4x4 error")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("render time (s, median)")
-        ax.set_ylabel("mean abs error vs 16x16 SS")
-        ax.set_title(f"{view}: {r['scene']}")
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    panels = [
+        {
+            "title": f"{view}: {r['scene']}",
+            "rows": r["rows"],
+            "target": r["ss4x4_mae"],
+            "target_label": "SS 4x4 error",
+            "ylabel": "mean abs error vs 16x16 SS",
+        }
+        for view, r in report["pareto"].items()
+    ]
+    _time_error.plot_time_vs_error(
+        path, panels, time_key="time_s", xlabel="render time (s, median)"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
