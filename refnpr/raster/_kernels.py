@@ -543,9 +543,26 @@ def raster_visibility(
 
 @pnjit
 def raster_count(
-    coords, bbox, sub, sub_bbox, tile_first, tile_lists, n, nw, nh, tile, tiles_x, count
+    coords,
+    bbox,
+    sub,
+    sub_bbox,
+    sub_parent,
+    qplane,
+    q_lo,
+    q_hi,
+    tile_first,
+    tile_lists,
+    n,
+    nw,
+    nh,
+    tile,
+    tiles_x,
+    count,
 ):
-    """Debug: count[sy, sx] = how many primitives claim each sample (no depth test)."""
+    """Debug: count[sy, sx] = how many primitives claim each sample: the coverage rule and the
+    per-sample near/far clip of ``raster_visibility``, without the depth test between them."""
+    m = coords.shape[0]
     n_tiles = tile_first.shape[0] - 1
     for k in prange(n_tiles):
         ty = k // tiles_x
@@ -555,8 +572,10 @@ def raster_count(
         x1 = min(x0 + tile, nw)
         y1 = min(y0 + tile, nh)
         for e in range(tile_first[k], tile_first[k + 1]):
-            c = _prim(tile_lists[e], coords, sub)
-            b = _prim(tile_lists[e], bbox, sub_bbox)
+            ref = tile_lists[e]
+            t = ref if ref < m else sub_parent[ref - m]
+            c = _prim(ref, coords, sub)
+            b = _prim(ref, bbox, sub_bbox)
             sx0, sx1, sy0, sy1 = np.int64(b[0]), np.int64(b[1]), np.int64(b[2]), np.int64(b[3])
             A0, B0, C0 = _edge_setup(c, n, 1, 2)
             A1, B1, C1 = _edge_setup(c, n, 2, 0)
@@ -567,7 +586,9 @@ def raster_count(
                     e1 = A1 * sx + B1 * sy + C1
                     e2 = A2 * sx + B2 * sy + C2
                     if (e0 | e1 | e2) >= 0:
-                        count[sy, sx] += 1
+                        q = qplane[t, 0] * sx + qplane[t, 1] * sy + qplane[t, 2]
+                        if q_lo <= q <= q_hi:
+                            count[sy, sx] += 1
 
 
 # ---------------------------------------------------------------------------------------------
@@ -610,9 +631,10 @@ def interp_bary(tri_id, lam, bary):
                 continue
             l0, l1, l2 = _lambdas(lam, t, sx, sy)
             q = l0 + l1 + l2
-            bary[sy, sx, 0] = l0 / q
-            bary[sy, sx, 1] = l1 / q
-            bary[sy, sx, 2] = l2 / q
+            inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
+            bary[sy, sx, 0] = l0 * inv_q
+            bary[sy, sx, 1] = l1 * inv_q
+            bary[sy, sx, 2] = l2 * inv_q
 
 
 @pnjit
@@ -628,11 +650,12 @@ def interp_attr(tri_id, lam, faces, attr, fill, out):
                 continue
             l0, l1, l2 = _lambdas(lam, t, sx, sy)
             q = l0 + l1 + l2
+            inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
             i0 = faces[t, 0]
             i1 = faces[t, 1]
             i2 = faces[t, 2]
             for c in range(nc):
-                out[sy, sx, c] = (l0 * attr[i0, c] + l1 * attr[i1, c] + l2 * attr[i2, c]) / q
+                out[sy, sx, c] = (l0 * attr[i0, c] + l1 * attr[i1, c] + l2 * attr[i2, c]) * inv_q
 
 
 @pnjit
@@ -651,6 +674,7 @@ def interp_attr_deriv(tri_id, lam, faces, attr, n, out, out_dx, out_dy):
                 continue
             l0, l1, l2 = _lambdas(lam, t, sx, sy)
             q = l0 + l1 + l2
+            inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
             qx = (lam[t, 0, 0] + lam[t, 1, 0] + lam[t, 2, 0]) * n
             qy = (lam[t, 0, 1] + lam[t, 1, 1] + lam[t, 2, 1]) * n
             i0 = faces[t, 0]
@@ -660,12 +684,74 @@ def interp_attr_deriv(tri_id, lam, faces, attr, n, out, out_dx, out_dy):
                 f0 = attr[i0, c]
                 f1 = attr[i1, c]
                 f2 = attr[i2, c]
-                f = (l0 * f0 + l1 * f1 + l2 * f2) / q
+                f = (l0 * f0 + l1 * f1 + l2 * f2) * inv_q
                 px = (lam[t, 0, 0] * f0 + lam[t, 1, 0] * f1 + lam[t, 2, 0] * f2) * n
                 py = (lam[t, 0, 1] * f0 + lam[t, 1, 1] * f1 + lam[t, 2, 1] * f2) * n
                 out[sy, sx, c] = f
-                out_dx[sy, sx, c] = (px - f * qx) / q
-                out_dy[sy, sx, c] = (py - f * qy) / q
+                out_dx[sy, sx, c] = (px - f * qx) * inv_q
+                out_dy[sy, sx, c] = (py - f * qy) * inv_q
+
+
+@pnjit
+def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout):
+    """All requested per-vertex quantities in one pass over the samples, so each sample gathers
+    its triangle's planes and indices once (on dense meshes these gathers dominate).
+
+    dtab (N, Cd): values with analytic per-pixel derivatives -> dout, dxout, dyout (nH, nW, Cd);
+    vtab (N, Cv): values only -> vout; ntab (N, 3k), k in {0, 1}: normals, renormalized -> nout.
+    Zero-width tables cost nothing (their loops run zero times). Empty samples get 0.
+    f = P / Q and df = (dP - f dQ) / Q with d(sample)/d(pixel) = n.
+    """
+    cd = dtab.shape[1]
+    cv = vtab.shape[1]
+    k_n = ntab.shape[1] // 3
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                for c in range(cd):
+                    dout[sy, sx, c] = 0.0
+                    dxout[sy, sx, c] = 0.0
+                    dyout[sy, sx, c] = 0.0
+                for c in range(cv):
+                    vout[sy, sx, c] = 0.0
+                for c in range(3 * k_n):
+                    nout[sy, sx, c] = 0.0
+                continue
+            l0, l1, l2 = _lambdas(lam, t, sx, sy)
+            q = l0 + l1 + l2
+            inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
+            i0 = faces[t, 0]
+            i1 = faces[t, 1]
+            i2 = faces[t, 2]
+            if cd > 0:
+                ax0 = lam[t, 0, 0] * n
+                ax1 = lam[t, 1, 0] * n
+                ax2 = lam[t, 2, 0] * n
+                ay0 = lam[t, 0, 1] * n
+                ay1 = lam[t, 1, 1] * n
+                ay2 = lam[t, 2, 1] * n
+                qx = ax0 + ax1 + ax2
+                qy = ay0 + ay1 + ay2
+                for c in range(cd):
+                    f0 = dtab[i0, c]
+                    f1 = dtab[i1, c]
+                    f2 = dtab[i2, c]
+                    f = (l0 * f0 + l1 * f1 + l2 * f2) * inv_q
+                    dout[sy, sx, c] = f
+                    dxout[sy, sx, c] = (ax0 * f0 + ax1 * f1 + ax2 * f2 - f * qx) * inv_q
+                    dyout[sy, sx, c] = (ay0 * f0 + ay1 * f1 + ay2 * f2 - f * qy) * inv_q
+            for c in range(cv):
+                vout[sy, sx, c] = (l0 * vtab[i0, c] + l1 * vtab[i1, c] + l2 * vtab[i2, c]) * inv_q
+            for _ in range(k_n):
+                nx = l0 * ntab[i0, 0] + l1 * ntab[i1, 0] + l2 * ntab[i2, 0]
+                ny = l0 * ntab[i0, 1] + l1 * ntab[i1, 1] + l2 * ntab[i2, 1]
+                nz = l0 * ntab[i0, 2] + l1 * ntab[i1, 2] + l2 * ntab[i2, 2]
+                length = math.sqrt(nx * nx + ny * ny + nz * nz)
+                inv_len = 1.0 / length if length > 0.0 else 0.0
+                nout[sy, sx, 0] = nx * inv_len
+                nout[sy, sx, 1] = ny * inv_len
+                nout[sy, sx, 2] = nz * inv_len
 
 
 @pnjit
@@ -687,9 +773,10 @@ def interp_normal(tri_id, lam, faces, normals, out):
             nz = l0 * normals[i0, 2] + l1 * normals[i1, 2] + l2 * normals[i2, 2]
             length = math.sqrt(nx * nx + ny * ny + nz * nz)
             if length > 0.0:
-                out[sy, sx, 0] = nx / length
-                out[sy, sx, 1] = ny / length
-                out[sy, sx, 2] = nz / length
+                inv_len = 1.0 / length
+                out[sy, sx, 0] = nx * inv_len
+                out[sy, sx, 1] = ny * inv_len
+                out[sy, sx, 2] = nz * inv_len
             else:
                 for c in range(3):
                     out[sy, sx, c] = 0.0

@@ -10,6 +10,7 @@ import numpy as np
 
 from . import _kernels as K
 from .camera import Camera
+from .channels import attribute_names, interpolated_channels
 from .gbuffer import BUILTIN_CHANNELS, GBuffer
 from .mesh import Mesh
 
@@ -23,7 +24,6 @@ _BIN_CHUNKS = 64
 _MAX_GUARD = 16.0
 #: Sample-space coordinates in units of 1/(512 n) px must stay below this for int64 edge math.
 _FIXED_LIMIT = 2.0**30
-_LOD_FLOOR = 2.0**-64
 #: Relative slack of the per-sample near/far depth clip (Q = 1/w in [1/far, 1/near]).
 _DEPTH_CLIP_SLACK = 1e-6
 
@@ -47,18 +47,11 @@ def _meshes_of(obj) -> list[Mesh]:
     return meshes
 
 
-def _attribute_names(meshes: list[Mesh]) -> set[str]:
-    names = set(meshes[0].attributes)
-    for m in meshes[1:]:
-        names &= set(m.attributes)
-    return names
-
-
 def valid_channels(meshes: Mesh | Sequence[Mesh] | None = None) -> list[str]:
     """Channel names ``rasterize`` accepts (built-ins plus the meshes' common vertex attributes)."""
     names = set(BUILTIN_CHANNELS)
     if meshes is not None:
-        for a in _attribute_names(_meshes_of(meshes)):
+        for a in attribute_names(_meshes_of(meshes)):
             names |= {a, f"d{a}_dx", f"d{a}_dy"}
     return sorted(names)
 
@@ -100,28 +93,6 @@ def _parse_channels(channels: Iterable[str], attr_names: set[str]) -> set[str]:
     if not wanted:
         raise ValueError("channels: ask for at least one channel, e.g. ('depth', 'tri_id')")
     return set(wanted)
-
-
-def _concat(meshes: list[Mesh], key: str, what: str) -> np.ndarray:
-    arrays = []
-    for m in meshes:
-        a = m.attributes.get(key) if key not in ("uv", "normals") else getattr(m, key)
-        if a is None:
-            remedy = {
-                "uv": "give the mesh uv, or project them (refnpr.scenes.project_uv(mesh, 'planar'|"
-                "'box'|'spherical'|'cylindrical'))",
-                "normals": "give the mesh vertex normals (e.g. trimesh's vertex_normals)",
-            }.get(key, f"add attributes={{{key!r}: ...}} to the mesh")
-            raise ValueError(
-                f"channels: {what} requested but mesh {m.name!r} has no {key}; {remedy}"
-            )
-        arrays.append(a.reshape(a.shape[0], -1))
-    ncols = {a.shape[1] for a in arrays}
-    if len(ncols) != 1:
-        raise ValueError(
-            f"channels: attribute {key!r} has different widths across meshes: {sorted(ncols)}"
-        )
-    return np.ascontiguousarray(np.concatenate(arrays), dtype=np.float64)
 
 
 def rasterize(
@@ -191,7 +162,7 @@ def rasterize(
         raise TypeError(f"dtype: expected numpy.float32 or numpy.float64, got {dtype}")
     if cull_backfaces not in (True, False):
         raise TypeError(f"cull_backfaces: expected a bool, got {cull_backfaces!r}")
-    wanted = _parse_channels(channels, _attribute_names(meshes))
+    wanted = _parse_channels(channels, attribute_names(meshes))
     if "lod" in wanted:
         if texture_size is None:
             raise ValueError(
@@ -285,6 +256,8 @@ def rasterize(
 
     # ---- visibility ------------------------------------------------------------------------
     t0 = time.perf_counter()
+    q_lo = (1.0 - _DEPTH_CLIP_SLACK) / camera.far  # per-sample near/far clip on Q = 1/w
+    q_hi = (1.0 + _DEPTH_CLIP_SLACK) / camera.near
     tri_id = np.empty((nh, nw), dtype=np.int32)
     K.raster_visibility(
         coords,
@@ -293,8 +266,8 @@ def rasterize(
         sub_bbox,
         sub_parent,
         qplane,
-        (1.0 - _DEPTH_CLIP_SLACK) / camera.far,
-        (1.0 + _DEPTH_CLIP_SLACK) / camera.near,
+        q_lo,
+        q_hi,
         tile_first,
         lists,
         n,
@@ -313,7 +286,24 @@ def rasterize(
         out["tri_id"] = tri_id
     if "coverage_count" in wanted:
         cc = np.zeros((nh, nw), dtype=np.int32)
-        K.raster_count(coords, bbox, sub, sub_bbox, tile_first, lists, n, nw, nh, tile, tiles_x, cc)
+        K.raster_count(
+            coords,
+            bbox,
+            sub,
+            sub_bbox,
+            sub_parent,
+            qplane,
+            q_lo,
+            q_hi,
+            tile_first,
+            lists,
+            n,
+            nw,
+            nh,
+            tile,
+            tiles_x,
+            cc,
+        )
         out["coverage_count"] = cc
     if "mesh_id" in wanted:
         mesh_id = np.searchsorted(first_tri, tri_id, side="right").astype(np.int32) - 1
@@ -323,87 +313,24 @@ def rasterize(
         cov = np.empty((height, width), dtype=dtype)
         K.resolve_coverage(tri_id, n, cov)
         out["coverage"] = cov
-    if wanted - {"tri_id", "coverage_count", "mesh_id", "coverage", "depth"}:
-        # exact perspective-correct barycentric planes, only for triangles that own a sample
-        mark = np.zeros(m_tris, dtype=np.uint8)
-        K.mark_visible(tri_id, mark)
-        lam = np.empty((m_tris, 3, 3), dtype=np.float64)
-        K.lam_for_marked(clip, faces, mark, n, width, height, lam)
-    if "depth" in wanted or "ndc_z" in wanted:
-        depth = np.empty((nh, nw), dtype=np.float64 if "ndc_z" in wanted else dtype)
-        K.interp_depth(tri_id, qplane, depth)
-        if "ndc_z" in wanted:
-            zc = np.empty((nh, nw, 1), dtype=np.float64)
-            K.interp_attr(tri_id, lam, faces, np.ascontiguousarray(clip[:, 2:3]), 0.0, zc)
-            with np.errstate(invalid="ignore"):
-                ndc = np.where(tri_id >= 0, zc[..., 0] / np.where(tri_id >= 0, depth, 1.0), 1.0)
-            out["ndc_z"] = ndc.astype(dtype)
-        if "depth" in wanted:
-            out["depth"] = depth.astype(dtype, copy=False)
-    if "bary" in wanted:
-        bary = np.empty((nh, nw, 3), dtype=dtype)
-        K.interp_bary(tri_id, lam, bary)
-        out["bary"] = bary
-    if "normal" in wanted:
-        normals = _concat(meshes, "normals", "normal")
-        nrm = np.empty((nh, nw, 3), dtype=dtype)
-        K.interp_normal(tri_id, lam, faces, normals, nrm)
-        out["normal"] = nrm
-
-    def attribute(values_key: str, base: str, want: set[str], dest: dict) -> None:
-        """Interpolate one per-vertex quantity; derivatives only if one of them is wanted."""
-        d_names = (f"d{base}_dx", f"d{base}_dy")
-        need_d = any(d in want for d in d_names)
-        if not need_d and base not in want:
-            return
-        values = positions if values_key == "position" else _concat(meshes, values_key, base)
-        vals = np.empty((nh, nw, values.shape[1]), dtype=dtype)
-        squeeze = (
-            values_key not in ("uv", "position") and meshes[0].attributes[values_key].ndim == 1
+    out.update(
+        interpolated_channels(
+            wanted,
+            meshes=meshes,
+            positions=positions,
+            faces=faces,
+            clip=clip,
+            qplane=qplane,
+            tri_id=tri_id,
+            n=n,
+            width=width,
+            height=height,
+            dtype=dtype,
+            texture_size=texture_size,
+            line_period=line_period,
+            dyadic_coord=dyadic_coord,
         )
-        results = {base: vals}
-        if need_d:
-            dx, dy = np.empty_like(vals), np.empty_like(vals)
-            K.interp_attr_deriv(tri_id, lam, faces, values, n, vals, dx, dy)
-            results[d_names[0]], results[d_names[1]] = dx, dy
-        else:
-            K.interp_attr(tri_id, lam, faces, values, 0.0, vals)
-        for key, arr in results.items():
-            if key in want:
-                dest[key] = arr[..., 0] if squeeze else arr
-
-    attribute("position", "position", wanted, out)
-    for a in _attribute_names(meshes):
-        attribute(a, a, wanted, out)
-    if {"lod", "dyadic_scale"} & wanted:
-        internal: dict[str, np.ndarray] = {}
-        attribute("uv", "uv", wanted | {"duv_dx", "duv_dy"}, internal)
-        for key in ("uv", "duv_dx", "duv_dy"):
-            if key in wanted:
-                out[key] = internal[key]
-        duv_dx = internal["duv_dx"].astype(np.float64)
-        duv_dy = internal["duv_dy"].astype(np.float64)
-        empty = tri_id < 0
-        if "lod" in wanted:
-            tw, th = texture_size
-            # OpenGL 4.x sec. 8.14: rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels, lambda = log2 rho
-            rho = np.maximum(
-                np.hypot(duv_dx[..., 0] * tw, duv_dx[..., 1] * th),
-                np.hypot(duv_dy[..., 0] * tw, duv_dy[..., 1] * th),
-            )
-            lod = np.log2(np.maximum(rho, _LOD_FLOOR))
-            lod[empty] = 0.0
-            out["lod"] = lod.astype(dtype)
-        if "dyadic_scale" in wanted:
-            k = 1 if dyadic_coord == "v" else 0
-            grad = np.hypot(duv_dx[..., k], duv_dy[..., k])
-            # Veryovka eq. 5: d = 1/|grad v| (pixels between iso-lines v and v + 1), s = log2(d / w)
-            s = -np.log2(np.maximum(grad, _LOD_FLOOR)) - math.log2(line_period)
-            s = np.clip(s, -64.0, 64.0)  # finite even where v is constant on screen
-            s[empty] = 0.0
-            out["dyadic_scale"] = s.astype(dtype)
-    else:
-        attribute("uv", "uv", wanted, out)
+    )
     timings["channels"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
     return GBuffer(
