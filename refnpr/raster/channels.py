@@ -15,7 +15,7 @@ import numpy as np
 from . import _kernels as K
 from .mesh import Mesh
 
-__all__ = ["interpolated_channels", "attribute_names", "INTERPOLATED"]
+__all__ = ["interpolated_channels", "attribute_names", "check_vertex_data", "INTERPOLATED"]
 
 #: Channels that need the barycentric planes of the visible triangles.
 INTERPOLATED = frozenset(
@@ -42,6 +42,19 @@ def attribute_names(meshes: Sequence[Mesh]) -> set[str]:
     for m in meshes[1:]:
         names &= set(m.attributes)
     return names
+
+
+def check_vertex_data(meshes: Sequence[Mesh], wanted: set[str]) -> None:
+    """Raise the missing-uv/normals error before any rasterization work is done."""
+    if {"uv", "duv_dx", "duv_dy", "lod", "dyadic_scale"} & wanted:
+        what = sorted({"uv", "duv_dx", "duv_dy", "lod", "dyadic_scale"} & wanted)[0]
+        for m in meshes:
+            if m.uv is None:
+                _concat([m], "uv", what)
+    if "normal" in wanted:
+        for m in meshes:
+            if m.normals is None:
+                _concat([m], "normals", "normal")
 
 
 def _concat(meshes: Sequence[Mesh], key: str, what: str) -> np.ndarray:

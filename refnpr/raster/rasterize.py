@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _kernels as K
 from .camera import Camera
-from .channels import attribute_names, interpolated_channels
+from .channels import attribute_names, check_vertex_data, interpolated_channels
 from .gbuffer import BUILTIN_CHANNELS, GBuffer
 from .mesh import Mesh
 
@@ -163,6 +163,7 @@ def rasterize(
     if cull_backfaces not in (True, False):
         raise TypeError(f"cull_backfaces: expected a bool, got {cull_backfaces!r}")
     wanted = _parse_channels(channels, attribute_names(meshes))
+    check_vertex_data(meshes, wanted)
     if "lod" in wanted:
         if texture_size is None:
             raise ValueError(
