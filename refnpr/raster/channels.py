@@ -47,10 +47,9 @@ def attribute_names(meshes: Sequence[Mesh]) -> set[str]:
 def check_vertex_data(meshes: Sequence[Mesh], wanted: set[str]) -> None:
     """Raise the missing-uv/normals error before any rasterization work is done."""
     if {"uv", "duv_dx", "duv_dy", "lod", "dyadic_scale"} & wanted:
-        what = sorted({"uv", "duv_dx", "duv_dy", "lod", "dyadic_scale"} & wanted)[0]
         for m in meshes:
             if m.uv is None:
-                _concat([m], "uv", what)
+                _concat([m], "uv", "uv")
     if "normal" in wanted:
         for m in meshes:
             if m.normals is None:
