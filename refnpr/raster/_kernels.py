@@ -29,7 +29,7 @@ N_PLANES = 6
 MAX_POLY = 3 + N_PLANES  # Sutherland-Hodgman adds at most one vertex per plane
 
 
-@njit(inline="always")
+@njit
 def _plane_dist(p, x, y, z, w, guard):
     if p == 0:
         return z + w  # near: z_ndc >= -1
@@ -44,7 +44,7 @@ def _plane_dist(p, x, y, z, w, guard):
     return guard * w - y
 
 
-@njit(inline="always")
+@njit
 def _snap(x, w, half_w, half_h, out, k):
     """Project clip (x, y, w) to pixels and snap to 1/256 px (round half up). out[k], out[k+1]."""
     sx = (x[0] / w + 1.0) * half_w
@@ -53,7 +53,7 @@ def _snap(x, w, half_w, half_h, out, k):
     out[k + 1] = np.int64(math.floor(sy * 256.0 + 0.5))
 
 
-@njit(inline="always")
+@njit
 def _signed_area(c):
     """Twice the signed area of snapped (X0, Y0, X1, Y1, X2, Y2), screen y down (int64)."""
     x0 = np.int64(c[0])
@@ -63,7 +63,7 @@ def _signed_area(c):
     )
 
 
-@njit(inline="always")
+@njit
 def _lex_greater(a, b):
     for i in range(4):
         if a[i] > b[i]:
@@ -123,7 +123,7 @@ def _clip_polygon(v0, v1, v2, guard, poly, tmp):
     return count
 
 
-@njit(inline="always")
+@njit
 def _outcode_reject(c0, c1, c2, guard):
     """True if all three vertices are outside one clip plane; also returns whether any is outside."""
     any_out = False
@@ -138,7 +138,7 @@ def _outcode_reject(c0, c1, c2, guard):
     return False, any_out
 
 
-@njit(inline="always")
+@njit
 def _keep(area, cull):
     # Screen y points down, so a triangle counter-clockwise in NDC (front-facing in GL) has area < 0.
     if area == 0:
@@ -148,7 +148,7 @@ def _keep(area, cull):
     return True
 
 
-@njit(inline="always")
+@njit
 def _lam_rows(c0, c1, c2, nw, nh):
     """M^-1 S for M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]] (clip x, y, w of the exact vertices).
 
@@ -216,7 +216,7 @@ def transform_vertices(positions, vp, width, height, guard, clip, snapped, outco
             snapped[i, 1] = 0
 
 
-@njit(inline="always")
+@njit
 def _count_tiles(sx0, sx1, sy0, sy1, shift, tiles_x, counts_row):
     for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
         for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
@@ -399,7 +399,7 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, n, max_out):
     return sub[:k].copy(), sub_bbox[:k].copy(), parent[:k].copy(), first
 
 
-@njit(inline="always")
+@njit
 def _sample_bbox(c, n, nw, nh):
     """Inclusive sample-index bounding box of snapped coords (1/256 px) on the n-times grid.
 
@@ -417,7 +417,7 @@ def _sample_bbox(c, n, nw, nh):
     return sx0, sx1, sy0, sy1
 
 
-@njit(inline="always")
+@njit
 def _prim(ref, coords, sub):
     """Row of a per-primitive array: ref < M is a whole triangle's row, else a clipped piece's."""
     m = coords.shape[0]
@@ -455,7 +455,7 @@ def bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, off
                         cursor[k] += 1
 
 
-@njit(inline="always")
+@njit
 def _edge_setup(c, n, ia, ib):
     """Edge a->b of the canonical (area > 0) triangle: E(sx, sy) = A sx + B sy + C (int64), with
     the top-left bias folded into C so that a sample is inside where E >= 0 for all three edges."""
@@ -592,12 +592,12 @@ def raster_count(
 
 
 # ---------------------------------------------------------------------------------------------
-# Interpolation kernels: one specialisation per channel family, so a channel that is not asked for
-# costs nothing and no per-pixel branch decides what to compute.
+# Interpolation kernels: depth, barycentrics, and one fused pass over every requested per-vertex
+# table (zero-width tables cost nothing), so a channel that is not asked for is not computed.
 # ---------------------------------------------------------------------------------------------
 
 
-@njit(inline="always")
+@njit
 def _lambdas(lam, t, sx, sy):
     """lambda'_i = b_i / w of triangle t at sample (sx, sy) (affine in the sample position)."""
     return (
@@ -635,61 +635,6 @@ def interp_bary(tri_id, lam, bary):
             bary[sy, sx, 0] = l0 * inv_q
             bary[sy, sx, 1] = l1 * inv_q
             bary[sy, sx, 2] = l2 * inv_q
-
-
-@pnjit
-def interp_attr(tri_id, lam, faces, attr, fill, out):
-    """out (nH, nW, C) = perspective-correct interpolation of per-vertex attr (N, C)."""
-    nc = attr.shape[1]
-    for sy in prange(tri_id.shape[0]):
-        for sx in range(tri_id.shape[1]):
-            t = tri_id[sy, sx]
-            if t < 0:
-                for c in range(nc):
-                    out[sy, sx, c] = fill
-                continue
-            l0, l1, l2 = _lambdas(lam, t, sx, sy)
-            q = l0 + l1 + l2
-            inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
-            i0 = faces[t, 0]
-            i1 = faces[t, 1]
-            i2 = faces[t, 2]
-            for c in range(nc):
-                out[sy, sx, c] = (l0 * attr[i0, c] + l1 * attr[i1, c] + l2 * attr[i2, c]) * inv_q
-
-
-@pnjit
-def interp_attr_deriv(tri_id, lam, faces, attr, n, out, out_dx, out_dy):
-    """As interp_attr, plus analytic per-pixel derivatives d/dx (right) and d/dy (down):
-    f = P / Q, df = (dP - f dQ) / Q, with d(sample)/d(pixel) = n."""
-    nc = attr.shape[1]
-    for sy in prange(tri_id.shape[0]):
-        for sx in range(tri_id.shape[1]):
-            t = tri_id[sy, sx]
-            if t < 0:
-                for c in range(nc):
-                    out[sy, sx, c] = 0.0
-                    out_dx[sy, sx, c] = 0.0
-                    out_dy[sy, sx, c] = 0.0
-                continue
-            l0, l1, l2 = _lambdas(lam, t, sx, sy)
-            q = l0 + l1 + l2
-            inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
-            qx = (lam[t, 0, 0] + lam[t, 1, 0] + lam[t, 2, 0]) * n
-            qy = (lam[t, 0, 1] + lam[t, 1, 1] + lam[t, 2, 1]) * n
-            i0 = faces[t, 0]
-            i1 = faces[t, 1]
-            i2 = faces[t, 2]
-            for c in range(nc):
-                f0 = attr[i0, c]
-                f1 = attr[i1, c]
-                f2 = attr[i2, c]
-                f = (l0 * f0 + l1 * f1 + l2 * f2) * inv_q
-                px = (lam[t, 0, 0] * f0 + lam[t, 1, 0] * f1 + lam[t, 2, 0] * f2) * n
-                py = (lam[t, 0, 1] * f0 + lam[t, 1, 1] * f1 + lam[t, 2, 1] * f2) * n
-                out[sy, sx, c] = f
-                out_dx[sy, sx, c] = (px - f * qx) * inv_q
-                out_dy[sy, sx, c] = (py - f * qy) * inv_q
 
 
 @pnjit
@@ -752,34 +697,6 @@ def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vo
                 nout[sy, sx, 0] = nx * inv_len
                 nout[sy, sx, 1] = ny * inv_len
                 nout[sy, sx, 2] = nz * inv_len
-
-
-@pnjit
-def interp_normal(tri_id, lam, faces, normals, out):
-    """Interpolated vertex normals renormalized to unit length; 0 where empty or degenerate."""
-    for sy in prange(tri_id.shape[0]):
-        for sx in range(tri_id.shape[1]):
-            t = tri_id[sy, sx]
-            if t < 0:
-                for c in range(3):
-                    out[sy, sx, c] = 0.0
-                continue
-            l0, l1, l2 = _lambdas(lam, t, sx, sy)
-            i0 = faces[t, 0]
-            i1 = faces[t, 1]
-            i2 = faces[t, 2]
-            nx = l0 * normals[i0, 0] + l1 * normals[i1, 0] + l2 * normals[i2, 0]
-            ny = l0 * normals[i0, 1] + l1 * normals[i1, 1] + l2 * normals[i2, 1]
-            nz = l0 * normals[i0, 2] + l1 * normals[i1, 2] + l2 * normals[i2, 2]
-            length = math.sqrt(nx * nx + ny * ny + nz * nz)
-            if length > 0.0:
-                inv_len = 1.0 / length
-                out[sy, sx, 0] = nx * inv_len
-                out[sy, sx, 1] = ny * inv_len
-                out[sy, sx, 2] = nz * inv_len
-            else:
-                for c in range(3):
-                    out[sy, sx, c] = 0.0
 
 
 @pnjit
