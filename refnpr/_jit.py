@@ -18,7 +18,7 @@ JIT_FLAGS: dict = {"cache": True, "fastmath": False, "nogil": True, "error_model
 
 
 def njit(func=None, **overrides):
-    """Serial numba kernel with refnpr's flags (``@njit`` or ``@njit(inline="always")``)."""
+    """Serial numba kernel with refnpr's flags (``@njit`` or ``@njit(boundscheck=True)``)."""
     flags = {**JIT_FLAGS, **overrides}
     if func is None:
         return lambda f: numba.njit(**flags)(f)

@@ -7,7 +7,7 @@ import math
 from refnpr._jit import njit
 
 
-@njit(inline="always")
+@njit
 def _visible(depth, x, y, w, rel_tol):
     """An edge point at sample coords (x, y) with eye depth w is visible if it is not behind the
     farthest surface in the 3x3 samples around it (silhouettes border farther surfaces)."""
@@ -26,7 +26,7 @@ def _visible(depth, x, y, w, rel_tol):
     return w <= far * (1.0 + rel_tol)
 
 
-@njit(inline="always")
+@njit
 def _splat_capsule(cov, ax, ay, bx, by, radius):
     """cov = max(cov, clamp(radius + 0.5 - distance(sample centre, segment ab), 0, 1))."""
     nh, nw = cov.shape

@@ -73,7 +73,7 @@ def chart_labels(faces, n_vertices):
     return out
 
 
-@njit(inline="always")
+@njit
 def _splitmix(z):
     z = z + _M1
     z = (z ^ (z >> _S30)) * _M2
@@ -81,13 +81,13 @@ def _splitmix(z):
     return z ^ (z >> _S31)
 
 
-@njit(inline="always")
+@njit
 def _hash01(sid, salt_off):
     z = np.uint64(sid) + salt_off
     return np.float64(_splitmix(z) >> _S11) * _INV53
 
 
-@njit(inline="always")
+@njit
 def _pack(chart, layer, level, gx, gy, r):
     v = chart * 4 + layer
     v = v * 16 + level
@@ -320,7 +320,7 @@ def field_pass(
                 out_ink[i] = ink
 
 
-@njit(inline="always")
+@njit
 def _edge(ax, ay, bx, by, px, py):
     return (bx - ax) * (py - ay) - (by - ay) * (px - ax)
 

@@ -10,13 +10,13 @@ from numba import prange
 from refnpr._jit import njit, pnjit
 
 
-@njit(inline="always")
+@njit
 def _wrap(i, n):
     r = i % n
     return r + n if r < 0 else r
 
 
-@njit(inline="always")
+@njit
 def _bilinear_into(texels, offset, rows, cols, u, v, weight, out_row):
     """out_row[c] += weight * GL_LINEAR/GL_REPEAT sample of one level at (u, v)."""
     x = u * cols - 0.5
