@@ -18,9 +18,12 @@ def _wrap(i, n):
 
 @njit
 def _bilinear_into(texels, offset, rows, cols, u, v, weight, out_row):
-    """out_row[c] += weight * GL_LINEAR/GL_REPEAT sample of one level at (u, v)."""
-    x = u * cols - 0.5
-    y = v * rows - 0.5
+    """out_row[c] += weight * GL_LINEAR/GL_REPEAT sample of one level at (u, v).
+
+    u and v are first reduced to one period (u - floor(u) is exact in floating point), so huge
+    coordinates cannot overflow the integer texel index."""
+    x = (u - np.floor(u)) * cols - 0.5
+    y = (v - np.floor(v)) * rows - 0.5
     x0 = math.floor(x)
     y0 = math.floor(y)
     fx = x - x0

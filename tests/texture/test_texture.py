@@ -123,3 +123,11 @@ def test_sampling_errors():
         load_texture("nope")
     with pytest.raises(ValueError, match=r"float pixels must lie in \[0, 1\]"):
         build_pyramid(np.full((2, 2), 2.0))
+
+
+def test_huge_coordinates_wrap_without_overflow():
+    p = build_pyramid(np.random.default_rng(4).random((4, 4)).astype(np.float32))
+    uv = np.array([[1e300, -1e300], [2.0**60 + 0.25, 3.75], [1e30, 7.5]])
+    got = sample_trilinear(p, uv, np.zeros(3))
+    assert np.all(np.isfinite(got))
+    np.testing.assert_allclose(got, sample_trilinear(p, uv - np.floor(uv), np.zeros(3)), atol=1e-6)
