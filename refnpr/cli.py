@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import threading
@@ -80,9 +81,11 @@ class _Progress:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
+    from .image import check_png_path
     from .render import render
     from .scenes import load_scene
 
+    check_png_path(args.output)  # before rendering, not after
     scene = load_scene(args.scene)
     style = None
     if args.style or args.param:
@@ -166,6 +169,19 @@ def _cmd_golden(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def _fraction(name: str):
+    def parse(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name}: expected a number, got {text!r}") from None
+        if not 0.0 <= v <= 1.0:
+            raise argparse.ArgumentTypeError(f"{name}: expected a value in [0, 1], got {text!r}")
+        return v
+
+    return parse
+
+
 def _cmd_compare(args: argparse.Namespace) -> int:
     from .compare import compare_dirs, format_table
 
@@ -177,7 +193,14 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         m for m in results if not m.passes(max_frac_over=args.max_frac_over, min_ssim=args.min_ssim)
     ]
     if args.json:
-        Path(args.json).write_text(json.dumps([m.__dict__ for m in results], default=str, indent=2))
+        rows = [
+            {
+                k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                for k, v in m.__dict__.items()
+            }
+            for m in results
+        ]
+        Path(args.json).write_text(json.dumps(rows, indent=2))
     print(f"{len(results) - len(bad)} passed, {len(bad)} failed")
     return 1 if bad else 0
 
@@ -221,9 +244,9 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("candidate", help="directory of candidate PNGs with the same file names")
     c.add_argument("--out", default=None, help="write NAME.diff.png and report.json here")
     c.add_argument("--json", default=None, help="write the metrics as JSON to this file")
-    c.add_argument("--tolerance", type=float, default=2.0 / 255)
-    c.add_argument("--max-frac-over", type=float, default=0.001)
-    c.add_argument("--min-ssim", type=float, default=0.99)
+    c.add_argument("--tolerance", type=_fraction("--tolerance"), default=2.0 / 255)
+    c.add_argument("--max-frac-over", type=_fraction("--max-frac-over"), default=0.001)
+    c.add_argument("--min-ssim", type=_fraction("--min-ssim"), default=0.99)
     c.set_defaults(func=_cmd_compare)
     return p
 
@@ -233,7 +256,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (ValueError, TypeError) as exc:
+    except (ValueError, TypeError, OSError) as exc:
         print(f"refnpr {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

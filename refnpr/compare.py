@@ -90,6 +90,8 @@ def compare_images(
     """Metrics of ``candidate`` against ``reference``, both (H, W, 4) float in [0, 1]."""
     from skimage.metrics import structural_similarity
 
+    if not (isinstance(tolerance, (int, float)) and 0.0 <= tolerance <= 1.0):
+        raise ValueError(f"tolerance: expected a number in [0, 1], got {tolerance!r}")
     if reference.shape != candidate.shape:
         return ImageMetrics(name, np.inf, np.inf, 1.0, 0.0, tolerance, status="size")
     ref, cand = _flatten(reference), _flatten(candidate)

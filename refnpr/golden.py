@@ -105,7 +105,10 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
             f"{path}: unknown top-level keys {sorted(unknown)}; use include, [defaults], [[case]]"
         )
     raw_cases = list(data.get("case", []))
-    for inc in data.get("include", []):
+    includes = data.get("include", [])
+    if not isinstance(includes, list) or not all(isinstance(i, str) for i in includes):
+        raise ValueError(f"{path}: include must be a list of file names, got {includes!r}")
+    for inc in includes:
         inc_path = path.parent / inc
         if not inc_path.is_file():
             raise ValueError(
@@ -147,6 +150,7 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
                     f"{path}: case {name!r}: unknown key {key!r}; valid keys: {sorted(_DEFAULTS)}"
                 )
         params = {**defaults, **raw}
+        _check_case(path, name, params)
         if params["kind"] not in ("image", "gbuffer"):
             raise ValueError(
                 f"{path}: case {name!r}: kind must be 'image' or 'gbuffer', got {params['kind']!r}"
@@ -157,6 +161,31 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
     if not cases:
         raise ValueError(f"{path}: the suite has no [[case]] entries")
     return cases
+
+
+def _check_case(path: Path, name: str, params: dict[str, Any]) -> None:
+    """Types and ranges of a case's numbers (a NaN tolerance would pass any image)."""
+
+    def fail(key: str, expected: str) -> None:
+        raise ValueError(f"{path}: case {name!r}: {key}: expected {expected}, got {params[key]!r}")
+
+    for key in ("width", "height", "spp"):
+        v = params[key]
+        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+            fail(key, "a positive integer")
+    for key, (lo, hi) in {
+        "tolerance": (0.0, 1.0),
+        "max_frac_over": (0.0, 1.0),
+        "min_ssim": (-1.0, 1.0),
+        "rtol": (0.0, 1.0),
+        "atol": (0.0, float("inf")),
+    }.items():
+        v = params[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo <= v <= hi:
+            fail(key, f"a number in [{lo}, {hi}]")
+    ch = params["channels"]
+    if not isinstance(ch, list) or not ch or not all(isinstance(c, str) for c in ch):
+        fail("channels", "a non-empty list of channel names")
 
 
 def render_case(case: GoldenCase) -> np.ndarray | dict[str, np.ndarray]:
@@ -255,7 +284,11 @@ def check_suite(
                 )
             )
             continue
-        got = render_case(case)
+        try:
+            got = render_case(case)
+        except (ValueError, TypeError, OSError) as exc:  # one broken case must not hide the rest
+            results.append(CaseResult(case.name, False, f"render failed: {exc}"))
+            continue
         if case.kind == "gbuffer":
             results.append(_check_gbuffer(case, target, got))
             continue

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Image", "linear_to_srgb", "srgb_to_linear", "write_png_atomic"]
+__all__ = ["Image", "check_png_path", "linear_to_srgb", "srgb_to_linear", "write_png_atomic"]
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
@@ -24,14 +24,30 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
 
 
+def check_png_path(path: str | os.PathLike) -> Path:
+    """Validate an output path before any work: ``.png`` suffix, not a directory, and a parent
+    directory that exists or can be created and is writable."""
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        raise ValueError(f"path: expected a .png file name, got {str(path)!r}")
+    if path.is_dir():
+        raise ValueError(f"path: {str(path)!r} is a directory; give a file name ending in .png")
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise ValueError(
+            f"path: cannot write {str(path)!r} (directory {str(parent)!r} is not writable)"
+        )
+    return path
+
+
 def write_png_atomic(path: str | os.PathLike, pixels: np.ndarray) -> Path:
     """Write a uint8 (H, W[, C]) array as PNG through a temporary file and an atomic rename, so an
     interrupted write never leaves a corrupted file behind."""
     import imageio.v3 as iio
 
-    path = Path(path)
-    if path.suffix.lower() != ".png":
-        raise ValueError(f"path: expected a .png file name, got {str(path)!r}")
+    path = check_png_path(path)
     if pixels.dtype != np.uint8:
         raise TypeError(f"pixels: expected uint8, got {pixels.dtype}")
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -39,6 +55,9 @@ def write_png_atomic(path: str | os.PathLike, pixels: np.ndarray) -> Path:
     os.close(fd)
     try:
         iio.imwrite(tmp, pixels, extension=".png")
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual file mode
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -90,3 +90,45 @@ def test_golden_check_on_a_suite(tmp_path, capsys):
     assert "0 passed, 1 failed" in capsys.readouterr().out
     assert main(["golden", "--update", "--suite", str(suite)]) == 0
     assert main(["golden", "--suite", str(suite)]) == 0
+
+
+def test_output_path_checked_before_rendering(tmp_path, capsys):
+    (tmp_path / "d.png").mkdir()
+    assert main(["render", "--size", "8x8", "-o", str(tmp_path / "d.png")]) == 2
+    assert "is a directory" in capsys.readouterr().err
+    assert main(["render", "--size", "8x8", "-o", str(tmp_path / "x.jpg")]) == 2
+    assert "expected a .png file name" in capsys.readouterr().err
+
+
+def test_missing_scene_file_is_a_clear_error(tmp_path, capsys):
+    assert (
+        main(["render", "--scene", str(tmp_path / "nope.toml"), "-o", str(tmp_path / "a.png")]) == 2
+    )
+    assert "nope.toml" in capsys.readouterr().err
+
+
+def test_written_png_has_the_usual_file_mode(tmp_path):
+    import os
+
+    out = tmp_path / "m.png"
+    assert main(["render", "--size", "8x8", "-o", str(out), "-q"]) == 0
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (out.stat().st_mode & 0o777) == (0o666 & ~umask)
+
+
+def test_compare_rejects_nan_tolerance(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        main(["compare", str(tmp_path), str(tmp_path), "--tolerance", "nan"])
+    assert "--tolerance: expected a value in [0, 1]" in capsys.readouterr().err
+
+
+def test_compare_json_is_valid_json_with_missing_images(tmp_path):
+    import json
+
+    ref, cand = tmp_path / "ref", tmp_path / "cand"
+    main(["render", "--scene", "sphere", "--size", "16x12", "-o", str(ref / "s.png"), "-q"])
+    cand.mkdir()
+    assert main(["compare", str(ref), str(cand), "--json", str(tmp_path / "r.json")]) == 1
+    rows = json.loads((tmp_path / "r.json").read_text())  # strict JSON: no Infinity
+    assert rows[0]["status"] == "missing" and rows[0]["max_abs"] is None

@@ -97,3 +97,39 @@ def test_include_adds_cases_and_missing_include_fails(tmp_path):
     suite.write_text("include = ['gone.toml']\n" + _MINI.format(n=2))
     with pytest.raises(ValueError, match="include 'gone.toml' does not exist"):
         load_suite(suite)
+
+
+@pytest.mark.parametrize(
+    ("line", "match"),
+    [
+        ("tolerance = nan", r"case 'x': tolerance: expected a number in \[0.0, 1.0\], got nan"),
+        ("tolerance = 'x'", r"case 'x': tolerance: expected a number"),
+        ("spp = 0", r"case 'x': spp: expected a positive integer, got 0"),
+        ("channels = []", r"case 'x': channels: expected a non-empty list"),
+    ],
+)
+def test_case_values_are_checked(tmp_path, line, match):
+    suite = tmp_path / "suite.toml"
+    suite.write_text(f"[[case]]\nname = 'x'\nscene = 'sphere'\n{line}\n")
+    with pytest.raises(ValueError, match=match):
+        load_suite(suite)
+
+
+def test_include_must_be_a_list(tmp_path):
+    suite = tmp_path / "suite.toml"
+    suite.write_text("include = 'v.toml'\n[[case]]\nname = 'x'\nscene = 'sphere'\n")
+    with pytest.raises(ValueError, match="include must be a list of file names"):
+        load_suite(suite)
+
+
+def test_a_broken_case_does_not_stop_the_others(tmp_path):
+    suite = tmp_path / "suite.toml"
+    suite.write_text(
+        "[[case]]\nname = 'bad'\nscene = 'gone.toml'\nwidth = 8\nheight = 8\n"
+        "[[case]]\nname = 'good'\nscene = 'sphere'\nwidth = 8\nheight = 8\n"
+    )
+    update_suite(suite, only=["good"], log=lambda *_: None)
+    (tmp_path / "bad.png").write_bytes((tmp_path / "good.png").read_bytes())
+    res = {r.name: r for r in check_suite(suite)}
+    assert not res["bad"].passed and "render failed" in res["bad"].message
+    assert res["good"].passed
