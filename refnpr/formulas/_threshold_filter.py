@@ -45,6 +45,10 @@ def pcf_threshold(x, t_samples, *, weights=None, n: int = 1) -> np.ndarray:
         raise ValueError(
             "t_samples: expected shape (..., K) with the K samples on the last axis, got a scalar"
         )
+    if ts.shape[-1] == 0:
+        raise ValueError(
+            f"t_samples: expected K >= 1 threshold samples on the last axis, got shape {ts.shape}"
+        )
     broadcast(x=x[..., None], t_samples=ts)
     hits = step_kernel(x[..., None], ts, n)
     if weights is None:

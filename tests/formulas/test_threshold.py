@@ -857,3 +857,8 @@ def test_public_api_and_import_boundary():
                 assert not (node.module or "").startswith("refnpr"), (stem, node.module)
             if isinstance(node, ast.Import):
                 assert not any(a.name.startswith("refnpr") for a in node.names), stem
+
+
+def test_pcf_threshold_needs_at_least_one_sample():
+    with pytest.raises(ValueError, match=r"t_samples: expected K >= 1 threshold samples"):
+        threshold.pcf_threshold(np.ones(2), np.zeros((2, 0)))
