@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._shading_checks import unit_vectors
 from ._validate import as_float, check_scalar, describe, result_dtype
 from ._xtoon_shapes import (
     cylinder_normals,
@@ -282,14 +283,14 @@ def _unit(name: str, value) -> np.ndarray:
         raise ValueError(
             f"{name}: expected shape (..., 3), got {describe(arr)}; pass 3D vectors in the last axis"
         )
-    norm = np.linalg.norm(arr, axis=-1, keepdims=True)
-    if np.any(norm == 0):
-        i = int(np.flatnonzero(np.ravel(norm == 0))[0])
+    zero = np.all(arr == 0, axis=-1)
+    if np.any(zero):
+        i = int(np.flatnonzero(np.ravel(zero))[0])
         raise ValueError(
             f"{name}: expected non-zero vectors, got a zero vector at index {i}; "
             "repair degenerate normals before blending"
         )
-    return arr / norm
+    return unit_vectors(arr)  # scaled first: no overflow or underflow of |v|
 
 
 def blend_normals(n, n_abstract, weight, *, normalize: bool = True) -> np.ndarray:

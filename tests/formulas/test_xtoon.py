@@ -598,3 +598,12 @@ def test_stress_focus_finite_float32(z_min, r, margin):
         d = xtoon.detail_focus(zz[zz > 0], z_c, z_min, r)
         assert d.dtype == dt and np.all(np.isfinite(d)) and np.all((d >= 0) & (d <= 1))
     assert xtoon.detail_focus(np.float32(z_c), z_c, z_min, r) == 1.0
+
+
+def test_blend_normals_extreme_lengths_stay_unit():
+    big = np.array([1e20, 0.0, 0.0], np.float32)
+    tiny = np.array([1e-30, 0.0, 0.0], np.float32)
+    up = np.array([0.0, 0.0, 1.0], np.float32)
+    np.testing.assert_allclose(xtoon.blend_normals(big, big, np.float32(0.5)), [1, 0, 0], atol=1e-6)
+    out = xtoon.blend_normals(tiny, up, np.float32(0.5))
+    np.testing.assert_allclose(out, np.array([1, 0, 1]) / np.sqrt(2), atol=1e-6)
