@@ -201,6 +201,7 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
     style = _table(src, "[style]", top.get("style", {}), None)
     if "name" in style and not isinstance(style["name"], str):
         raise SceneFileError(f"{src}: [style]: name: expected a string, got {style['name']!r}")
+    style = _resolve_style_paths(style, Path(base_dir))
     name = top.get("name", Path(src).stem if source is not None else "scene")
     if not isinstance(top.get("description", ""), str):
         raise SceneFileError(f"{src}: description: expected a string")
@@ -217,6 +218,21 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
             name=name,
             style=style,
         )
+
+
+def _resolve_style_paths(value, base_dir: Path):
+    """Style parameters that name files (textures, screens, layers, maps) are relative to the
+    scene file, like material textures: any string with a slash or a suffix that names an
+    existing file next to the scene becomes an absolute path (tables and lists recursively)."""
+    if isinstance(value, dict):
+        return {k: _resolve_style_paths(v, base_dir) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_resolve_style_paths(v, base_dir) for v in value]
+    if isinstance(value, str) and ("/" in value or "\\" in value or Path(value).suffix):
+        path = base_dir / value
+        if not Path(value).is_absolute() and path.is_file():
+            return str(path)
+    return value
 
 
 def _data_dir() -> Path:

@@ -78,6 +78,10 @@ def _face_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
 
+#: Widest line in pixels (wider lines cover everything and overflow the kernel's box).
+_MAX_WIDTH = 256.0
+
+
 @dataclass(frozen=True)
 class ContourLayer:
     """Parameters of the contour layer.
@@ -103,10 +107,16 @@ class ContourLayer:
     depth_tolerance: float = 0.01
 
     def __post_init__(self) -> None:
-        check_number("width", self.width, lo=0.0, lo_open=True)
-        c = np.asarray(self.color, dtype=np.float64)
-        if c.shape != (3,) or np.any(c < 0) or np.any(c > 1):
-            raise ValueError(f"color: expected 3 values in [0, 1], got {self.color!r}")
+        check_number("width", self.width, lo=0.0, lo_open=True, hi=_MAX_WIDTH)
+        try:
+            c = np.asarray(self.color, dtype=np.float64)
+        except (TypeError, ValueError):
+            c = np.full(1, np.nan)
+        if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
+            raise ValueError(f"color: expected 3 values in [0, 1] (linear RGB), got {self.color!r}")
+        for flag in ("silhouettes", "boundaries"):
+            if not isinstance(getattr(self, flag), bool):
+                raise TypeError(f"{flag}: expected true or false, got {getattr(self, flag)!r}")
         if self.crease_angle is not None:
             check_number("crease_angle", self.crease_angle, lo=0.0, lo_open=True, hi=180.0)
         check_number("depth_tolerance", self.depth_tolerance, lo=0.0)
@@ -179,6 +189,10 @@ class Contoured(Style):
         if contours is True:
             contours = ContourLayer()
         elif isinstance(contours, dict):
+            valid = sorted(ContourLayer.__dataclass_fields__)
+            unknown = sorted(set(contours) - set(valid))
+            if unknown:
+                raise ValueError(f"contours: unknown keys {unknown}; valid keys are {valid}")
             contours = ContourLayer(**contours)
         elif not isinstance(contours, ContourLayer):
             raise TypeError(f"contours: expected a ContourLayer, a table or True, got {contours!r}")

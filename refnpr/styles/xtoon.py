@@ -98,7 +98,7 @@ class XToonStyle(Style):
     shape_weight : float in [0, 1], "detail", {"texture": name_or_path, "uv_scale": s} or array
     shape_blend : {"vertex", "pixel"}
     shape_frame : {"pca", "aabb"}
-    shape_iterations : int >= 0
+    shape_iterations : int in [0, 10000]
         Smoothing iterations of the "smoothed" shape.
     shape_objects : list of str, optional
         Objects to abstract (default: all).
@@ -218,10 +218,11 @@ class XToonStyle(Style):
         if (
             isinstance(shape_iterations, bool)
             or not isinstance(shape_iterations, (int, np.integer))
-            or shape_iterations < 0
+            or not 0 <= shape_iterations <= 10_000
         ):
             raise ValueError(
-                f"shape_iterations: expected an integer >= 0, got {shape_iterations!r}"
+                f"shape_iterations: expected an integer in [0, 10000], got {shape_iterations!r}; "
+                "a few tens of iterations already give a smooth field"
             )
         if shape_objects is not None:
             if isinstance(shape_objects, str) or not all(isinstance(o, str) for o in shape_objects):

@@ -96,3 +96,22 @@ def test_contoured_wraps_any_style_and_adds_depth():
 def test_bad_layer_parameters(kwargs, match):
     with pytest.raises(ValueError, match=match):
         ContourLayer(**kwargs)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "exc", "match"),
+    [
+        ({"color": (np.nan, 0.0, 0.0)}, ValueError, r"color: expected 3 values in \[0, 1\]"),
+        ({"color": "black"}, ValueError, r"color: expected 3 values in \[0, 1\]"),
+        ({"silhouettes": "no"}, TypeError, r"silhouettes: expected true or false, got 'no'"),
+        ({"width": 1e300}, ValueError, r"width: expected a value <= 256.0"),
+    ],
+)
+def test_more_bad_layer_parameters(kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        ContourLayer(**kwargs)
+
+
+def test_unknown_contour_key_lists_valid_keys():
+    with pytest.raises(ValueError, match=r"contours: unknown keys \['colour'\]; valid keys are \["):
+        get_style("contoured", base="toon", contours={"colour": (0, 0, 0)})

@@ -289,3 +289,19 @@ def test_parse_scene_dict_source_label():
         ValueError, match=r"<scene dict>: \[\[object\]\] #1 'torus': r: the tube radius"
     ):
         parse_scene(data)
+
+
+def test_style_file_parameters_are_relative_to_the_scene_file(tmp_path):
+    import numpy as np
+
+    from refnpr.image import write_png_atomic
+
+    write_png_atomic(tmp_path / "paper.png", np.full((8, 8), 128, np.uint8))
+    (tmp_path / "s.toml").write_text(
+        "[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\n"
+        "[style]\nname = 'threshold'\ntexture = 'paper.png'\nlist = ['paper.png', 'brick']\n"
+        "[[object]]\nmesh = 'uv_sphere'\n"
+    )
+    scene = load_scene(tmp_path / "s.toml")
+    assert scene.style["texture"] == str(tmp_path / "paper.png")
+    assert scene.style["list"] == [str(tmp_path / "paper.png"), "brick"]  # names stay names

@@ -656,3 +656,10 @@ def test_benchmark_quick_mode_writes_speed_and_accuracy_rows(tmp_path):
         if row["style"] == "xtoon-depth":
             assert row["channels"] == ["depth", "mesh_id", "normal"]
     assert {(r["scene"], r["detail"]) for r in report["accuracy"]} >= {("xtoon_teapot", "depth")}
+
+
+def test_shape_iterations_is_bounded():
+    from refnpr.styles import get_style
+
+    with pytest.raises(ValueError, match=r"shape_iterations: expected an integer in \[0, 10000\]"):
+        get_style("xtoon", shape="smoothed", shape_iterations=10**9)
