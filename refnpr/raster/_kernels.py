@@ -638,22 +638,26 @@ def interp_bary(tri_id, lam, bary):
 
 
 @pnjit
-def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout):
+def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout):
     """All requested per-vertex quantities in one pass over the samples, so each sample gathers
     its triangle's planes and indices once (on dense meshes these gathers dominate).
 
     dtab (N, Cd): values with analytic per-pixel derivatives -> dout, dxout, dyout (nH, nW, Cd);
     vtab (N, Cv): values only -> vout; ntab (N, 3k), k in {0, 1}: normals, renormalized -> nout.
+    wout (nH, nW, k), k in {0, 1}: depth w = 1 / Q (+inf where empty).
     Zero-width tables cost nothing (their loops run zero times). Empty samples get 0.
     f = P / Q and df = (dP - f dQ) / Q with d(sample)/d(pixel) = n.
     """
     cd = dtab.shape[1]
     cv = vtab.shape[1]
     k_n = ntab.shape[1] // 3
+    k_w = wout.shape[2]
     for sy in prange(tri_id.shape[0]):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
             if t < 0:
+                for c in range(k_w):
+                    wout[sy, sx, c] = np.inf
                 for c in range(cd):
                     dout[sy, sx, c] = 0.0
                     dxout[sy, sx, c] = 0.0
@@ -666,6 +670,8 @@ def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vo
             l0, l1, l2 = _lambdas(lam, t, sx, sy)
             q = l0 + l1 + l2
             inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
+            for c in range(k_w):
+                wout[sy, sx, c] = inv_q
             i0 = faces[t, 0]
             i1 = faces[t, 1]
             i2 = faces[t, 2]

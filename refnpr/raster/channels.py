@@ -120,12 +120,13 @@ def interpolated_channels(
     nh, nw = tri_id.shape
     out: dict[str, np.ndarray] = {}
     attrs = attribute_names(meshes)
-    if "depth" in wanted or "ndc_z" in wanted:
-        depth = np.empty((nh, nw), dtype=np.float64 if "ndc_z" in wanted else dtype)
-        K.interp_depth(tri_id, qplane, depth)
-        if "depth" in wanted:
-            out["depth"] = depth.astype(dtype, copy=False)
+    need_depth = "depth" in wanted or "ndc_z" in wanted
+    depth_dtype = np.float64 if "ndc_z" in wanted else dtype
     if not (wanted & INTERPOLATED or wanted & (attrs | {f"d{a}_{x}" for a in attrs for x in "xy"})):
+        if need_depth:  # nothing to interpolate: depth from the depth planes alone
+            depth = np.empty((nh, nw), dtype=depth_dtype)
+            K.interp_depth(tri_id, qplane, depth)
+            out["depth"] = depth.astype(dtype, copy=False)
         return out
 
     # exact perspective-correct barycentric planes, only for triangles that own a sample
@@ -168,7 +169,12 @@ def interpolated_channels(
     dyout = np.empty_like(dout)
     vout = np.empty((nh, nw, vtab.shape[1]), dtype=np.float64 if "ndc_z" in wanted else dtype)
     nout = np.empty((nh, nw, ntab.shape[1]), dtype=dtype)
-    K.interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout)
+    wout = np.empty((nh, nw, 1 if need_depth else 0), dtype=depth_dtype)
+    K.interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout)
+    if need_depth:
+        depth = wout.reshape(nh, nw)  # w = 1 / Q, +inf where empty
+        if "depth" in wanted:
+            out["depth"] = depth.astype(dtype, copy=False)
 
     internal: dict[str, np.ndarray] = {}
     for name, a, b in d_slices:
