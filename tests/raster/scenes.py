@@ -10,6 +10,28 @@ from refnpr.raster import Camera, Mesh
 
 from .meshes import cube, icosphere, with_data
 
+#: Every built-in channel name, spelled out here (not taken from the code under test).
+BUILTIN_CHANNELS = (
+    "depth",
+    "ndc_z",
+    "tri_id",
+    "mesh_id",
+    "bary",
+    "position",
+    "normal",
+    "uv",
+    "duv_dx",
+    "duv_dy",
+    "lod",
+    "dyadic_scale",
+    "coverage",
+    "coverage_count",
+    "dposition_dx",
+    "dposition_dy",
+)
+#: The scenes' scalar vertex attribute and its derivatives.
+HEAT_CHANNELS = ("heat", "dheat_dx", "dheat_dy")
+
 
 @dataclass(frozen=True)
 class Scene:

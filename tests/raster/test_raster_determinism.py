@@ -10,29 +10,9 @@ import pytest
 from refnpr.raster import rasterize
 
 from .meshes import icosphere
-from .scenes import SCENES
+from .scenes import BUILTIN_CHANNELS, HEAT_CHANNELS, SCENES
 
-CHANNELS = (
-    "depth",
-    "ndc_z",
-    "tri_id",
-    "mesh_id",
-    "bary",
-    "position",
-    "normal",
-    "uv",
-    "duv_dx",
-    "duv_dy",
-    "lod",
-    "dyadic_scale",
-    "coverage",
-    "coverage_count",
-    "dposition_dx",
-    "dposition_dy",
-    "heat",
-    "dheat_dx",
-    "dheat_dy",
-)
+CHANNELS = BUILTIN_CHANNELS + HEAT_CHANNELS
 
 
 def _render(scene_name: str, **kwargs):

@@ -14,25 +14,9 @@ from hypothesis import strategies as st
 from refnpr.raster import Camera, Mesh, rasterize
 
 from .oracle import View, cast, pixel_centres
+from .scenes import BUILTIN_CHANNELS
 
-CHANNELS = (
-    "depth",
-    "ndc_z",
-    "tri_id",
-    "mesh_id",
-    "bary",
-    "position",
-    "normal",
-    "uv",
-    "duv_dx",
-    "duv_dy",
-    "lod",
-    "dyadic_scale",
-    "coverage",
-    "coverage_count",
-    "dposition_dx",
-    "dposition_dy",
-)
+CHANNELS = BUILTIN_CHANNELS
 KINDS = (
     "generic",
     "tiny",

@@ -9,30 +9,11 @@ from refnpr.raster import rasterize
 
 from .meshes import concat
 from .oracle import View, cast, derivatives, pixel_centres, surface
-from .scenes import SCENES
+from .scenes import BUILTIN_CHANNELS, HEAT_CHANNELS, SCENES
 
 TEXTURE_SIZE = (256, 64)
 LINE_PERIOD = 3.0
-ALL_CHANNELS = (
-    "depth",
-    "ndc_z",
-    "tri_id",
-    "mesh_id",
-    "bary",
-    "position",
-    "normal",
-    "uv",
-    "duv_dx",
-    "duv_dy",
-    "lod",
-    "dyadic_scale",
-    "coverage",
-    "dposition_dx",
-    "dposition_dy",
-    "heat",
-    "dheat_dx",
-    "dheat_dy",
-)
+ALL_CHANNELS = tuple(c for c in BUILTIN_CHANNELS if c != "coverage_count") + HEAT_CHANNELS
 #: Relative tolerance of values at sample centres (float64 buffers).
 RTOL64 = 1e-6
 #: float32 buffers: the float64 result rounded once (half an ulp) plus the float64 error.
