@@ -471,6 +471,34 @@ def _edge_setup(c, n, ia, ib):
     return -dy * 512, dx * 512, dx * (256 - ay) - dy * (256 - ax) - bias
 
 
+@njit
+def _tile_rect(k, tiles_x, tile, nw, nh):
+    """Sample rectangle [x0, x1) x [y0, y1) of tile k."""
+    ty = k // tiles_x
+    tx = k - ty * tiles_x
+    x0 = tx * tile
+    y0 = ty * tile
+    return x0, y0, min(x0 + tile, nw), min(y0 + tile, nh)
+
+
+@njit
+def _prim_in_tile(ref, coords, bbox, sub, sub_bbox, sub_parent, n, x0, y0, x1, y1):
+    """Parent triangle, sample range clipped to the tile, and the three edge functions of a
+    primitive reference (whole triangle if ref < M, else a clipped piece)."""
+    m = coords.shape[0]
+    t = ref if ref < m else sub_parent[ref - m]
+    c = _prim(ref, coords, sub)
+    b = _prim(ref, bbox, sub_bbox)
+    sx0 = max(np.int64(b[0]), x0)
+    sx1 = min(np.int64(b[1]), x1 - 1)
+    sy0 = max(np.int64(b[2]), y0)
+    sy1 = min(np.int64(b[3]), y1 - 1)
+    A0, B0, C0 = _edge_setup(c, n, 1, 2)
+    A1, B1, C1 = _edge_setup(c, n, 2, 0)
+    A2, B2, C2 = _edge_setup(c, n, 0, 1)
+    return t, sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2
+
+
 @pnjit
 def raster_visibility(
     coords,
@@ -495,29 +523,14 @@ def raster_visibility(
     ties keep the earlier primitive (lists are in increasing triangle order), so the result is
     independent of the thread count and of the tile size. Samples whose exact Q lies outside
     [q_lo, q_hi] (beyond the far/near plane, with a relative slack) are not covered."""
-    m = coords.shape[0]
-    n_tiles = tile_first.shape[0] - 1
-    for k in prange(n_tiles):
-        ty = k // tiles_x
-        tx = k - ty * tiles_x
-        x0 = tx * tile
-        y0 = ty * tile
-        x1 = min(x0 + tile, nw)
-        y1 = min(y0 + tile, nh)
+    for k in prange(tile_first.shape[0] - 1):
+        x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
         qbuf = np.full((y1 - y0, x1 - x0), -np.inf)
         ibuf = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
         for e in range(tile_first[k], tile_first[k + 1]):
-            ref = tile_lists[e]
-            t = ref if ref < m else sub_parent[ref - m]
-            c = _prim(ref, coords, sub)
-            b = _prim(ref, bbox, sub_bbox)
-            sx0 = max(np.int64(b[0]), x0)
-            sx1 = min(np.int64(b[1]), x1 - 1)
-            sy0 = max(np.int64(b[2]), y0)
-            sy1 = min(np.int64(b[3]), y1 - 1)
-            A0, B0, C0 = _edge_setup(c, n, 1, 2)
-            A1, B1, C1 = _edge_setup(c, n, 2, 0)
-            A2, B2, C2 = _edge_setup(c, n, 0, 1)
+            t, sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
+                tile_lists[e], coords, bbox, sub, sub_bbox, sub_parent, n, x0, y0, x1, y1
+            )
             qa = qplane[t, 0]
             qb = qplane[t, 1]
             qc = qplane[t, 2]
@@ -562,26 +575,14 @@ def raster_count(
 ):
     """Debug: count[sy, sx] = how many primitives claim each sample: the coverage rule and the
     per-sample near/far clip of ``raster_visibility``, without the depth test between them."""
-    m = coords.shape[0]
-    n_tiles = tile_first.shape[0] - 1
-    for k in prange(n_tiles):
-        ty = k // tiles_x
-        tx = k - ty * tiles_x
-        x0 = tx * tile
-        y0 = ty * tile
-        x1 = min(x0 + tile, nw)
-        y1 = min(y0 + tile, nh)
+    for k in prange(tile_first.shape[0] - 1):
+        x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
         for e in range(tile_first[k], tile_first[k + 1]):
-            ref = tile_lists[e]
-            t = ref if ref < m else sub_parent[ref - m]
-            c = _prim(ref, coords, sub)
-            b = _prim(ref, bbox, sub_bbox)
-            sx0, sx1, sy0, sy1 = np.int64(b[0]), np.int64(b[1]), np.int64(b[2]), np.int64(b[3])
-            A0, B0, C0 = _edge_setup(c, n, 1, 2)
-            A1, B1, C1 = _edge_setup(c, n, 2, 0)
-            A2, B2, C2 = _edge_setup(c, n, 0, 1)
-            for sy in range(max(sy0, y0), min(sy1, y1 - 1) + 1):
-                for sx in range(max(sx0, x0), min(sx1, x1 - 1) + 1):
+            t, sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
+                tile_lists[e], coords, bbox, sub, sub_bbox, sub_parent, n, x0, y0, x1, y1
+            )
+            for sy in range(sy0, sy1 + 1):
+                for sx in range(sx0, sx1 + 1):
                     e0 = A0 * sx + B0 * sy + C0
                     e1 = A1 * sx + B1 * sy + C1
                     e2 = A2 * sx + B2 * sy + C2
