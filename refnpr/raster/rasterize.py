@@ -160,7 +160,7 @@ def rasterize(
     dtype = np.dtype(dtype)
     if dtype not in (np.float32, np.float64):
         raise TypeError(f"dtype: expected numpy.float32 or numpy.float64, got {dtype}")
-    if cull_backfaces not in (True, False):
+    if not isinstance(cull_backfaces, (bool, np.bool_)):  # 1 and 0 are not flags
         raise TypeError(f"cull_backfaces: expected a bool, got {cull_backfaces!r}")
     wanted = _parse_channels(channels, attribute_names(meshes))
     check_vertex_data(meshes, wanted)

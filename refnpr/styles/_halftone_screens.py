@@ -107,7 +107,7 @@ def normalize_spec(spec: Any) -> dict[str, Any]:
     if kind not in KINDS:
         raise _bad(kind, f"a screen table needs kind in {list(KINDS)}")
     lighting = spec.pop("lighting", True)
-    if lighting not in (True, False):
+    if not isinstance(lighting, (bool, np.bool_)):  # 1 and 0 are not flags
         raise TypeError(f"screen.lighting: expected a bool, got {lighting!r}")
     if kind == "engraving":
         out = _with_defaults("engraving", spec, _ENGRAVING_KEYS)

@@ -39,7 +39,7 @@ __all__ = ["TamissParams", "PipelineResult", "run_pipeline"]
 
 
 def _check_bool(name: str, value: Any) -> bool:
-    if value not in (True, False):
+    if not isinstance(value, (bool, np.bool_)):  # 1 and 0 are not flags
         raise TypeError(f"{name}: expected a bool, got {value!r}")
     return bool(value)
 

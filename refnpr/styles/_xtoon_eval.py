@@ -66,6 +66,11 @@ def _map_channels(kind: str) -> set[str]:
 
 
 def _light_of(cfg: Config, scene: Any):
+    if not scene.lights:
+        raise ValueError(
+            "light: X-Toon's tone is n.l of one light, but the scene has no lights; add a "
+            "[[light]] table to the scene"
+        )
     if cfg.light >= len(scene.lights):
         raise ValueError(
             f"light: index {cfg.light} out of range; the scene has {len(scene.lights)} light(s) "

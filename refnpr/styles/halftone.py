@@ -138,7 +138,7 @@ class HalftoneStyle(Style):
             "equalize": equalize,
         }
         for flag, val in flags.items():
-            if val not in (True, False):
+            if not isinstance(val, (bool, np.bool_)):  # 1 and 0 are not flags
                 raise TypeError(f"{flag}: expected a bool (true/false), got {val!r}")
         self.centred, self.specular = bool(centred), bool(specular)
         self.sample_lod, self.equalize = bool(sample_lod), bool(equalize)

@@ -30,7 +30,7 @@ class SmoothStyle(Style):
     description = "continuous ambient + diffuse + specular shading (Veryovka eq. 1)"
 
     def __init__(self, *, specular: bool = True, model: str = "blinn-phong") -> None:
-        if specular not in (True, False):
+        if not isinstance(specular, (bool, np.bool_)):  # 1 and 0 are not flags
             raise TypeError(f"specular: expected a bool, got {specular!r}")
         self.specular = bool(specular)
         self.model = check_choice("model", model, ("blinn-phong", "phong"))

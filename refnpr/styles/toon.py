@@ -50,7 +50,7 @@ class ToonStyle(Style):
         self.n = check_count("n", n, lo=1, hi=256)
         self.t = check_number("t", t, lo=0.0, hi=1.0)
         self.mode = check_choice("mode", mode, ("step", "lake"))
-        if specular not in (True, False):
+        if not isinstance(specular, (bool, np.bool_)):  # 1 and 0 are not flags
             raise TypeError(f"specular: expected a bool, got {specular!r}")
         self.specular = bool(specular) and self.mode == "step"
         self._params = {"n": self.n, "t": self.t, "mode": self.mode, "specular": self.specular}

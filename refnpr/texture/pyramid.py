@@ -158,7 +158,7 @@ def clahe_pyramid(
         raise ValueError(f"clip_limit: expected a number in (0, 1], got {clip_limit!r}")
     if isinstance(nbins, bool) or not isinstance(nbins, (int, np.integer)) or nbins < 2:
         raise ValueError(f"nbins: expected an integer >= 2, got {nbins!r}")
-    if uniform not in (True, False):
+    if not isinstance(uniform, (bool, np.bool_)):  # 1 and 0 are not flags
         raise TypeError(f"uniform: expected a bool, got {uniform!r}")
     base = build_pyramid(image)
     if base.channels != 1:

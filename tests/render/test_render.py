@@ -90,3 +90,8 @@ def test_style_table_from_scene_file_form(plane_scene):
 def test_scene_argument_type_error():
     with pytest.raises(TypeError, match="scene: expected a refnpr.scenes.Scene"):
         render(42, "toon", 8, 8)
+
+
+def test_integer_flags_are_not_bools():
+    with pytest.raises(TypeError, match="specular: expected a bool"):
+        get_style("toon", specular=1)

@@ -71,12 +71,19 @@ def _oracle(style, scene, gb, idx, *, direction=None):
 @pytest.mark.parametrize(
     "screen,direction,threshold,centred,spp,sample_lod",
     [
-        ({"kind": "engraving", "profile": "triangle", "angle": 30.0}, 30.0, "binary", 0, 1, 0),
-        ({"kind": "engraving", "profile": "ramp", "angle": 90.0}, 90.0, "smooth", 0, 4, 1),
-        ({"kind": "engraving", "profile": "triangle", "angle": 0.0}, 0.0, "binary", 0, 4, 0),
+        ({"kind": "engraving", "profile": "triangle", "angle": 30.0}, 30.0, "binary", False, 1, 0),
+        ({"kind": "engraving", "profile": "ramp", "angle": 90.0}, 90.0, "smooth", False, 4, 1),
+        ({"kind": "engraving", "profile": "triangle", "angle": 0.0}, 0.0, "binary", False, 4, 0),
         ("grass", None, "binary", False, 1, False),
         ("grass", None, "smooth", True, 1, False),
-        ({"kind": "strokes", "set": "hatching", "size": 64, "lines": 8}, None, "smooth", 0, 4, 1),
+        (
+            {"kind": "strokes", "set": "hatching", "size": 64, "lines": 8},
+            None,
+            "smooth",
+            False,
+            4,
+            1,
+        ),
     ],
 )
 def test_samples_match_naive_oracle(screen, direction, threshold, centred, spp, sample_lod):

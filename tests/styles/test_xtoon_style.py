@@ -663,3 +663,14 @@ def test_shape_iterations_is_bounded():
 
     with pytest.raises(ValueError, match=r"shape_iterations: expected an integer in \[0, 10000\]"):
         get_style("xtoon", shape="smoothed", shape_iterations=10**9)
+
+
+def test_scene_without_lights_is_a_clear_error():
+    import dataclasses
+
+    from refnpr.render import render
+    from refnpr.scenes import load_scene
+
+    scene = dataclasses.replace(load_scene("sphere"), lights=())
+    with pytest.raises(ValueError, match="light: X-Toon's tone is n.l of one light, but the scene"):
+        render(scene, "xtoon", 16, 12)
