@@ -124,21 +124,6 @@ def _clip_polygon(v0, v1, v2, guard, poly, tmp):
 
 
 @njit
-def _outcode_reject(c0, c1, c2, guard):
-    """True if all three vertices are outside one clip plane; also returns whether any is outside."""
-    any_out = False
-    for p in range(N_PLANES):
-        d0 = _plane_dist(p, c0[0], c0[1], c0[2], c0[3], guard)
-        d1 = _plane_dist(p, c1[0], c1[1], c1[2], c1[3], guard)
-        d2 = _plane_dist(p, c2[0], c2[1], c2[2], c2[3], guard)
-        if d0 < 0.0 and d1 < 0.0 and d2 < 0.0:
-            return True, True
-        if d0 < 0.0 or d1 < 0.0 or d2 < 0.0:
-            any_out = True
-    return False, any_out
-
-
-@njit
 def _keep(area, cull):
     # Screen y points down, so a triangle counter-clockwise in NDC (front-facing in GL) has area < 0.
     if area == 0:

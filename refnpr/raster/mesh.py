@@ -7,27 +7,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .gbuffer import BUILTIN_CHANNELS
+
 __all__ = ["Mesh", "RESERVED_NAMES"]
 
 #: Names that are G-buffer channels and therefore cannot be vertex attribute names.
-RESERVED_NAMES = frozenset(
-    {
-        "depth",
-        "ndc_z",
-        "tri_id",
-        "mesh_id",
-        "bary",
-        "position",
-        "normal",
-        "uv",
-        "duv_dx",
-        "duv_dy",
-        "lod",
-        "dyadic_scale",
-        "coverage",
-        "coverage_count",
-    }
-)
+RESERVED_NAMES = frozenset(BUILTIN_CHANNELS)
 
 
 def _as_float_array(name: str, value, ncols: int | None, nverts: int | None) -> np.ndarray:
