@@ -62,13 +62,13 @@ sys.path.insert(0, str(HERE.parent))
 from refnpr.formulas.tamiss import StrokeHashTable  # noqa: E402
 from refnpr.raster import Camera, rasterize  # noqa: E402
 from refnpr.scenes import load_scene  # noqa: E402
-from refnpr.styles._tamiss_strokes import take_fit  # noqa: E402
 from refnpr.styles.tamiss import (  # noqa: E402
     AggregateHistory,
     TamissParams,
     run_pipeline,
     stroke_geometry,
 )
+from refnpr.styles.tamiss.strokes import take_fit  # noqa: E402
 
 CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal"]
 PHASES = ("gather", "aggregate", "fit", "extrude", "raster")

@@ -13,7 +13,7 @@ from refnpr.raster import rasterize
 from refnpr.render import render, required_channels
 from refnpr.scenes import load_scene
 from refnpr.styles import ShadeContext, get_style, style_from_spec
-from refnpr.styles._halftone_shading import tangent_frame
+from refnpr.styles.halftone.shading import tangent_frame
 
 from .test_halftone_scenes import wall
 
@@ -150,7 +150,7 @@ def test_requires_only_what_the_scene_needs():
 
 
 def test_screen_lod_equals_the_rasterizer_lod_channel():
-    from refnpr.styles import _halftone_screens as HS
+    from refnpr.styles.halftone import screens as HS
 
     scene = wall(0.5, distance=2.5, fov=50.0)
     gb = rasterize(

@@ -13,8 +13,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from refnpr.styles import _tamiss_kernels as K
-from refnpr.styles._tamiss_field import (
+from refnpr.styles.tamiss import _kernels as K
+from refnpr.styles.tamiss.field import (
     KX,
     MAX_LEVEL,
     SALT_TONE,

@@ -9,7 +9,7 @@ import pytest
 
 from refnpr.raster import Camera, Mesh, rasterize
 from refnpr.scenes import Material, Scene, SceneObject, load_scene, teapot, uv_sphere
-from refnpr.styles._tamiss_field import (
+from refnpr.styles.tamiss.field import (
     KX,
     SALT_LENGTH,
     SALT_TONE,
@@ -19,7 +19,7 @@ from refnpr.styles._tamiss_field import (
     pack_id,
     stroke_geometry,
 )
-from refnpr.styles._tamiss_gather import (
+from refnpr.styles.tamiss.gather import (
     FieldInputs,
     field_inputs,
     gather_fragments,

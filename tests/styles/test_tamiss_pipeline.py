@@ -14,7 +14,6 @@ import pytest
 from refnpr.formulas.tamiss import StrokeHashTable, fit_fragments
 from refnpr.raster import Camera, Mesh, rasterize
 from refnpr.scenes import Light, Material, Scene, SceneObject
-from refnpr.styles._tamiss_strokes import take_fit
 from refnpr.styles.tamiss import (
     AggregateHistory,
     TamissParams,
@@ -24,6 +23,7 @@ from refnpr.styles.tamiss import (
     run_pipeline,
     stroke_geometry,
 )
+from refnpr.styles.tamiss.strokes import take_fit
 
 CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal"]
 

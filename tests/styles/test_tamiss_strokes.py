@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from refnpr.formulas.tamiss import StrokeStrip, extrude_stroke, fit_fragments
-from refnpr.styles._tamiss_field import StrokeField, pack_id
-from refnpr.styles._tamiss_raster import BRUSHES, brush_texture, rasterize_strips
-from refnpr.styles._tamiss_strokes import (
+from refnpr.styles.tamiss.field import StrokeField, pack_id
+from refnpr.styles.tamiss.raster import BRUSHES, brush_texture, rasterize_strips
+from refnpr.styles.tamiss.strokes import (
     Strips,
     centreline,
     drawn_segments,

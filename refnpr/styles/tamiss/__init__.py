@@ -1,0 +1,69 @@
+"""TAMISS (Szécsi, Szirányi, Kacsó): tonal art maps with image-space strokes.
+
+The surfaces are hatched with an RPTAM stroke field (``_tamiss_field``), but instead of drawing the
+strokes in texture space every covered sample emits a fragment (x, y, t, id) per stroke over it
+(fragment gathering); fragments are summed per stroke id (exactly, or by the paper's double-hashed
+table), a cubic x(t), y(t) and a visibility v(t) are fitted per stroke by four conjugate-gradient
+iterations, and each stroke is extruded to an image-space triangle strip of constant pixel width,
+with taper, per-stroke randomisation, an optional brush texture and a choice of extent (visible
+segments, [t_min, t_max], the whole stroke, or visible segments run on over outlines), then drawn
+anti-aliased over a background or any other style (``contours`` add outlines).
+
+Public API: the style :class:`TamissStyle` (registered as ``"tamiss"``), and for inspecting the
+phases :func:`run_pipeline` -> :class:`PipelineResult`, :class:`TamissParams`,
+:class:`StrokeField`, :func:`stroke_geometry`, :class:`AggregateHistory`. See ``docs/tamiss.md``.
+"""
+
+from __future__ import annotations
+
+from .aggregate import (
+    AggregateHistory,
+    Aggregates,
+    HashStats,
+    aggregate_exact,
+    aggregate_hashed,
+    recentre,
+)
+from .field import StrokeField, StrokeGeometry, key32, pack_id, seed_set, stroke_geometry, unpack_id
+from .gather import FieldInputs, Fragments, field_inputs, gather_fragments, layer_scale, tam_ink
+from .pipeline import PipelineResult, TamissParams, run_pipeline
+from .raster import BRUSHES, brush_texture, rasterize_strips
+from .strokes import EXTENTS, Strips, centreline, drawn_segments, extrude, keep_mask
+from .style import TamissStyle
+from .tam import TamStyle
+
+__all__ = [
+    "TamissStyle",
+    "TamStyle",
+    "TamissParams",
+    "PipelineResult",
+    "run_pipeline",
+    "StrokeField",
+    "StrokeGeometry",
+    "stroke_geometry",
+    "seed_set",
+    "pack_id",
+    "unpack_id",
+    "key32",
+    "FieldInputs",
+    "Fragments",
+    "field_inputs",
+    "gather_fragments",
+    "tam_ink",
+    "layer_scale",
+    "Aggregates",
+    "HashStats",
+    "aggregate_exact",
+    "aggregate_hashed",
+    "recentre",
+    "AggregateHistory",
+    "EXTENTS",
+    "Strips",
+    "keep_mask",
+    "drawn_segments",
+    "centreline",
+    "extrude",
+    "BRUSHES",
+    "brush_texture",
+    "rasterize_strips",
+]

@@ -1,0 +1,306 @@
+"""Aggregation of fragments by stroke id (TAMISS sec. 3.1 "summation", sec. 4).
+
+Two routes to the same per-stroke sums:
+
+* :func:`aggregate_exact` groups fragments by their 64-bit id (a sort; the CPU reference).
+* :func:`aggregate_hashed` is the paper's GPU route: fragments are routed by double hashing of a
+  32-bit key of the id into a fixed-size table (:class:`refnpr.formulas.tamiss.StrokeHashTable`:
+  last frame's table read-only, this frame's write-only, swapped after the frame) and summed per
+  slot. As a GPU would, each slot also min/max-blends the keys (and, here, the ids) it received;
+  a slot that received more than one stroke this frame ("contested": new strokes that claimed the
+  same empty slot) is skipped for the frame, so colliding new strokes appear one frame later.
+
+Both follow the formula layer's two-pass scheme (``refnpr.formulas.tamiss.fit_fragments``): min/max
+of t and of (x, y) per stroke, then the 15 regressors of each fragment in the centred parameter
+s = normalize_t(t, t_min, t_max) and relative to the centre of the stroke's fragment bounding box,
+summed in the fit dtype (float32 sums model GPU blending).
+
+:class:`AggregateHistory` averages aggregates over the last frames (the paper's proposal against
+jitter, sec. 4.1). Each frame's sums are in its own normalization (t range, origin), so before
+averaging they are re-expressed in a common one by :func:`recentre` (the binomial expansion of the
+affine change of parameter s' = alpha s + beta, benign because the normalizations of consecutive
+frames are close); the history works in float64.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, replace
+from math import comb
+
+import numpy as np
+
+from refnpr.formulas.tamiss import (
+    StrokeHashTable,
+    aggregate,
+    fragment_regressors,
+    normalize_t,
+)
+
+from .field import key32
+from .gather import Fragments
+
+__all__ = [
+    "Aggregates",
+    "HashStats",
+    "aggregate_exact",
+    "aggregate_hashed",
+    "recentre",
+    "AggregateHistory",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class HashStats:
+    """What happened to one frame's strokes in the hash table.
+
+    Attributes
+    ----------
+    table_size : int
+    n_strokes : distinct stroke ids in the frame
+    n_found : ids found in last frame's table
+    n_claimed : ids that reached an empty slot first (new or moved strokes)
+    n_delayed : claimants whose id lost the write race (enter the table next frame)
+    n_contested : strokes whose slot received another stroke's fragments this frame (not drawn
+        this frame; includes the winners of the races)
+    n_lost : strokes that found no slot within ``max_probes`` (not drawn)
+    n_aliased : strokes sharing their 32-bit key with another stroke of the frame
+    occupancy : fraction of the new table's slots in use
+    """
+
+    table_size: int
+    n_strokes: int
+    n_found: int
+    n_claimed: int
+    n_delayed: int
+    n_contested: int
+    n_lost: int
+    n_aliased: int
+    occupancy: float
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True, eq=False)
+class Aggregates:
+    """Per-stroke sums (the aggregate texture's texels), S strokes sorted by id.
+
+    Attributes
+    ----------
+    stroke_ids : (S,) int64
+    count : (S,) int64, fragments per stroke
+    t_min, t_max : (S,) fit dtype, range of t
+    origin : (S, 2) fit dtype, centre of the fragments' bounding box (subtracted from x, y)
+    moments : (S, 15) fit dtype, sums of ``fragment_regressors(s, x - o_x, y - o_y)``
+    hash_stats : HashStats or None (hashed route only)
+    """
+
+    stroke_ids: np.ndarray
+    count: np.ndarray
+    t_min: np.ndarray
+    t_max: np.ndarray
+    origin: np.ndarray
+    moments: np.ndarray
+    hash_stats: HashStats | None = None
+
+    def __len__(self) -> int:
+        return int(self.stroke_ids.shape[0])
+
+    @property
+    def dtype(self) -> np.dtype:
+        return self.moments.dtype
+
+    def take(self, idx) -> Aggregates:
+        """The strokes at ``idx`` (index or bool array)."""
+        return replace(
+            self,
+            stroke_ids=self.stroke_ids[idx],
+            count=self.count[idx],
+            t_min=self.t_min[idx],
+            t_max=self.t_max[idx],
+            origin=self.origin[idx],
+            moments=self.moments[idx],
+        )
+
+    def astype(self, dtype) -> Aggregates:
+        """The same sums in another float dtype."""
+        dt = np.dtype(dtype)
+        return replace(
+            self,
+            t_min=self.t_min.astype(dt),
+            t_max=self.t_max.astype(dt),
+            origin=self.origin.astype(dt),
+            moments=self.moments.astype(dt),
+        )
+
+
+def _sums(keys, t, x, y, dtype):
+    """Aggregates over groups of ``keys`` (int): (keys, count, lo, hi, origin, M)."""
+    order = np.argsort(keys, kind="stable")
+    keys, t, x, y = keys[order], t[order], x[order], y[order]  # later sorts are then O(n)
+    t_ = t.astype(dtype)
+    xy = np.stack([x, y], axis=-1).astype(dtype)
+    uid, lo = aggregate(keys, t_, op="min")  # min blending pass
+    _, hi = aggregate(keys, t_, op="max")  # max blending pass
+    _, mn = aggregate(keys, xy, op="min")
+    _, mx = aggregate(keys, xy, op="max")
+    origin = (mn + mx) * dtype.type(0.5)
+    inv = np.searchsorted(uid, keys)
+    s = normalize_t(t_, lo[inv], hi[inv])
+    R = fragment_regressors(s, xy[:, 0] - origin[inv, 0], xy[:, 1] - origin[inv, 1])
+    _, M = aggregate(keys, R, op="sum")  # additive blending pass
+    count = np.bincount(inv, minlength=uid.size).astype(np.int64)
+    return uid, count, lo, hi, origin, M
+
+
+def aggregate_exact(frags: Fragments, *, dtype=np.float32) -> Aggregates:
+    """Exact per-stroke aggregates of a frame's fragments (group by id)."""
+    dtype = np.dtype(dtype)
+    uid, count, lo, hi, origin, M = _sums(frags.id, frags.t, frags.x, frags.y, dtype)
+    return Aggregates(uid, count, lo, hi, origin, M)
+
+
+def aggregate_hashed(frags: Fragments, table: StrokeHashTable, *, dtype=np.float32) -> Aggregates:
+    """Aggregates through the double-hashed table (routes one frame and swaps ``table``).
+
+    Fragments are summed per slot; slots that received more than one stroke this frame are
+    dropped (see module docstring). Returned strokes are sorted by id, like
+    :func:`aggregate_exact`, and carry :class:`HashStats` in ``hash_stats``.
+    """
+    dtype = np.dtype(dtype)
+    keys = key32(frags.id)
+    route = table.route_frame(keys)
+    slot = route.fragment_slot
+    kept = slot >= 0
+    ids_k = frags.id[kept]
+    slot_k = slot[kept]
+    uid, count, lo, hi, origin, M = _sums(
+        slot_k, frags.t[kept], frags.x[kept], frags.y[kept], dtype
+    )
+    _, kmin = aggregate(slot_k, keys[kept].astype(np.float64), op="min")
+    _, kmax = aggregate(slot_k, keys[kept].astype(np.float64), op="max")
+    # the stroke id of each slot (its first fragment's); exact ids decide contests below
+    order = np.argsort(slot_k, kind="stable")
+    first = ids_k[order][np.searchsorted(slot_k[order], uid)]
+    single_key = kmin == kmax  # what a GPU can see: one key blended into the slot
+    # strokes per slot among this frame's distinct ids
+    sid_all = np.unique(frags.id)
+    sid_slot = route.slot[np.searchsorted(route.stroke_ids, key32(sid_all))]
+    per_slot = np.bincount(sid_slot[sid_slot >= 0], minlength=table.size)
+    contested_slots = uid[per_slot[uid] > 1]
+    n_contested = int(np.sum(per_slot[contested_slots]))
+    _, key_counts = np.unique(key32(sid_all), return_counts=True)
+    n_aliased = int(np.sum(key_counts[key_counts > 1]))
+    valid = single_key & (per_slot[uid] == 1)
+    stats = HashStats(
+        table_size=table.size,
+        n_strokes=int(sid_all.size),
+        n_found=int(route.found.sum()),
+        n_claimed=int(np.sum(~route.found & ~route.lost)),
+        n_delayed=route.n_delayed,
+        n_contested=n_contested,
+        n_lost=int(np.sum(route.lost)),
+        n_aliased=n_aliased,
+        occupancy=table.occupancy,
+    )
+    sel = np.flatnonzero(valid)
+    ids_out = first[sel]
+    order_out = sel[np.argsort(ids_out, kind="stable")]
+    return Aggregates(
+        stroke_ids=first[order_out],
+        count=count[order_out],
+        t_min=lo[order_out],
+        t_max=hi[order_out],
+        origin=origin[order_out],
+        moments=M[order_out],
+        hash_stats=stats,
+    )
+
+
+def recentre(moments, t_min, t_max, origin, new_t_min, new_t_max, new_origin) -> np.ndarray:
+    """Re-express centred sums in another normalization (all float64, per stroke).
+
+    With t = c + h s (c, h: centre and half-width of [t_min, t_max]) the new parameter is
+    s' = (t - c') / h' = alpha s + beta, alpha = h / h', beta = (c - c') / h', so
+    sum s'^m = sum_j C(m, j) alpha^j beta^(m-j) sum s^j, likewise for the sums weighted by
+    x - o, and sum s'^m (x - o') = sum s'^m (x - o) + (o - o') sum s'^m. Where h' = 0, s' = 0.
+
+    Parameters
+    ----------
+    moments : (S, 15); t_min, t_max, new_t_min, new_t_max : (S,); origin, new_origin : (S, 2)
+
+    Returns
+    -------
+    (S, 15) float64
+    """
+    M = np.asarray(moments, dtype=np.float64)
+    c = 0.5 * (np.asarray(t_min, np.float64) + np.asarray(t_max, np.float64))
+    h = 0.5 * (np.asarray(t_max, np.float64) - np.asarray(t_min, np.float64))
+    c2 = 0.5 * (np.asarray(new_t_min, np.float64) + np.asarray(new_t_max, np.float64))
+    h2 = 0.5 * (np.asarray(new_t_max, np.float64) - np.asarray(new_t_min, np.float64))
+    ok = h2 > 0
+    alpha = np.where(ok, h / np.where(ok, h2, 1.0), 0.0)
+    beta = np.where(ok, (c - c2) / np.where(ok, h2, 1.0), 0.0)
+    do = np.asarray(origin, np.float64) - np.asarray(new_origin, np.float64)
+    out = np.zeros_like(M)
+
+    def power(m, base):  # sum s'^m w from sum s^j w = base[:, j]
+        acc = np.zeros(M.shape[0])
+        for j in range(m + 1):
+            acc = acc + comb(m, j) * alpha**j * beta ** (m - j) * base[:, j]
+        return acc
+
+    for m in range(7):
+        out[:, m] = power(m, M[:, 0:7])
+    for m in range(4):
+        out[:, 7 + m] = power(m, M[:, 7:11]) + do[:, 0] * out[:, m]
+        out[:, 11 + m] = power(m, M[:, 11:15]) + do[:, 1] * out[:, m]
+    return out
+
+
+class AggregateHistory:
+    """Average aggregates over the last ``frames`` frames, per stroke id (sec. 4.1's proposal).
+
+    :meth:`push` takes a frame's :class:`Aggregates` and returns the averaged aggregates of the
+    strokes of *that* frame (float64): t range and origin are averaged over the frames in the
+    window in which the stroke appeared, each frame's sums are :func:`recentre`-d to that averaged
+    normalization and averaged. Averaging lags true motion by about (frames - 1) / 2 frames.
+    """
+
+    def __init__(self, frames: int = 4):
+        if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or frames < 1:
+            raise ValueError(f"frames: expected an integer >= 1, got {frames!r}")
+        self.frames = int(frames)
+        self._window: deque = deque(maxlen=self.frames)
+
+    def push(self, agg: Aggregates) -> Aggregates:
+        agg = agg.astype(np.float64)
+        self._window.append(agg)
+        ids = agg.stroke_ids
+        n = ids.size
+        hits = np.zeros(n)
+        acc_lo = np.zeros(n)
+        acc_hi = np.zeros(n)
+        acc_o = np.zeros((n, 2))
+        found = []
+        for past in self._window:
+            if past.stroke_ids.size == 0:
+                continue
+            pos = np.minimum(np.searchsorted(past.stroke_ids, ids), past.stroke_ids.size - 1)
+            hit = past.stroke_ids[pos] == ids
+            acc_lo[hit] += past.t_min[pos[hit]]
+            acc_hi[hit] += past.t_max[pos[hit]]
+            acc_o[hit] += past.origin[pos[hit]]
+            hits += hit
+            found.append((past, pos, hit))
+        hits = np.maximum(hits, 1.0)
+        lo, hi, origin = acc_lo / hits, acc_hi / hits, acc_o / hits[:, None]
+        acc_m = np.zeros((n, 15))
+        for past, pos, hit in found:
+            i = pos[hit]
+            acc_m[hit] += recentre(
+                past.moments[i], past.t_min[i], past.t_max[i], past.origin[i],
+                lo[hit], hi[hit], origin[hit],
+            )  # fmt: skip
+        return replace(agg, t_min=lo, t_max=hi, origin=origin, moments=acc_m / hits[:, None])

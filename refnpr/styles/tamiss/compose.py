@@ -1,0 +1,73 @@
+"""What the ``tam`` and ``tamiss`` styles share: channels, colours and compositing ink over a base."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._common import rgba_from
+from ..base import ShadeContext, Style, style_from_spec
+
+__all__ = ["check_color", "field_channels", "base_style", "composite_ink"]
+
+
+def check_color(name: str, value: Any) -> tuple[float, float, float] | None:
+    """A linear RGB triple in [0, 1] (a single number means grey); None passes through."""
+    if value is None:
+        return None
+    vals = [value] * 3 if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+    try:
+        c = np.asarray(vals, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected 3 numbers in [0, 1], got {value!r}") from None
+    if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
+        raise ValueError(f"{name}: expected 3 numbers in [0, 1] (linear RGB), got {value!r}")
+    return tuple(float(x) for x in c)
+
+
+def field_channels(scene: Any, constant_tone: float | None) -> set[str]:
+    """G-buffer channels the stroke field reads (tone needs normals, point lights positions)."""
+    req = {"uv", "duv_dx", "duv_dy", "tri_id", "mesh_id"}
+    if constant_tone is None:
+        req.add("normal")
+        if any(light.kind == "point" for light in scene.lights):
+            req.add("position")
+    return req
+
+
+def base_style(base: Any) -> Style | None:
+    """The style drawn under the strokes (None: none)."""
+    return None if base is None else style_from_spec(base)
+
+
+def composite_ink(
+    ctx: ShadeContext,
+    ink: np.ndarray,
+    ink_color: tuple[float, float, float],
+    *,
+    base: Style | None,
+    fill: tuple[float, float, float] | None,
+) -> np.ndarray:
+    """(nH, nW, 4) float32 straight-alpha RGBA: ink (coverage ``ink``) over the base style, or over
+    the ``fill`` colour on covered samples, or over nothing (alpha = ink: the scene background
+    shows through, also where strokes run past the silhouette)."""
+    shape = ink.shape
+    if base is not None:
+        under = np.asarray(base.shade(ctx), dtype=np.float64)
+    elif fill is not None:
+        under = rgba_from(np.asarray(fill), ctx.mask).astype(np.float64)
+    else:
+        under = np.zeros(shape + (4,))
+    a = np.clip(ink, 0.0, 1.0)
+    a_b = under[..., 3]
+    alpha = a + a_b * (1.0 - a)
+    premult = (
+        np.asarray(ink_color)[None, None, :] * a[..., None]
+        + under[..., :3] * (a_b * (1.0 - a))[..., None]
+    )
+    rgb = np.divide(
+        premult, alpha[..., None], out=np.zeros_like(premult), where=alpha[..., None] > 0
+    )
+    out = np.concatenate([np.clip(rgb, 0.0, 1.0), alpha[..., None]], axis=-1)
+    return out.astype(np.float32)

@@ -1,0 +1,273 @@
+"""Per-stroke fits, the drop rule, drawn extents and image-space extrusion (TAMISS sec. 3.2, 4).
+
+Fit: ``refnpr.formulas.tamiss.fit_strokes`` on the aggregates (four CG iterations, t centred and
+scaled, float32 or float64), giving x(t), y(t) and the visibility v(t) with the zero prior.
+
+Drop rule (:func:`keep_mask`): a stroke is drawn only if it has at least ``min_fragments``
+fragments (never fewer than 4, the cubic's unknowns) and its fragments span at least
+``min_t_span`` of the stroke (t_max - t_min), and its fitted coefficients are finite.
+
+Extent (:func:`drawn_segments`), in stroke parameter t:
+
+* ``"visible"``: the (at most two) intervals where v(t) >= threshold, inside [t_min, t_max];
+* ``"range"``: [t_min, t_max];
+* ``"stroke"``: the whole stroke [0, 1] (overdraw across outlines and gaps, Figure 4);
+* ``"overdraw"``: the visible intervals with the first start and the last end run on by up to
+  ``overdraw`` pixels, within [0, 1] (strokes cross silhouettes, borders and density cuts a
+  little, as a pen does, Figure 4; hidden gaps stay open).
+
+Outside [t_min, t_max] the curve is continued along the end tangent at the mean speed of the fit
+over [t_min, t_max] (a cubic extrapolated far from its data curls; a tangent line does not).
+
+Extrusion (:func:`extrude`): ``samples`` vertex pairs per drawn interval, half width
+w f / 2 * taper profile (f: the stroke's width factor from its id), a perpendicular wobble
+A sin(2 pi (k t + phi)) with amplitude and phase from the stroke id, and an end jitter that moves
+each outer end by up to ``end_jitter`` / 2 of the drawn length, also from the id: the same
+stroke looks the same in every frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from refnpr.formulas.tamiss import StrokeFit, StrokeStrip, fit_strokes
+
+from .aggregate import Aggregates
+from .field import SALT_WIDTH, StrokeField, hash01
+
+__all__ = [
+    "EXTENTS",
+    "SALT_WOBBLE_AMP",
+    "SALT_WOBBLE_PHASE",
+    "SALT_END_A",
+    "SALT_END_B",
+    "fit_aggregates",
+    "keep_mask",
+    "drawn_segments",
+    "mean_speed",
+    "centreline",
+    "Strips",
+    "extrude",
+    "take_fit",
+]
+
+EXTENTS = ("visible", "range", "stroke", "overdraw")
+SALT_WOBBLE_AMP, SALT_WOBBLE_PHASE, SALT_END_A, SALT_END_B = 11, 12, 13, 14
+
+
+def fit_aggregates(agg: Aggregates, *, iterations: int = 4, prior_weight: float = 1.0) -> StrokeFit:
+    """Batched cubic fits of x(t), y(t) and v(t) (sec. 3.2, eq. 1) in the aggregates' dtype."""
+    if len(agg) == 0:
+        z = np.zeros((0, 4), dtype=agg.dtype)
+        e = np.zeros(0, dtype=agg.dtype)
+        return StrokeFit(z, z, z, e, e, e, prior_weight=prior_weight)
+    return fit_strokes(
+        agg.moments,
+        agg.t_min,
+        agg.t_max,
+        origin=agg.origin,
+        iterations=iterations,
+        basis="legendre",
+        prior_weight=prior_weight,
+    )
+
+
+def keep_mask(
+    agg: Aggregates, fit: StrokeFit, *, min_fragments: int = 6, min_t_span: float = 0.05
+) -> np.ndarray:
+    """(S,) bool: count >= max(min_fragments, 4), t_max - t_min >= min_t_span, finite fit."""
+    span = agg.t_max.astype(np.float64) - agg.t_min.astype(np.float64)
+    finite = np.all(np.isfinite(fit.c_x), -1) & np.all(np.isfinite(fit.c_y), -1)
+    return (agg.count >= max(int(min_fragments), 4)) & (span >= min_t_span) & finite
+
+
+def mean_speed(fit: StrokeFit) -> np.ndarray:
+    """(S,) float64 pixels per unit t of the fitted curve over [t_min, t_max] (17-point polyline
+    length / (t_max - t_min); 0 for a single t)."""
+    lo = np.asarray(fit.t_min, dtype=np.float64).reshape(-1, 1)
+    hi = np.asarray(fit.t_max, dtype=np.float64).reshape(-1, 1)
+    ts = lo + (hi - lo) * np.linspace(0.0, 1.0, 17)
+    px, py = (np.asarray(a, dtype=np.float64) for a in fit.evaluate(ts))
+    arc = np.sum(np.hypot(np.diff(px, axis=1), np.diff(py, axis=1)), axis=1)
+    span = (hi - lo)[:, 0]
+    return np.where(span > 0, arc / np.where(span > 0, span, 1.0), 0.0)
+
+
+def drawn_segments(
+    fit: StrokeFit,
+    extent: str = "visible",
+    *,
+    threshold: float | None = None,
+    overdraw: float = 6.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Drawn t intervals per stroke: ``(S, 2, 2)`` float64 (start, end), NaN if absent, and
+    ``(S,)`` int64 counts (see module docstring for the extents). ``overdraw`` (pixels) bounds
+    how far ``"overdraw"`` runs the outer ends on (converted to t with :func:`mean_speed`)."""
+    S = fit.batch_shape[0] if fit.batch_shape else 1
+    lo = np.asarray(fit.t_min, dtype=np.float64).reshape(S)
+    hi = np.asarray(fit.t_max, dtype=np.float64).reshape(S)
+    seg = np.full((S, 2, 2), np.nan)
+    count = np.ones(S, dtype=np.int64)
+    if extent == "range":
+        seg[:, 0, 0], seg[:, 0, 1] = lo, hi
+    elif extent == "stroke":
+        seg[:, 0, 0], seg[:, 0, 1] = 0.0, 1.0
+    else:
+        vis, count = fit.visible_segments(threshold) if S else (seg, np.zeros(0, np.int64))
+        seg = np.asarray(vis, dtype=np.float64).reshape(S, 2, 2).copy()
+        count = np.asarray(count, dtype=np.int64).reshape(S)
+        if extent == "overdraw":
+            speed = mean_speed(fit)
+            dt = np.where(speed > 0, overdraw / np.where(speed > 0, speed, 1.0), 0.0)
+            rows = np.flatnonzero(count >= 1)
+            last = count[rows] - 1
+            seg[rows, 0, 0] = np.maximum(0.0, seg[rows, 0, 0] - dt[rows])
+            seg[rows, last, 1] = np.minimum(1.0, seg[rows, last, 1] + dt[rows])
+    return seg, count
+
+
+def _unit(dx, dy, fx, fy):
+    n = np.hypot(dx, dy)
+    ok = n > 1e-12
+    fn = np.hypot(fx, fy)
+    fok = fn > 1e-12
+    ux = np.where(ok, dx / np.where(ok, n, 1), np.where(fok, fx / np.where(fok, fn, 1), 1.0))
+    uy = np.where(ok, dy / np.where(ok, n, 1), np.where(fok, fy / np.where(fok, fn, 1), 0.0))
+    return ux, uy
+
+
+def centreline(fit: StrokeFit, t) -> tuple[np.ndarray, ...]:
+    """Points and unit tangents of the drawn curve at t, ``(S, K)`` each: x, y, tx, ty (float64).
+
+    r(t) from the fit on [t_min, t_max]; outside, the tangent line at the nearer end, traversed
+    at the fit's mean speed over [t_min, t_max] (:func:`mean_speed`).
+    """
+    t = np.asarray(t, dtype=np.float64)
+    lo = np.asarray(fit.t_min, dtype=np.float64)[:, None]
+    hi = np.asarray(fit.t_max, dtype=np.float64)[:, None]
+    tc = np.clip(t, lo, hi)
+    x, y = (np.asarray(a, dtype=np.float64) for a in fit.evaluate(tc))
+    dx, dy = (np.asarray(a, dtype=np.float64) for a in fit.derivative(tc))
+    speed = mean_speed(fit)[:, None]
+    (x0, y0), (x1, y1) = fit.evaluate(lo), fit.evaluate(hi)
+    chord_x = np.asarray(x1, dtype=np.float64) - np.asarray(x0, dtype=np.float64)
+    chord_y = np.asarray(y1, dtype=np.float64) - np.asarray(y0, dtype=np.float64)
+    tx, ty = _unit(dx, dy, chord_x, chord_y)
+    below = t < lo
+    above = t > hi
+    if np.any(below | above):
+        d_out = np.where(below, t - lo, np.where(above, t - hi, 0.0)) * speed
+        x = x + d_out * tx
+        y = y + d_out * ty
+    return x, y, tx, ty
+
+
+@dataclass(frozen=True, eq=False)
+class Strips:
+    """Image-space strokes: one triangle strip per drawn interval ("piece").
+
+    Attributes
+    ----------
+    strip : StrokeStrip, ``left``/``right`` (P, K, 2) float64 pixels, ``t`` (P, K) stroke t
+    stroke : (P,) int64, index of the piece's stroke in the fitted batch
+    ids : (P,) int64, stroke id
+    width : (P,) float64, full width in pixels (before taper)
+    """
+
+    strip: StrokeStrip
+    stroke: np.ndarray
+    ids: np.ndarray
+    width: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.ids.shape[0])
+
+
+def extrude(
+    fit: StrokeFit,
+    ids: np.ndarray,
+    segments: np.ndarray,
+    field: StrokeField,
+    *,
+    width: float = 1.5,
+    taper: float = 0.2,
+    wobble: float = 0.0,
+    wobble_frequency: float = 1.5,
+    end_jitter: float = 0.0,
+    samples: int = 16,
+) -> Strips:
+    """Triangle strips of the drawn intervals (see module docstring).
+
+    Parameters
+    ----------
+    fit : StrokeFit of S strokes; ids : (S,) int64; segments : (S, 2, 2) from
+    :func:`drawn_segments` (NaN: no interval)
+    field : StrokeField (its ``width_jitter`` sets the per-stroke width factor)
+    width : px; taper : fraction of each end over which the width ramps from 0, [0, 0.5]
+    wobble : amplitude in px; wobble_frequency : cycles per unit t
+    end_jitter : fraction of the drawn length by which outer ends may move
+    samples : vertex pairs per interval (>= 2)
+    """
+    S = int(np.asarray(ids).shape[0])
+    ids = np.asarray(ids, dtype=np.int64)
+    seg = np.asarray(segments, dtype=np.float64).reshape(S, 2, 2)
+    has = ~np.isnan(seg[:, :, 0])
+    # end jitter on the outermost ends of each stroke
+    if end_jitter > 0 and S:
+        n_seg = has.sum(axis=1)
+        first_start = seg[:, 0, 0]
+        last = np.maximum(n_seg - 1, 0)
+        last_end = seg[np.arange(S), last, 1]
+        span = np.where(n_seg > 0, last_end - first_start, 0.0)
+        ja = end_jitter * (2.0 * hash01(ids, SALT_END_A) - 1.0) * 0.5 * span
+        jb = end_jitter * (2.0 * hash01(ids, SALT_END_B) - 1.0) * 0.5 * span
+        seg = seg.copy()
+        seg[:, 0, 0] = np.minimum(first_start - ja, seg[:, 0, 1] - 1e-6)
+        seg[np.arange(S), last, 1] = np.maximum(last_end + jb, seg[np.arange(S), last, 0] + 1e-6)
+    stroke, slot = np.nonzero(has)
+    P = stroke.size
+    K = int(samples)
+    u = np.linspace(0.0, 1.0, K)
+    t0 = seg[stroke, slot, 0][:, None]
+    t1 = seg[stroke, slot, 1][:, None]
+    t = t0 + (t1 - t0) * u  # (P, K)
+    sub = take_fit(fit, stroke)
+    x, y, tx, ty = centreline(sub, t) if P else (np.zeros((0, K)),) * 4
+    nx, ny = -ty, tx  # left normal
+    wf = 1.0 + field.width_jitter * (2.0 * hash01(ids, SALT_WIDTH) - 1.0)
+    w = width * wf[stroke]
+    if taper > 0:
+        profile = np.minimum(1.0, np.minimum(u, 1.0 - u) / taper)
+    else:
+        profile = np.ones_like(u)
+    h = 0.5 * w[:, None] * profile[None, :]
+    if wobble > 0 and P:
+        amp = wobble * (0.5 + hash01(ids, SALT_WOBBLE_AMP))[stroke][:, None]
+        phase = hash01(ids, SALT_WOBBLE_PHASE)[stroke][:, None]
+        off = amp * np.sin(2.0 * np.pi * (wobble_frequency * t + phase))
+        x = x + off * nx
+        y = y + off * ny
+    left = np.stack([x + h * nx, y + h * ny], axis=-1)
+    right = np.stack([x - h * nx, y - h * ny], axis=-1)
+    return Strips(
+        strip=StrokeStrip(left=left, right=right, t=t),
+        stroke=stroke.astype(np.int64),
+        ids=ids[stroke],
+        width=w,
+    )
+
+
+def take_fit(fit: StrokeFit, idx: np.ndarray) -> StrokeFit:
+    """The strokes ``idx`` of a batched fit."""
+    return StrokeFit(
+        c_x=fit.c_x[idx],
+        c_y=fit.c_y[idx],
+        c_v=fit.c_v[idx],
+        t_min=np.asarray(fit.t_min)[idx],
+        t_max=np.asarray(fit.t_max)[idx],
+        count=np.asarray(fit.count)[idx],
+        basis=fit.basis,
+        prior_weight=fit.prior_weight,
+    )

@@ -1,0 +1,165 @@
+"""Validated parameters of the ``threshold`` style (Veryovka 2002); all TOML-representable."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from .._common import check_choice, check_count, check_number
+
+__all__ = ["SOURCES", "FILTERS", "CLAHE_LEVELS", "ThresholdParams", "parse_params"]
+
+SOURCES = ("constant", "image", "lines", "stipple")
+FILTERS = ("none", "pcf", "analytic")
+CLAHE_LEVELS = ("all", "base", "none")
+
+
+def _bool(name: str, value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise TypeError(f"{name}: expected a bool (true/false), got {value!r}")
+    return bool(value)
+
+
+def _numbers(name: str, value: Any, *, lo: float, hi: float, what: str) -> tuple[float, ...]:
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
+        raise TypeError(f"{name}: expected a list of numbers ({what}), got {value!r}")
+    out = tuple(check_number(f"{name}[{i}]", x, lo=lo, hi=hi) for i, x in enumerate(value))
+    if not out:
+        raise ValueError(f"{name}: expected at least one value ({what}), got an empty list")
+    return out
+
+
+@dataclass(frozen=True)
+class ThresholdParams:
+    """Parameters of :class:`refnpr.styles.threshold.ThresholdStyle` (see its docstring)."""
+
+    source: str = "lines"
+    n: int = 1
+    t: float = 0.5
+    specular: bool = True
+    specular_threshold: str | float = "texture"
+    filter: str = "none"
+    samples: int = 4
+    strength: float = 1.0
+    facing_fade: float = 0.0
+    facing_power: float = 1.0
+    tone_fade: tuple[float, float] = (0.0, 0.0)
+    scale: float = 1.0
+    # image threshold textures (sec. 3.1)
+    texture: str | None = None
+    window: int = 16
+    clip_limit: float = 0.01
+    nbins: int = 256
+    rank_equalize: bool = True
+    clahe_levels: str = "all"
+    tone_correct: bool = False
+    pcf_levels: int = 2
+    lod_bias: float = 0.0
+    # procedural lines and dots (sec. 3.2)
+    period: float = 8.0
+    angles: tuple[float, ...] = (0.0,)
+    onsets: tuple[float, ...] | None = None
+    uniform: bool = False
+    multiscale: bool = True
+    noise: float = 0.0
+    noise_scale: float = 4.0
+    noise_seed: int = 0
+
+    def as_dict(self) -> dict[str, Any]:
+        """TOML-friendly dict (tuples as lists, None values dropped)."""
+        out = {}
+        for k, v in asdict(self).items():
+            if v is None:
+                continue
+            out[k] = list(v) if isinstance(v, tuple) else v
+        return out
+
+
+def parse_params(**kw: Any) -> ThresholdParams:
+    """Validate keyword parameters into :class:`ThresholdParams` (clear errors naming each)."""
+    defaults = ThresholdParams()
+    unknown = set(kw) - set(asdict(defaults))
+    if unknown:
+        raise TypeError(
+            f"unknown parameter(s) {sorted(unknown)}; valid parameters: {sorted(asdict(defaults))}"
+        )
+    p = {**asdict(defaults), **kw}
+    source = check_choice("source", p["source"], SOURCES)
+    filt = check_choice("filter", p["filter"], FILTERS)
+    if filt == "analytic" and source != "lines":
+        raise ValueError(
+            f"filter: 'analytic' filtering exists for source='lines' only (got source={source!r});"
+            " use filter='pcf' for image and stipple thresholds"
+        )
+    samples = check_count("samples", p["samples"], lo=1, hi=256)
+    if math.isqrt(samples) ** 2 != samples:
+        raise ValueError(
+            f"samples: expected a square number of threshold samples (1, 4, 9, 16, ...) laid out "
+            f"on a k x k grid over the footprint, got {samples}"
+        )
+    spec_t = p["specular_threshold"]
+    if isinstance(spec_t, str):
+        if spec_t != "texture":
+            raise ValueError(
+                f"specular_threshold: expected 'texture' or a number in [0, 1], got {spec_t!r}"
+            )
+    else:
+        spec_t = check_number("specular_threshold", spec_t, lo=0.0, hi=1.0)
+    tone_fade = _numbers("tone_fade", p["tone_fade"], lo=0.0, hi=0.5, what="[dark, bright] widths")
+    if len(tone_fade) != 2:
+        raise ValueError(f"tone_fade: expected two widths [dark, bright], got {list(tone_fade)}")
+    texture = p["texture"]
+    if texture is not None and (not isinstance(texture, str) or not texture):
+        raise TypeError(
+            f"texture: expected a built-in texture name or an image path (str), got {texture!r}"
+        )
+    window = check_count("window", p["window"], lo=2, hi=4096)
+    clip_limit = check_number("clip_limit", p["clip_limit"], lo=0.0, lo_open=True, hi=1.0)
+    angles = _numbers("angles", p["angles"], lo=-360.0, hi=360.0, what="hatching angles, degrees")
+    onsets = p["onsets"]
+    if onsets is not None:
+        onsets = _numbers("onsets", onsets, lo=0.0, hi=1.0, what="onset intensity per angle")
+        if len(onsets) != len(angles):
+            raise ValueError(
+                f"onsets: expected one onset per angle ({len(angles)}), got {list(onsets)}"
+            )
+        if min(onsets) <= 0.0 or max(onsets) != 1.0:
+            raise ValueError(
+                f"onsets: expected values in (0, 1] whose largest is 1 (the first layer shows at "
+                f"every tone below white), got {list(onsets)}"
+            )
+    noise_seed = p["noise_seed"]
+    if isinstance(noise_seed, bool) or not isinstance(noise_seed, int):
+        raise TypeError(f"noise_seed: expected an integer, got {noise_seed!r}")
+    return ThresholdParams(
+        source=source,
+        n=check_count("n", p["n"], lo=1, hi=256),
+        t=check_number("t", p["t"], lo=0.0, hi=1.0),
+        specular=_bool("specular", p["specular"]),
+        specular_threshold=spec_t,
+        filter=filt,
+        samples=samples,
+        strength=check_number("strength", p["strength"], lo=0.0, hi=1.0),
+        facing_fade=check_number("facing_fade", p["facing_fade"], lo=0.0, hi=1.0),
+        facing_power=check_number("facing_power", p["facing_power"], lo=0.0, lo_open=True),
+        tone_fade=(tone_fade[0], tone_fade[1]),
+        scale=check_number("scale", p["scale"], lo=0.0, lo_open=True),
+        texture=texture,
+        window=window,
+        clip_limit=clip_limit,
+        nbins=check_count("nbins", p["nbins"], lo=2, hi=65536),
+        rank_equalize=_bool("rank_equalize", p["rank_equalize"]),
+        clahe_levels=check_choice("clahe_levels", p["clahe_levels"], CLAHE_LEVELS),
+        tone_correct=_bool("tone_correct", p["tone_correct"]),
+        pcf_levels=check_count("pcf_levels", p["pcf_levels"], lo=1, hi=2),
+        lod_bias=check_number("lod_bias", p["lod_bias"], lo=-16.0, hi=16.0),
+        period=check_number("period", p["period"], lo=0.0, lo_open=True),
+        angles=angles,
+        onsets=onsets,
+        uniform=_bool("uniform", p["uniform"]),
+        multiscale=_bool("multiscale", p["multiscale"]),
+        noise=check_number("noise", p["noise"], lo=0.0, hi=1.0),
+        noise_scale=check_number("noise_scale", p["noise_scale"], lo=0.0, lo_open=True),
+        noise_seed=int(noise_seed),
+    )

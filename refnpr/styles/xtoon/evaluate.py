@@ -1,0 +1,330 @@
+"""Evaluation of the X-Toon style on a G-buffer: which channels a configuration needs (the plan),
+per-vertex quantities (the paper's vertex shader) and per-sample tone, detail and normals.
+
+Everything is computed on the covered samples only, as flat float64 arrays ``(K, ...)``.
+
+Per-vertex quantities are interpolated perspective-correctly at the samples, either by the
+rasterizer (when the scene's meshes carry them as vertex attributes, see
+``XToonStyle.prepare_scene``) or here from ``tri_id`` and ``bary`` (the same formula). Names:
+``xtoon_d`` (D per vertex), ``xtoon_flow`` (screen displacement per vertex, pixels) and
+``xtoon_normal`` (the linear blend (1 - w) n + w n_abstract per vertex, unnormalized).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from refnpr.formulas import xtoon
+from refnpr.texture import sample_level
+
+from .detail import FLOW_BEHIND, DetailParams, detail_values, resolve_frame
+from .geometry import VertexGeometry, project_pixels
+from .params import WeightSpec
+from .shape import AbstractedNormals, abstract_normals, unit_rows
+
+__all__ = ["Config", "Plan", "plan", "vertex_values", "evaluate", "Evaluated"]
+
+_POSITION_MAPS = ("focus", "orientation", "highlight", "flow")
+
+
+@dataclass(frozen=True, eq=False)
+class Config:
+    """A validated X-Toon configuration (built by ``XToonStyle.__init__``)."""
+
+    texture: np.ndarray  # (rows, cols, 4) float32 RGBA, rows grow with D
+    detail: DetailParams
+    detail_mode: str
+    tone: str
+    light: int
+    shape: Any
+    weight: WeightSpec
+    shape_blend: str
+    shape_frame: str
+    shape_iterations: int
+    shape_objects: tuple[str, ...] | None
+    modulate: bool
+    weight_pyramid: Any = None
+    cache: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What a frame needs: G-buffer channels, per-vertex quantities and how they arrive."""
+
+    channels: frozenset[str]
+    vertex_names: tuple[str, ...]
+    carried: frozenset[str]  # vertex quantities the meshes carry as attributes
+
+
+def _map_channels(kind: str) -> set[str]:
+    if kind == "depth":
+        return {"depth"}
+    return {"position"} if kind in _POSITION_MAPS else set()
+
+
+def _light_of(cfg: Config, scene: Any):
+    if not scene.lights:
+        raise ValueError(
+            "light: X-Toon's tone is n.l of one light, but the scene has no lights; add a "
+            "[[light]] table to the scene"
+        )
+    if cfg.light >= len(scene.lights):
+        raise ValueError(
+            f"light: index {cfg.light} out of range; the scene has {len(scene.lights)} light(s) "
+            f"(use 0..{len(scene.lights) - 1})"
+        )
+    return scene.lights[cfg.light]
+
+
+def plan(cfg: Config, scene: Any) -> Plan:
+    """The channels and per-vertex quantities ``cfg`` needs for ``scene`` (nothing more)."""
+    kind = cfg.detail.kind
+    shaped = cfg.shape is not None
+    vertex_blend = shaped and cfg.shape_blend == "vertex"
+    channels = {"mesh_id"}
+    names: list[str] = []
+    if vertex_blend:
+        names.append("xtoon_normal")
+    else:
+        channels.add("normal")
+    if _light_of(cfg, scene).kind == "point":
+        channels.add("position")
+    if cfg.detail_mode == "pixel":
+        channels |= _map_channels(kind)
+    elif kind not in ("map", "none"):
+        names.append("xtoon_flow" if kind == "flow" else "xtoon_d")
+    bary = shaped and not vertex_blend  # the abstracted normal, interpolated per pixel
+    if bary and cfg.weight.kind == "detail":
+        channels |= _map_channels(kind)
+    if bary and cfg.weight.kind == "texture":
+        channels.add("uv")
+    meshes = scene.world_meshes()
+    carried = frozenset(n for n in names if all(n in m.attributes for m in meshes))
+    channels |= carried
+    if bary or set(names) - carried:
+        channels |= {"tri_id", "bary"}
+    return Plan(frozenset(channels), tuple(names), carried)
+
+
+def _abstract(cfg: Config, scene: Any) -> list[np.ndarray | None]:
+    meshes = scene.world_meshes()
+    if isinstance(cfg.shape, AbstractedNormals):
+        return cfg.shape.for_meshes(meshes)
+    key = tuple(id(m) for m in meshes)
+    hit = cfg.cache.get("abstract")
+    if hit is None or hit[0] != key:
+        an = abstract_normals(
+            scene,
+            cfg.shape,
+            objects=cfg.shape_objects,
+            frame=cfg.shape_frame,
+            iterations=cfg.shape_iterations,
+        )
+        hit = (key, an, meshes)  # keeps the meshes alive so their ids stay unique
+        cfg.cache["abstract"] = hit
+    return list(hit[1].normals)
+
+
+def _light_dirs(light: Any, points: np.ndarray | None) -> np.ndarray:
+    if light.kind == "point":
+        return unit_rows(np.asarray(light.position) - points)
+    return np.asarray(light.direction, dtype=np.float64)
+
+
+def _flow(points: np.ndarray, cfg: Config, camera: Any, width: int, height: int) -> np.ndarray:
+    """(K, 2) screen displacement in pixels since the previous camera (X-Toon sec. 5)."""
+    now, _ = project_pixels(points, camera, width, height)
+    before, _ = project_pixels(points, cfg.detail.prev_camera, width, height)
+    f = now - before
+    bad = ~np.all(np.isfinite(f), axis=1)
+    f[bad] = (FLOW_BEHIND, 0.0)  # behind either camera: no screen position, coarsest detail
+    return f
+
+
+def vertex_values(
+    cfg: Config, scene: Any, width: int, height: int, geom: VertexGeometry | None = None
+) -> dict[str, np.ndarray]:
+    """The per-vertex quantities of the plan, ``(N,)`` or ``(N, C)`` float64 over all vertices."""
+    names = plan(cfg, scene).vertex_names
+    if not names:
+        return {}
+    camera = scene.camera
+    geom = VertexGeometry.of(scene.world_meshes()) if geom is None else geom
+    p = geom.positions
+    n_v = unit_rows(geom.normals())
+    light = _light_dirs(_light_of(cfg, scene), p)
+    frame = resolve_frame(cfg.detail, scene, camera)
+    out: dict[str, np.ndarray] = {}
+
+    def d_at_vertices(normals: np.ndarray) -> np.ndarray:
+        flow = _flow(p, cfg, camera, width, height) if cfg.detail.kind == "flow" else None
+        return detail_values(
+            cfg.detail,
+            frame,
+            camera,
+            positions=p,
+            normals=normals,
+            light=light,
+            flow=flow,
+            count=len(p),
+        )
+
+    n_shade = n_v
+    if cfg.shape is not None:
+        parts = _abstract(cfg, scene)
+        n_abs = np.concatenate(
+            [a if a is not None else b for a, b in zip(parts, geom.split(n_v), strict=True)]
+        )
+        w: Any = cfg.weight.value
+        if cfg.weight.kind == "detail":
+            w = (1.0 - d_at_vertices(n_v))[:, None]  # local weight from the same attribute map
+        elif cfg.weight.kind != "global":
+            w = 0.0  # per-pixel weights: vertex D uses the mesh normals
+        blend = (1.0 - w) * n_v + w * n_abs  # sec. 4: linear blend in the vertex shader
+        if "xtoon_normal" in names:
+            out["xtoon_normal"] = blend
+        n_shade = unit_rows(blend)
+    if "xtoon_flow" in names:
+        out["xtoon_flow"] = _flow(p, cfg, camera, width, height)
+    if "xtoon_d" in names:
+        out["xtoon_d"] = d_at_vertices(n_shade)  # sec. 3.1: D per vertex, then interpolated
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluated:
+    """Per-sample results on the covered samples ``mask`` (flat arrays of length K)."""
+
+    mask: np.ndarray  # (nH, nW) bool
+    tone: np.ndarray  # (K,)
+    detail: np.ndarray  # (K,)
+    normal: np.ndarray  # (K, 3) unit shading normals
+    weight: np.ndarray | None  # (K,) shape weight where it varies, else None
+    rgba: np.ndarray  # (K, 4) texture value (straight alpha)
+
+
+def _sample_grid(arr: np.ndarray, gb: Any, name: str) -> np.ndarray:
+    nh, nw = gb.sample_shape
+    if arr.shape == (nh, nw):
+        return arr
+    if arr.shape == (gb.height, gb.width):
+        return np.repeat(np.repeat(arr, gb.n, axis=0), gb.n, axis=1)
+    raise ValueError(
+        f"{name}: map of shape {arr.shape} does not match the image: expected ({gb.height}, "
+        f"{gb.width}) per pixel or ({nh}, {nw}) per sample; render at the map's size"
+    )
+
+
+def _fresh(name: str, carried: np.ndarray, fresh: np.ndarray, mesh: Any) -> None:
+    a = np.asarray(carried, dtype=np.float64).reshape(fresh.shape)
+    if not np.allclose(a, fresh, rtol=1e-7, atol=1e-9):
+        raise ValueError(
+            f"{name}: the vertex attribute carried by mesh {mesh.name!r} does not match this "
+            "frame (camera, image size or style parameters changed); rebuild the scene with "
+            "XToonStyle.prepare_scene(scene, width=..., height=..., camera=...)"
+        )
+
+
+def evaluate(cfg: Config, ctx: Any) -> Evaluated:
+    """Tone, detail, shading normals and the 2D toon texture value at the covered samples."""
+    gb, scene = ctx.gb, ctx.scene
+    camera = scene.camera
+    pl = plan(cfg, scene)
+    mask = gb["mesh_id"] >= 0
+    k = int(mask.sum())
+
+    def at(channel: str) -> np.ndarray:
+        return np.asarray(gb[channel][mask], dtype=np.float64)
+
+    geom = None
+    if "tri_id" in pl.channels:
+        geom = VertexGeometry.of(scene.world_meshes())
+        tri, bary = gb["tri_id"][mask], gb["bary"][mask]
+    vals = vertex_values(cfg, scene, gb.width, gb.height, geom) if pl.vertex_names else {}
+    interp: dict[str, np.ndarray] = {}
+    for name, v in vals.items():
+        if name in pl.carried:
+            meshes = scene.world_meshes()
+            split = VertexGeometry.of(meshes).split(v)
+            for mesh, fresh in zip(meshes, split, strict=True):
+                _fresh(name, mesh.attributes[name], fresh, mesh)
+            interp[name] = at(name)
+        else:
+            interp[name] = geom.interpolate(v, tri, bary)
+
+    pos = at("position") if "position" in pl.channels else None
+    light = _light_dirs(_light_of(cfg, scene), pos)
+    frame = resolve_frame(cfg.detail, scene, camera)
+    user = None
+    if cfg.detail.kind == "map":
+        user = _sample_grid(cfg.detail.user_map, gb, "detail_map")[mask]
+
+    def d_at_pixels(normals: np.ndarray) -> np.ndarray:
+        kind = cfg.detail.kind
+        flow = _flow(pos, cfg, camera, gb.width, gb.height) if kind == "flow" else None
+        depth = at("depth") if kind == "depth" else None
+        return detail_values(
+            cfg.detail,
+            frame,
+            camera,
+            positions=pos,
+            depth=depth,
+            normals=normals,
+            light=light,
+            flow=flow,
+            user=user,
+            count=k,
+        )
+
+    weight = None
+    if cfg.shape is None:
+        n = unit_rows(at("normal"))
+    elif cfg.shape_blend == "vertex":
+        n = unit_rows(interp["xtoon_normal"])  # renormalized per pixel (sec. 4)
+    else:
+        n0 = unit_rows(at("normal"))
+        parts = _abstract(cfg, scene)
+        n_v = unit_rows(geom.normals())
+        n_abs = np.concatenate(
+            [a if a is not None else b for a, b in zip(parts, geom.split(n_v), strict=True)]
+        )
+        na = geom.interpolate(n_abs, tri, bary)
+        w = _pixel_weight(cfg, gb, mask, n0, d_at_pixels, at)
+        weight = None if np.ndim(w) == 0 else w
+        ok = np.linalg.norm(na, axis=1) > 0
+        na[~ok] = n0[~ok]
+        zero = np.linalg.norm(n0, axis=1) == 0
+        n0[zero] = np.where(ok[zero, None], na[zero], (0.0, 0.0, 1.0))
+        na[zero & ~ok] = (0.0, 0.0, 1.0)
+        n = xtoon.blend_normals(n0, na, w)  # per-pixel blend (refnpr option)
+
+    n_dot_l = np.sum(n * light, axis=-1)
+    if cfg.tone == "half_lambert":
+        tone = 0.5 * (n_dot_l + 1.0)  # half-Lambert (Valve): n.l mapped to [0, 1]
+    else:
+        tone = np.clip(n_dot_l, 0.0, 1.0)  # sec. 3: tone from n.l, clamped
+    if cfg.detail_mode == "vertex" and "xtoon_d" in interp:
+        detail = np.clip(interp["xtoon_d"], 0.0, 1.0)
+    elif cfg.detail_mode == "vertex" and "xtoon_flow" in interp:
+        f = interp["xtoon_flow"]
+        detail = detail_values(cfg.detail, frame, camera, flow=f)  # |interpolated flow| -> D
+    else:
+        detail = d_at_pixels(n)
+    rgba = xtoon.toon_lookup(cfg.texture, tone, detail)  # sec. 3: 2D toon texture lookup
+    return Evaluated(mask, tone, detail, n, weight, np.asarray(rgba, dtype=np.float64))
+
+
+def _pixel_weight(cfg, gb, mask, n0, d_at_pixels, at) -> Any:
+    """The shape weight at the samples: a scalar, or (K,) where it varies locally (sec. 5)."""
+    spec = cfg.weight
+    if spec.kind == "global":
+        return spec.value
+    if spec.kind == "detail":
+        return 1.0 - d_at_pixels(n0)  # same attribute map as the tone detail, mesh normals
+    if spec.kind == "texture":
+        uv = at("uv") * np.asarray(spec.uv_scale)
+        return np.clip(sample_level(cfg.weight_pyramid, uv, 0, dtype=np.float64), 0.0, 1.0)
+    return _sample_grid(spec.texture, gb, "shape_weight")[mask]

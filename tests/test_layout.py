@@ -1,0 +1,667 @@
+"""The package layout is the architecture (DESIGN.md, "Architecture"): checked, not remembered.
+
+* Every name of the documented public API imports from the same place it always has.
+* Imports point one way between the top-level packages of refnpr (formulas <- texture <- styles
+  <- render <- cli; raster depends on nothing but the numba flags), the papers' packages inside
+  ``styles`` and ``formulas`` do not import one another, and the module import graph has no
+  cycle. The checker is run on small synthetic trees too, so it is shown to fail when it should.
+* One package per paper: no flat ``_<paper>_*.py`` prefix modules are left.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+from pathlib import Path
+
+import pytest
+
+import refnpr
+
+ROOT = Path(refnpr.__file__).resolve().parent
+
+PUBLIC_API = {
+    "refnpr.cli": ("main",),
+    "refnpr.compare": (
+        "ImageMetrics",
+        "compare_dirs",
+        "compare_images",
+        "difference_image",
+        "load_image",
+    ),
+    "refnpr.formulas.halftone": (
+        "apply_indication",
+        "binary_threshold",
+        "decode_stroke_map",
+        "encode_stroke_map",
+        "engraving_ramp",
+        "engraving_screen",
+        "layer_onsets",
+        "smooth_threshold",
+        "smooth_threshold_tone",
+        "stroke_levels",
+        "stroke_lighting",
+    ),
+    "refnpr.formulas.lighting": (
+        "ambient",
+        "diffuse",
+        "illumination",
+        "specular",
+        "toon_ramp",
+        "toon_ramp_texture",
+    ),
+    "refnpr.formulas.tamiss": (
+        "CLAIM",
+        "EMPTY",
+        "FOUND",
+        "LEGENDRE",
+        "LOST",
+        "N_REGRESSORS",
+        "RouteResult",
+        "StrokeFit",
+        "StrokeHashTable",
+        "StrokeStrip",
+        "aggregate",
+        "cg_solve",
+        "extrude_stroke",
+        "fit_fragments",
+        "fit_stroke",
+        "fit_strokes",
+        "fragment_regressors",
+        "hash_slot",
+        "moment_matrix",
+        "normalize_t",
+        "probe_table",
+        "visibility_prior",
+        "visible_segments",
+    ),
+    "refnpr.formulas.threshold": (
+        "DotToneTable",
+        "combine_thresholds",
+        "dot_dyadic_scale",
+        "dot_function",
+        "dot_threshold",
+        "dot_tone_table",
+        "dyadic_remap",
+        "dyadic_scale",
+        "dyadic_scale_from_gradient",
+        "hatch_coordinate",
+        "hatch_threshold",
+        "line_coverage",
+        "line_threshold",
+        "mip_threshold",
+        "multiscale_line",
+        "multiscale_line_cdf",
+        "pcf_threshold",
+        "step",
+        "step_n",
+        "threshold_illumination",
+    ),
+    "refnpr.formulas.xtoon": (
+        "blend_normals",
+        "cylinder_normals",
+        "detail_depth",
+        "detail_focus",
+        "detail_highlight",
+        "detail_orientation",
+        "ellipsoid_normals",
+        "shape_frame",
+        "smoothed_normals",
+        "sphere_normals",
+        "toon_lookup",
+        "toon_texture_backlight",
+        "toon_texture_blur",
+        "toon_texture_fade",
+        "toon_texture_hue",
+        "toon_texture_levels",
+        "toon_texture_metal",
+        "toon_texture_plastic",
+        "toon_texture_receding",
+    ),
+    "refnpr.golden": (
+        "CaseResult",
+        "GoldenCase",
+        "check_suite",
+        "load_suite",
+        "render_case",
+        "update_suite",
+    ),
+    "refnpr.image": (
+        "Image",
+        "check_png_path",
+        "linear_to_srgb",
+        "srgb_to_linear",
+        "write_png_atomic",
+    ),
+    "refnpr.raster": (
+        "BUILTIN_CHANNELS",
+        "Camera",
+        "GBuffer",
+        "Mesh",
+        "box_resolve",
+        "rasterize",
+        "valid_channels",
+    ),
+    "refnpr.raster.camera": ("Camera",),
+    "refnpr.raster.channels": (
+        "INTERPOLATED",
+        "attribute_names",
+        "check_vertex_data",
+        "interpolated_channels",
+    ),
+    "refnpr.raster.gbuffer": (
+        "BUILTIN_CHANNELS",
+        "GBuffer",
+        "box_resolve",
+    ),
+    "refnpr.raster.mesh": (
+        "Mesh",
+        "RESERVED_NAMES",
+    ),
+    "refnpr.raster.rasterize": (
+        "DEFAULT_TILE",
+        "rasterize",
+        "valid_channels",
+    ),
+    "refnpr.render": (
+        "DEFAULT_STYLE",
+        "render",
+        "required_channels",
+    ),
+    "refnpr.scenes": (
+        "Light",
+        "MESH_BUILDERS",
+        "Material",
+        "Scene",
+        "SceneFileError",
+        "SceneObject",
+        "UV_PROJECTIONS",
+        "builtin_scene_path",
+        "from_trimesh",
+        "icosphere",
+        "list_scenes",
+        "load_mesh",
+        "load_scene",
+        "mesh_from_spec",
+        "parse_scene",
+        "plane",
+        "project_uv",
+        "read_bpt",
+        "require_uv",
+        "revolve",
+        "room",
+        "rotation_minimising_frames",
+        "spherical_uv",
+        "teapot",
+        "teapot_patches",
+        "terrain",
+        "terrain_height",
+        "torus",
+        "torus_knot",
+        "torus_knot_curve",
+        "transform_matrix",
+        "uv_sphere",
+        "vase",
+        "vase_profile",
+    ),
+    "refnpr.scenes.knot": (
+        "rotation_minimising_frames",
+        "torus_knot",
+        "torus_knot_curve",
+    ),
+    "refnpr.scenes.loading": (
+        "from_trimesh",
+        "load_mesh",
+    ),
+    "refnpr.scenes.primitives": (
+        "icosphere",
+        "spherical_uv",
+        "torus",
+        "uv_sphere",
+    ),
+    "refnpr.scenes.registry": (
+        "MESH_BUILDERS",
+        "mesh_from_spec",
+    ),
+    "refnpr.scenes.revolution": (
+        "revolve",
+        "vase",
+        "vase_profile",
+    ),
+    "refnpr.scenes.room": (
+        "plane",
+        "room",
+    ),
+    "refnpr.scenes.scene": (
+        "Light",
+        "Material",
+        "Scene",
+        "SceneObject",
+        "transform_matrix",
+    ),
+    "refnpr.scenes.teapot": (
+        "read_bpt",
+        "teapot",
+        "teapot_patches",
+    ),
+    "refnpr.scenes.terrain": (
+        "terrain",
+        "terrain_height",
+    ),
+    "refnpr.scenes.toml_format": (
+        "SceneFileError",
+        "builtin_scene_path",
+        "list_scenes",
+        "load_scene",
+        "parse_scene",
+    ),
+    "refnpr.scenes.uv_projection": (
+        "UV_PROJECTIONS",
+        "project_uv",
+        "require_uv",
+    ),
+    "refnpr.styles": (
+        "ShadeContext",
+        "Style",
+        "get_style",
+        "list_styles",
+        "register",
+        "style_from_spec",
+    ),
+    "refnpr.styles.base": (
+        "ShadeContext",
+        "Style",
+        "get_style",
+        "list_styles",
+        "register",
+        "style_from_spec",
+    ),
+    "refnpr.styles.contours": (
+        "ContourLayer",
+        "Contoured",
+        "EdgeTable",
+        "edge_table",
+    ),
+    "refnpr.styles.halftone": ("HalftoneStyle",),
+    "refnpr.styles.smooth": ("SmoothStyle",),
+    "refnpr.styles.tam": ("TamStyle",),
+    "refnpr.styles.tamiss": (
+        "AggregateHistory",
+        "Aggregates",
+        "BRUSHES",
+        "EXTENTS",
+        "FieldInputs",
+        "Fragments",
+        "HashStats",
+        "PipelineResult",
+        "Strips",
+        "StrokeField",
+        "StrokeGeometry",
+        "TamissParams",
+        "TamissStyle",
+        "aggregate_exact",
+        "aggregate_hashed",
+        "brush_texture",
+        "centreline",
+        "drawn_segments",
+        "extrude",
+        "field_inputs",
+        "gather_fragments",
+        "keep_mask",
+        "key32",
+        "layer_scale",
+        "pack_id",
+        "rasterize_strips",
+        "recentre",
+        "run_pipeline",
+        "seed_set",
+        "stroke_geometry",
+        "tam_ink",
+        "unpack_id",
+    ),
+    "refnpr.styles.threshold": ("ThresholdStyle",),
+    "refnpr.styles.toon": ("ToonStyle",),
+    "refnpr.styles.xtoon": (
+        "AbstractedNormals",
+        "PRESETS",
+        "XToonStyle",
+        "abstract_normals",
+        "resolve_texture",
+    ),
+    "refnpr.texture": (
+        "BUILTIN_TEXTURES",
+        "MipPyramid",
+        "StrokeSet",
+        "as_texture",
+        "brick_set",
+        "build_pyramid",
+        "clahe_pyramid",
+        "engraving_pyramid",
+        "hatching_set",
+        "level_weights",
+        "load_stroke_layers",
+        "load_texture",
+        "normal_pyramid",
+        "rank_equalize",
+        "sample_level",
+        "sample_trilinear",
+        "stroke_map_pyramid",
+        "stroke_set_from_layers",
+    ),
+    "refnpr.texture.builtin": (
+        "BUILTIN_TEXTURES",
+        "load_texture",
+    ),
+    "refnpr.texture.pyramid": (
+        "MipPyramid",
+        "as_texture",
+        "build_pyramid",
+        "clahe_pyramid",
+        "rank_equalize",
+    ),
+    "refnpr.texture.sample": (
+        "level_weights",
+        "sample_level",
+        "sample_trilinear",
+    ),
+    "refnpr.texture.screens": (
+        "StrokeSet",
+        "brick_set",
+        "engraving_pyramid",
+        "hatching_layer",
+        "hatching_set",
+        "level_sizes",
+        "line_coverage",
+        "load_stroke_layers",
+        "normal_pyramid",
+        "stroke_map_pyramid",
+        "stroke_set_from_layers",
+    ),
+}
+
+
+@pytest.mark.parametrize("module", sorted(PUBLIC_API))
+def test_public_api_imports_from_its_documented_place(module):
+    mod = importlib.import_module(module)
+    missing = [name for name in PUBLIC_API[module] if not hasattr(mod, name)]
+    assert not missing, f"{module} no longer provides {missing}"
+    # each listed name is still declared public there
+    assert set(PUBLIC_API[module]) <= set(mod.__all__), module
+
+
+def test_documented_submodule_paths_still_import():
+    # paths that the README, docs and notebooks use as modules, not only as names
+    from refnpr.styles.tamiss import run_pipeline  # noqa: F401
+    from refnpr.texture import screens
+
+    assert callable(screens.hatching_set)
+    for path in ("refnpr.styles.tam", "refnpr.styles.base", "refnpr.texture.screens"):
+        importlib.import_module(path)
+
+
+# --------------------------------------------------------------------------------------------
+# import graph
+# --------------------------------------------------------------------------------------------
+#: Rank of each top-level part of refnpr: a module may import its own part and parts of lower
+#: rank, never a part of the same or a higher rank (so raster and formulas, or texture and
+#: scenes, do not import each other). ``refnpr`` itself (``__version__``) may be imported by all.
+RANK = {
+    "refnpr": -1,
+    "_jit": 0,
+    "raster": 1,
+    "formulas": 1,
+    "image": 1,
+    "texture": 2,
+    "scenes": 2,
+    "styles": 3,
+    "render": 4,
+    "compare": 5,
+    "golden": 6,
+    "kit": 7,
+    "cli": 8,
+}
+#: Stricter than the ranks: what DESIGN.md says these parts may import.
+ONLY = {"formulas": set(), "raster": {"_jit"}, "_jit": set(), "refnpr": set()}
+#: Paper packages that must not import one another, per layer.
+PAPERS = {
+    "styles": {"threshold", "halftone", "xtoon", "tamiss"},
+    "formulas": {"threshold", "halftone", "xtoon", "tamiss"},
+}
+
+
+def module_files(root: Path, package: str) -> dict[str, Path]:
+    """Dotted module name -> file, for every .py under ``root`` (the package ``package``)."""
+    out = {}
+    for path in sorted(root.rglob("*.py")):
+        parts = [package, *path.relative_to(root).with_suffix("").parts]
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+def imports_of(name: str, path: Path, modules: dict[str, Path], *, top_level_only: bool):
+    """Modules of the package that ``name`` imports (``from a import b`` -> ``a.b`` when that is a
+    module). ``top_level_only``: only statements run at import time (not inside functions)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    root = next(iter(modules)).split(".")[0]
+    if top_level_only:
+        nodes = []
+        stack = list(tree.body)
+        while stack:
+            node = stack.pop()
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+                continue
+            nodes.append(node)
+            stack.extend(ast.iter_child_nodes(node))
+    else:
+        nodes = list(ast.walk(tree))
+    found = set()
+    for node in nodes:
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            targets = [
+                f"{target}.{a.name}" if f"{target}.{a.name}" in modules else target
+                for a in node.names
+            ]
+        else:
+            continue
+        for t in targets:
+            if t == root or t.startswith(root + "."):
+                while t not in modules and "." in t:
+                    t = t.rpartition(".")[0]
+                found.add(t)
+    return found
+
+
+def layer_violations(root: Path, package: str) -> list[str]:
+    """Every import (anywhere in a module, lazy ones included) that points up or sideways."""
+    modules = module_files(root, package)
+    bad = []
+    for name, path in modules.items():
+        src_parts = name.split(".")
+        src = src_parts[1] if len(src_parts) > 1 else package
+        for tgt_name in imports_of(name, path, modules, top_level_only=False):
+            tgt_parts = tgt_name.split(".")
+            tgt = tgt_parts[1] if len(tgt_parts) > 1 else package
+            if tgt == src:
+                layer = PAPERS.get(src, set())
+                a = src_parts[2] if len(src_parts) > 2 else None
+                b = tgt_parts[2] if len(tgt_parts) > 2 else None
+                if a in layer and b in layer and a != b:
+                    bad.append(f"{name} imports {tgt_name}: one paper's package uses another's")
+                continue
+            if tgt == package:
+                continue  # the root package (__version__)
+            src_key = src if src in RANK else "refnpr"
+            if tgt not in RANK:
+                bad.append(f"{name} imports {tgt_name}: unknown part {tgt!r}; give it a RANK")
+            elif src_key in ONLY and tgt not in ONLY[src_key]:
+                bad.append(
+                    f"{name} imports {tgt_name}: {src} may import only {sorted(ONLY[src_key])}"
+                )
+            elif RANK[tgt] >= RANK.get(src_key, -1):
+                bad.append(f"{name} imports {tgt_name}: {tgt} is not below {src}")
+    return bad
+
+
+def import_cycles(root: Path, package: str) -> list[list[str]]:
+    """Strongly connected components (size > 1, or a self-import) of the import-time graph."""
+    modules = module_files(root, package)
+    graph = {
+        n: sorted(imports_of(n, p, modules, top_level_only=True) - {n}) for n, p in modules.items()
+    }
+    for n, p in modules.items():
+        if n in imports_of(n, p, modules, top_level_only=True) and not p.name == "__init__.py":
+            graph[n].append(n)
+    index, low, on_stack, stack, out = {}, {}, set(), [], []
+
+    def visit(v):  # Tarjan, recursive: the graph is a few hundred modules
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1 or v in graph.get(v, ()):
+                out.append(sorted(comp))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_imports_point_one_way():
+    assert layer_violations(ROOT, "refnpr") == []
+
+
+def test_no_import_cycles():
+    assert import_cycles(ROOT, "refnpr") == []
+
+
+def _tree(tmp_path: Path, files: dict[str, str]) -> Path:
+    root = tmp_path / "refnpr"
+    for rel, text in files.items():
+        path = root / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+    return root
+
+
+def test_checker_reports_an_upward_import(tmp_path):
+    root = _tree(
+        tmp_path,
+        {
+            "__init__.py": "",
+            "formulas/__init__.py": "",
+            "formulas/x.py": "def f():\n    from refnpr.styles import base\n",  # lazy, still up
+            "styles/__init__.py": "",
+            "styles/base.py": "from refnpr.formulas import x\n",  # down: fine
+            "texture/__init__.py": "from ..render import render\n",  # relative, up
+            "render.py": "from .texture import y\n",
+        },
+    )
+    bad = layer_violations(root, "refnpr")
+    assert len(bad) == 2, bad
+    assert any("refnpr.formulas.x imports refnpr.styles.base" in b for b in bad)
+    assert any("refnpr.texture imports refnpr.render" in b for b in bad)
+
+
+def test_checker_reports_papers_importing_each_other_and_sideways_parts(tmp_path):
+    root = _tree(
+        tmp_path,
+        {
+            "__init__.py": "",
+            "raster/__init__.py": "from refnpr.formulas import lighting\n",  # raster: _jit only
+            "formulas/__init__.py": "",
+            "formulas/lighting.py": "",
+            "scenes/__init__.py": "from refnpr.texture import pyramid\n",  # same rank
+            "texture/__init__.py": "",
+            "texture/pyramid.py": "",
+            "styles/__init__.py": "",
+            "styles/_common.py": "",
+            "styles/xtoon/__init__.py": "from .._common import x\n",  # its own layer: fine
+            "styles/tamiss/__init__.py": "from ..xtoon import shape\n",
+            "styles/xtoon/shape.py": "",
+        },
+    )
+    bad = layer_violations(root, "refnpr")
+    assert len(bad) == 3, bad
+    assert any("raster may import only ['_jit']" in b for b in bad)
+    assert any("refnpr.scenes imports refnpr.texture.pyramid" in b for b in bad)
+    assert any("one paper's package uses another's" in b for b in bad)
+
+
+def test_checker_reports_a_cycle_but_not_lazy_imports(tmp_path):
+    root = _tree(
+        tmp_path,
+        {
+            "__init__.py": "",
+            "styles/__init__.py": "",
+            "styles/a.py": "from . import b\n",
+            "styles/b.py": "from .c import f\n",
+            "styles/c.py": "from .a import g\n",
+            "styles/d.py": "from . import e\n",
+            "styles/e.py": "def h():\n    from . import d\n",  # lazy: no import-time cycle
+        },
+    )
+    assert import_cycles(root, "refnpr") == [
+        ["refnpr.styles.a", "refnpr.styles.b", "refnpr.styles.c"]
+    ]
+
+
+# --------------------------------------------------------------------------------------------
+# one package per paper
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("layer", ["styles", "formulas"])
+def test_no_prefix_modules_stand_in_for_packages(layer):
+    flat = sorted(
+        p.name
+        for p in (ROOT / layer).glob("_*_*.py")
+        if p.name.split("_")[1] in {"threshold", "halftone", "xtoon", "tamiss"}
+    )
+    assert flat == [], f"refnpr/{layer}: move {flat} into the paper's package"
+
+
+@pytest.mark.parametrize(
+    "package",
+    [
+        "styles/threshold",
+        "styles/halftone",
+        "styles/xtoon",
+        "styles/tamiss",
+        "formulas/threshold",
+        "formulas/xtoon",
+        "formulas/tamiss",
+        "texture/screens",
+    ],
+)
+def test_each_paper_has_its_package(package):
+    assert (ROOT / package / "__init__.py").is_file()
+
+
+def test_numba_code_lives_in_kernel_modules():
+    for path in ROOT.rglob("*.py"):
+        if path.name in ("_kernels.py", "_jit.py"):
+            continue
+        text = path.read_text(encoding="utf-8")
+        assert "njit" not in text and "numba.jit" not in text, path
