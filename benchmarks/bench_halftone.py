@@ -228,7 +228,7 @@ def section_tone(size: int, quick: bool = False) -> dict:
     variants = [
         ("binary", dict(threshold="binary")),
         ("binary per_level", dict(threshold="binary", mip="per_level")),
-        ("binary equalize", dict(threshold="binary", equalize=True)),
+        ("binary tone_correct", dict(threshold="binary", tone_correct=True)),
         ("smooth c=4 (paper)", dict(threshold="smooth", c=4.0)),
         ("smooth centred c=4", dict(threshold="smooth", c=4.0, centred=True)),
     ]

@@ -14,7 +14,7 @@ Sections:
     ``--runs`` calls of ``refnpr.render.render``, G-buffer included; the pyramids are built
     before timing). Methods: 1 spp binary, n x n supersampling (n = 2, 4, 8), filtered
     thresholding with K threshold samples (``filter="pcf"``; images: two mip levels each, the
-    paper's sec. 4, and "pcf-tri": one trilinear threshold each, ``pcf_levels=1``) alone and with
+    paper's sec. 4, and "pcf-tri": one trilinear threshold each, ``mip="trilinear"``) alone and with
     2 x 2 supersampling, analytic line filtering (lines only) alone and with 2 x 2.
     Error = mean absolute difference of the gray image (linear, [0, 1]); RMSE also reported. The
     Pareto front (no other method both faster and more accurate) is marked, and the method
@@ -59,7 +59,7 @@ from refnpr.styles.threshold import ThresholdStyle  # noqa: E402
 VIEWS = {
     "hatched": (
         "vase",
-        dict(source="lines", period=6.0, uniform=True, angles=[45.0, -45.0], specular=False),
+        dict(source="lines", period=6.0, uniform=True, directions=[45.0, -45.0], specular=False),
     ),
     "image": ("veryovka_room", dict(source="image", specular=False)),
 }
@@ -73,8 +73,10 @@ def methods(view: str) -> list[tuple[str, dict, int]]:
     out += [(f"pcf K={k}", dict(filter="pcf", samples=k), 1) for k in ks]
     out += [(f"pcf K={k} + SS 2x2", dict(filter="pcf", samples=k), 4) for k in ks[:2]]
     if view == "image":  # one trilinear threshold per footprint sample (PCF of the binary image)
-        out += [(f"pcf-tri K={k}", dict(filter="pcf", samples=k, pcf_levels=1), 1) for k in (4, 16)]
-        out += [("pcf-tri K=4 + SS 2x2", dict(filter="pcf", samples=4, pcf_levels=1), 4)]
+        out += [
+            (f"pcf-tri K={k}", dict(filter="pcf", samples=k, mip="trilinear"), 1) for k in (4, 16)
+        ]
+        out += [("pcf-tri K=4 + SS 2x2", dict(filter="pcf", samples=4, mip="trilinear"), 4)]
     if view == "hatched":
         out += [
             ("analytic", dict(filter="analytic"), 1),
@@ -212,7 +214,7 @@ TONE_SOURCES = {
     "lines (paper eq. 8)": dict(source="lines", period=4.0, uniform=False),
     "lines uniform": dict(source="lines", period=4.0, uniform=True),
     "lines uniform analytic": dict(source="lines", period=4.0, uniform=True, filter="analytic"),
-    "cross-hatch uniform": dict(source="lines", period=4.0, uniform=True, angles=[30.0, -60.0]),
+    "cross-hatch uniform": dict(source="lines", period=4.0, uniform=True, directions=[30.0, -60.0]),
     "stipple (paper)": dict(source="stipple", period=6.0, uniform=False),
     "stipple tone table": dict(source="stipple", period=6.0, uniform=True),
     "image brick trilinear": dict(source="image", texture="brick"),
@@ -234,9 +236,9 @@ def section_tone(size: int) -> dict:
     for label, params in TONE_SOURCES.items():
         p = dict(params, specular=False)
         if p["source"] == "lines":
-            p["scale"] = ppu / (p["period"] * 2.0**2.37)  # Frac(s) = 0.37
+            p["uv_scale"] = ppu / (p["period"] * 2.0**2.37)  # Frac(s) = 0.37
         elif p["source"] == "stipple":
-            p["scale"] = 1.7
+            p["uv_scale"] = 1.7
         style = ThresholdStyle(**p)
         errs = [
             float(render(_flat_scene(x, 5.0), style, size, size, 1).rgba[..., 0].mean() - x)

@@ -102,3 +102,20 @@ def specular_field(
             n[sel], ld, v[sel], shininess=float(p), model=model, normalize=False
         )
     return out
+
+
+def check_uv_scale(name: str, value: Any) -> tuple[float, float] | None:
+    """A style's ``uv_scale``: None (each material's own) or a positive number or ``[su, sv]``
+    that multiplies uv in place of the material's ``uv_scale``; the same meaning in every style."""
+    if value is None:
+        return None
+    v = [value, value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+    try:
+        arr = np.array(v, dtype=np.float64)
+    except (TypeError, ValueError):
+        arr = np.array([np.nan])
+    if arr.shape != (2,) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(
+            f"{name}: expected a positive number or two ([su, sv]) multiplying uv, got {value!r}"
+        )
+    return (float(arr[0]), float(arr[1]))

@@ -7,13 +7,56 @@ without textures never interpolates uv.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+import warnings
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-__all__ = ["Style", "ShadeContext", "register", "get_style", "list_styles", "style_from_spec"]
+__all__ = [
+    "Style",
+    "ShadeContext",
+    "register",
+    "get_style",
+    "list_styles",
+    "style_from_spec",
+    "renamed_params",
+]
+
+
+def renamed_params(
+    where: str, params: Mapping[str, Any], renamed: Mapping[str, str], *, stacklevel: int = 3
+) -> dict[str, Any]:
+    """``params`` with deprecated parameter names replaced by the current ones.
+
+    Each old name found gives a ``DeprecationWarning`` naming both; passing both names is a
+    ``TypeError``. Styles list their old names in ``Style.renamed`` (applied by :func:`register`);
+    nested tables (contours, screens) call this where they are parsed.
+
+    Parameters
+    ----------
+    where : str
+        What the parameters belong to, for the message (``"style 'halftone'"``, ``"contours"``).
+    params : mapping of str to any
+    renamed : mapping of old name -> current name
+    """
+    out = dict(params)
+    for old, new in renamed.items():
+        if old not in out:
+            continue
+        if new in out:
+            raise TypeError(
+                f"{where}: got both {old!r} (the deprecated name) and {new!r}; pass only {new!r}"
+            )
+        warnings.warn(
+            f"{where}: parameter {old!r} is deprecated, use {new!r} (one name across styles)",
+            DeprecationWarning,
+            stacklevel=stacklevel,
+        )
+        out[new] = out.pop(old)
+    return out
 
 
 class Style:
@@ -25,6 +68,8 @@ class Style:
 
     name: ClassVar[str] = ""
     description: ClassVar[str] = ""
+    #: Deprecated parameter names -> current names, still accepted with a DeprecationWarning.
+    renamed: ClassVar[Mapping[str, str]] = {}
 
     def requires(self, scene: Any) -> frozenset[str]:
         """G-buffer channels this style reads for ``scene``."""
@@ -112,9 +157,21 @@ _REGISTRY: dict[str, Callable[..., Style]] = {}
 
 
 def register(cls: type[Style]) -> type[Style]:
-    """Class decorator adding a style to the registry under ``cls.name``."""
+    """Class decorator adding a style to the registry under ``cls.name``.
+
+    When the class lists ``renamed`` parameters, its ``__init__`` accepts the old names too (a
+    ``DeprecationWarning`` each), for direct construction as for :func:`get_style`.
+    """
     if not cls.name:
         raise ValueError(f"{cls.__name__}: a registered style needs a non-empty `name`")
+    if cls.renamed and "renamed" in cls.__dict__:
+        init = cls.__init__
+
+        @functools.wraps(init)
+        def __init__(self, *args: Any, **params: Any) -> None:
+            init(self, *args, **renamed_params(f"style {cls.name!r}", params, cls.renamed))
+
+        cls.__init__ = __init__
     _REGISTRY[cls.name] = cls
     return cls
 
@@ -137,7 +194,10 @@ def get_style(name: str, **params: Any) -> Style:
     try:
         return _REGISTRY[name](**params)
     except TypeError as exc:
-        raise TypeError(f"style {name!r}: {exc}") from None
+        msg = str(exc)
+        raise TypeError(
+            msg if msg.startswith(f"style {name!r}:") else f"style {name!r}: {msg}"
+        ) from None
 
 
 def style_from_spec(spec: Any) -> Style:

@@ -13,14 +13,14 @@ silhouette borders a farther surface or the background); ``depth_tolerance`` is 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import InitVar, dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from . import _kernels as K
 from ._common import check_number
-from .base import ShadeContext, Style, get_style, register, style_from_spec
+from .base import ShadeContext, Style, get_style, register, renamed_params, style_from_spec
 
 __all__ = ["EdgeTable", "ContourLayer", "Contoured", "edge_table"]
 
@@ -90,8 +90,9 @@ class ContourLayer:
     ----------
     width : float
         Line width in pixels (> 0).
-    color : (3,) float
-        Linear RGB of the lines.
+    ink : (3,) float
+        Linear RGB of the lines (the name every style uses for its line colour; ``color`` is
+        accepted as a deprecated alias).
     silhouettes, boundaries : bool
     crease_angle : float or None
         Draw edges whose dihedral angle exceeds this (degrees, in (0, 180)); None: no creases.
@@ -100,20 +101,28 @@ class ContourLayer:
     """
 
     width: float = 1.5
-    color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    ink: tuple[float, float, float] = (0.0, 0.0, 0.0)
     silhouettes: bool = True
     boundaries: bool = True
     crease_angle: float | None = None
     depth_tolerance: float = 0.01
+    color: InitVar[Any] = None  # deprecated name of ``ink``
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, color: Any) -> None:
+        if color is not None:
+            kw = renamed_params("contours", {"color": color}, {"color": "ink"}, stacklevel=4)
+            if self.ink != (0.0, 0.0, 0.0):
+                raise TypeError(
+                    "contours: got both 'color' (the deprecated name) and 'ink'; pass only 'ink'"
+                )
+            object.__setattr__(self, "ink", kw["ink"])
         check_number("width", self.width, lo=0.0, lo_open=True, hi=_MAX_WIDTH)
         try:
-            c = np.asarray(self.color, dtype=np.float64)
+            c = np.asarray(self.ink, dtype=np.float64)
         except (TypeError, ValueError):
             c = np.full(1, np.nan)
         if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
-            raise ValueError(f"color: expected 3 values in [0, 1] (linear RGB), got {self.color!r}")
+            raise ValueError(f"ink: expected 3 values in [0, 1] (linear RGB), got {self.ink!r}")
         for flag in ("silhouettes", "boundaries"):
             if not isinstance(getattr(self, flag), bool):
                 raise TypeError(f"{flag}: expected true or false, got {getattr(self, flag)!r}")
@@ -189,7 +198,8 @@ class Contoured(Style):
         if contours is True:
             contours = ContourLayer()
         elif isinstance(contours, dict):
-            valid = sorted(ContourLayer.__dataclass_fields__)
+            contours = renamed_params("contours", contours, {"color": "ink"}, stacklevel=5)
+            valid = sorted(f.name for f in fields(ContourLayer))
             unknown = sorted(set(contours) - set(valid))
             if unknown:
                 raise ValueError(f"contours: unknown keys {unknown}; valid keys are {valid}")
@@ -199,7 +209,7 @@ class Contoured(Style):
         self.layer = contours
         self._params = {
             "base": self.base.params() | {"name": self.base.name},
-            "contours": contours.__dict__,
+            "contours": {f.name: getattr(contours, f.name) for f in fields(contours)},
         }
 
     def requires(self, scene: Any) -> frozenset[str]:
@@ -211,7 +221,7 @@ class Contoured(Style):
     def shade(self, ctx: ShadeContext) -> np.ndarray:
         rgba = np.asarray(self.base.shade(ctx), dtype=np.float64)
         cov = self.layer.coverage(ctx)[..., None]
-        color = np.asarray(self.layer.color, dtype=np.float64)
+        color = np.asarray(self.layer.ink, dtype=np.float64)
         out = np.empty_like(rgba)
         # straight-alpha "over": lines on top of the base
         a = cov[..., 0] + rgba[..., 3] * (1.0 - cov[..., 0])

@@ -90,7 +90,7 @@ def test_contoured_wraps_any_style_and_adds_depth():
     [
         ({"width": 0.0}, r"width: expected a value > 0.0"),
         ({"crease_angle": 200.0}, r"crease_angle: expected a value <= 180.0"),
-        ({"color": (2.0, 0.0, 0.0)}, r"color: expected 3 values in \[0, 1\]"),
+        ({"ink": (2.0, 0.0, 0.0)}, r"ink: expected 3 values in \[0, 1\]"),
     ],
 )
 def test_bad_layer_parameters(kwargs, match):
@@ -101,8 +101,8 @@ def test_bad_layer_parameters(kwargs, match):
 @pytest.mark.parametrize(
     ("kwargs", "exc", "match"),
     [
-        ({"color": (np.nan, 0.0, 0.0)}, ValueError, r"color: expected 3 values in \[0, 1\]"),
-        ({"color": "black"}, ValueError, r"color: expected 3 values in \[0, 1\]"),
+        ({"ink": (np.nan, 0.0, 0.0)}, ValueError, r"ink: expected 3 values in \[0, 1\]"),
+        ({"ink": "black"}, ValueError, r"ink: expected 3 values in \[0, 1\]"),
         ({"silhouettes": "no"}, TypeError, r"silhouettes: expected true or false, got 'no'"),
         ({"width": 1e300}, ValueError, r"width: expected a value <= 256.0"),
     ],

@@ -50,13 +50,13 @@ def test_engraving_reproduces_tone(profile, threshold, centred):
 def test_dither_screen_drifts_under_bilinear_filtering_and_equalize_fixes_it(texture):
     """CLAHE dither screens are uniform per level, but bilinear/trilinear filtering averages
     neighbouring texels: thresholding the filtered screen (the paper, the GPU) misses the tone
-    by more than 0.05 near I = 0.2 / 0.8; ``equalize`` keeps it within 0.02."""
+    by more than 0.05 near I = 0.2 / 0.8; ``tone_correct`` keeps it within 0.02."""
     paper = _tone_errors(screen=texture, uv_scale=2.0, threshold="binary")
     assert np.abs(paper).max() > 0.05, paper
-    fixed = _tone_errors(screen=texture, uv_scale=2.0, threshold="binary", equalize=True)
+    fixed = _tone_errors(screen=texture, uv_scale=2.0, threshold="binary", tone_correct=True)
     assert np.abs(fixed).max() < 0.02, fixed
     smooth = _tone_errors(
-        screen=texture, uv_scale=2.0, threshold="smooth", centred=True, equalize=True
+        screen=texture, uv_scale=2.0, threshold="smooth", centred=True, tone_correct=True
     )
     assert np.abs(smooth).max() < 0.025, smooth
 

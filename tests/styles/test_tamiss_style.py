@@ -61,10 +61,10 @@ def test_tam_parameter_errors():
 
 
 def test_params_round_trip_through_the_registry():
-    st = get_style("tamiss", **FIELD, extent="overdraw", wobble=0.5, fill=0.9)
+    st = get_style("tamiss", **FIELD, extent="overdraw", wobble=0.5, paper=0.9)
     again = get_style("tamiss", **{k: v for k, v in st.params().items() if k != "base"})
     assert again.params() == st.params()
-    assert st.params()["directions"] == [0.0, 90.0] and st.params()["fill"] == [0.9] * 3
+    assert st.params()["directions"] == [0.0, 90.0] and st.params()["paper"] == [0.9] * 3
 
 
 def test_strokes_cross_the_silhouette_only_with_overdraw():
@@ -85,7 +85,7 @@ def test_composites_over_fill_base_and_contours():
     ctx_img = {}
     for name, extra in {
         "bare": {},
-        "fill": {"fill": [1.0, 0.9, 0.8]},
+        "fill": {"paper": [1.0, 0.9, 0.8]},
         "base": {"base": {"name": "toon", "n": 2}},
         "contours": {"contours": {"width": 1.5}},
     }.items():

@@ -40,9 +40,9 @@ def _shade(scene, style, w=64, h=48, spp=1):
         (dict(source="image", filter="analytic"), ValueError, r"filter: 'analytic' .*lines"),
         (dict(filter="pcf", samples=3), ValueError, r"samples: expected a square number"),
         (
-            dict(angles=[0.0, 90.0], onsets=[1.0]),
+            dict(directions=[0.0, 90.0], onsets=[1.0]),
             ValueError,
-            r"onsets: expected one onset per angle",
+            r"onsets: expected one onset per direction",
         ),
         (dict(onsets=[0.5]), ValueError, r"onsets: .*largest is 1"),
         (dict(tone_fade=[0.1]), ValueError, r"tone_fade: expected two widths"),
@@ -50,7 +50,11 @@ def _shade(scene, style, w=64, h=48, spp=1):
         (dict(period=0), ValueError, r"period: expected a value > 0"),
         (dict(n=0), ValueError, r"n: expected an integer in \[1, 256\], got 0"),
         (dict(uniform="yes"), TypeError, r"uniform: expected a bool"),
-        (dict(angles=45), TypeError, r"angles: expected a list of numbers"),
+        (dict(directions="w"), ValueError, r"directions: each layer is 'u', 'v' or an angle"),
+        (dict(directions=[]), ValueError, r"directions: expected at least one value"),
+        (dict(directions=[0, 400]), ValueError, r"directions\[1\]: expected a value <= 360"),
+        (dict(uv_scale=0), ValueError, r"uv_scale: expected a positive number or two"),
+        (dict(mip="bilinear"), ValueError, r"mip: expected one of"),
         (dict(specular_threshold="lines"), ValueError, r"specular_threshold: expected 'texture'"),
         (dict(colour=1), TypeError, r"unknown parameter\(s\) \['colour'\]"),
         (dict(clahe_levels="some"), ValueError, r"clahe_levels: expected one of"),
@@ -68,10 +72,10 @@ def test_bad_prebuilt_pyramid():
 
 def test_params_are_toml_representable_and_round_trip():
     style = ThresholdStyle(
-        source="lines", angles=[30, -60], onsets=[1.0, 0.5], tone_fade=[0.1, 0.2]
+        source="lines", directions=[30, -60], onsets=[1.0, 0.5], tone_fade=[0.1, 0.2]
     )
     params = style.params()
-    assert params["angles"] == [30.0, -60.0] and params["tone_fade"] == [0.1, 0.2]
+    assert params["directions"] == [30.0, -60.0] and params["tone_fade"] == [0.1, 0.2]
     assert all(isinstance(v, (str, int, float, bool, list)) for v in params.values())
     again = style_from_spec({"name": "threshold", **params})
     assert again.params() == params
@@ -87,7 +91,7 @@ def test_requires_only_what_the_configuration_reads():
     single = ThresholdStyle(source="lines", specular=False)
     assert single.requires(scene) == {"normal", "mesh_id", "uv", "dyadic_scale"}
     assert single.raster_options(scene) == {"line_period": 8.0}
-    cross = ThresholdStyle(source="lines", angles=[0, 90], specular=False)
+    cross = ThresholdStyle(source="lines", directions=[0, 90], specular=False)
     assert cross.requires(scene) == {"normal", "mesh_id", "uv", "duv_dx", "duv_dy"}
     assert cross.raster_options(scene) == {}
     assert "position" in ThresholdStyle(source="image").requires(scene)  # specular: V
@@ -96,9 +100,9 @@ def test_requires_only_what_the_configuration_reads():
 
 def test_channel_dyadic_scale_and_derivative_paths_agree():
     scene = load_scene("torus_knot")
-    _, a = _shade(scene, ThresholdStyle(source="lines", period=5.0, scale=1.5))
+    _, a = _shade(scene, ThresholdStyle(source="lines", period=5.0, uv_scale=1.5))
     _, b = _shade(
-        scene, ThresholdStyle(source="lines", period=5.0, scale=1.5, filter="pcf", samples=1)
+        scene, ThresholdStyle(source="lines", period=5.0, uv_scale=1.5, filter="pcf", samples=1)
     )
     assert np.mean(a != b) < 1e-3
 
@@ -116,7 +120,7 @@ def test_constant_source_is_the_toon_step():
 
 def test_zero_strength_is_smooth_shading():
     scene = load_scene("vase")
-    _, a = _shade(scene, ThresholdStyle(source="lines", angles=[45, -45], strength=0.0))
+    _, a = _shade(scene, ThresholdStyle(source="lines", directions=[45, -45], strength=0.0))
     _, b = _shade(scene, SmoothStyle())
     np.testing.assert_allclose(a, b, atol=1e-6)
 
@@ -137,7 +141,9 @@ def _naive_line_white(v: float, s: float, x: float, uniform: bool) -> float:
 @pytest.mark.parametrize("uniform", [False, True])
 def test_binary_lines_match_naive_per_pixel_loop(uniform):
     scene = load_scene("sphere")
-    style = ThresholdStyle(source="lines", period=4.0, scale=3.0, uniform=uniform, specular=False)
+    style = ThresholdStyle(
+        source="lines", period=4.0, uv_scale=3.0, uniform=uniform, specular=False
+    )
     channels = sorted(style.requires(scene) | {"duv_dx", "duv_dy"})
     gb = rasterize(scene, scene.camera, 48, 40, channels, **style.raster_options(scene))
     out = style.shade(ShadeContext(gb, scene))
@@ -176,7 +182,7 @@ def _plane_lines(**extra):
     return ThresholdStyle(
         source="lines",
         period=4.0,
-        scale=line_scale(2.3, 4.0, size=64),
+        uv_scale=line_scale(2.3, 4.0, size=64),
         specular=False,
         uniform=True,
         **extra,
@@ -188,17 +194,17 @@ def test_pcf_on_an_affine_view_equals_supersampling(angles):
     # head-on plane: uv is affine in screen, so K = k*k threshold samples over the pixel are
     # exactly the k x k supersampling positions (x is constant on the plane)
     scene = flat_scene(0.4)
-    pcf = render(scene, _plane_lines(angles=angles, filter="pcf", samples=16), 64, 64, 1).rgba
-    ss = render(scene, _plane_lines(angles=angles), 64, 64, 16).rgba
+    pcf = render(scene, _plane_lines(directions=angles, filter="pcf", samples=16), 64, 64, 1).rgba
+    ss = render(scene, _plane_lines(directions=angles), 64, 64, 16).rgba
     diff = np.abs(pcf[..., 0] - ss[..., 0])
     assert diff.mean() < 2e-3 and diff.max() <= 2 / 16 + 1e-6
 
 
 def test_image_pcf_with_trilinear_thresholds_equals_supersampling_on_an_affine_view():
     scene = flat_scene(0.4)
-    params = dict(source="image", texture="grass", scale=0.7, specular=False)
+    params = dict(source="image", texture="grass", uv_scale=0.7, specular=False)
     pcf = render(
-        scene, ThresholdStyle(**params, filter="pcf", samples=16, pcf_levels=1), 48, 48
+        scene, ThresholdStyle(**params, filter="pcf", samples=16, mip="trilinear"), 48, 48
     ).rgba
     ss = render(scene, ThresholdStyle(**params), 48, 48, 16).rgba
     diff = np.abs(pcf[..., 0] - ss[..., 0])
@@ -370,7 +376,7 @@ def test_cli_reaches_the_parameters(tmp_path):
             "--param",
             'source="lines"',
             "--param",
-            "angles=[45, -45]",
+            "directions=[45, -45]",
             "--param",
             'filter="analytic"',
             "--param",

@@ -44,7 +44,7 @@ def flat_scene(x: float, *, distance: float = DIST, texture: str | None = None) 
 
 
 def line_scale(s: float, period: float, *, distance: float = DIST, size: int = SIZE) -> float:
-    """The ``scale`` that puts the plane's lines at dyadic scale ``s`` (eq. 5)."""
+    """The ``uv_scale`` that puts the plane's lines at dyadic scale ``s`` (eq. 5)."""
     ppu = size / (2 * distance * math.tan(math.radians(FOV / 2)))
     return ppu / (period * 2.0**s)
 
@@ -59,23 +59,23 @@ def tone_errors(style: ThresholdStyle) -> np.ndarray:
 
 
 # Frac(s) = 0.37: an intermediate scale where eq. 8 is far from uniform.
-LINES = dict(source="lines", period=4.0, scale=line_scale(2.37, 4.0), specular=False)
+LINES = dict(source="lines", period=4.0, uv_scale=line_scale(2.37, 4.0), specular=False)
 
 TOLERANCES = [
     # (id, style parameters, tolerance on |mean - x|)
     ("lines-uniform", dict(LINES, uniform=True), 0.01),
     ("lines-uniform-analytic", dict(LINES, uniform=True, filter="analytic"), 0.005),
     ("lines-uniform-pcf4", dict(LINES, uniform=True, filter="pcf", samples=4), 0.01),
-    ("cross-hatch-uniform", dict(LINES, uniform=True, angles=[30.0, -60.0]), 0.01),
+    ("cross-hatch-uniform", dict(LINES, uniform=True, directions=[30.0, -60.0]), 0.01),
     (
         "cross-hatch-onsets",
-        dict(LINES, uniform=True, angles=[30.0, -60.0], onsets=[1.0, 0.5], filter="analytic"),
+        dict(LINES, uniform=True, directions=[30.0, -60.0], onsets=[1.0, 0.5], filter="analytic"),
         0.01,
     ),
     ("lines-noise", dict(LINES, uniform=True, noise=0.3), 0.02),
     (
         "stipple-uniform",
-        dict(source="stipple", period=6.0, scale=1.7, specular=False, uniform=True),
+        dict(source="stipple", period=6.0, uv_scale=1.7, specular=False, uniform=True),
         0.01,
     ),
     (
@@ -83,7 +83,7 @@ TOLERANCES = [
         dict(
             source="image",
             texture="brick",
-            scale=1.0,
+            uv_scale=1.0,
             specular=False,
             filter="pcf",
             samples=1,
@@ -96,7 +96,7 @@ TOLERANCES = [
         dict(
             source="image",
             texture="gravel",
-            scale=1.0,
+            uv_scale=1.0,
             specular=False,
             filter="pcf",
             samples=1,
@@ -115,13 +115,13 @@ def test_flat_plane_reproduces_target_intensity(params, tol):
 
 def test_paper_multiscale_blend_drifts_where_uniform_does_not():
     # eq. 8 at t = 0.5: F has density 2/(1+t) in the middle, so at x = 1/4 only 1/6 is white
-    params = dict(LINES, scale=line_scale(2.5, 4.0), filter="analytic")
+    params = dict(LINES, uv_scale=line_scale(2.5, 4.0), filter="analytic")
     paper = mean_tone(ThresholdStyle(**params, uniform=False), 0.25)
     fixed = mean_tone(ThresholdStyle(**params, uniform=True), 0.25)
     assert paper == pytest.approx(1 / 6, abs=0.005)
     assert fixed == pytest.approx(0.25, abs=0.005)
     # at integer scales both are the sawtooth and agree with the target
-    params0 = dict(LINES, scale=line_scale(3.0, 4.0), filter="analytic")
+    params0 = dict(LINES, uv_scale=line_scale(3.0, 4.0), filter="analytic")
     assert mean_tone(ThresholdStyle(**params0, uniform=False), 0.25) == pytest.approx(
         0.25, abs=0.005
     )
@@ -130,7 +130,7 @@ def test_paper_multiscale_blend_drifts_where_uniform_does_not():
 def test_paper_blend_drift_follows_the_design_cdf():
     # mean white fraction of the paper's F at Frac(s) = t is its CDF G(x, t) (DESIGN.md)
     for t in (0.25, 0.5, 0.75):
-        params = dict(LINES, scale=line_scale(2.0 + t, 4.0), filter="analytic", uniform=False)
+        params = dict(LINES, uv_scale=line_scale(2.0 + t, 4.0), filter="analytic", uniform=False)
         for x in (0.2, 0.6):
             lo, hi = (1 - t) / 2, (1 + t) / 2
             g = x / (1 + t) if x < lo else ((2 * x - lo) / (1 + t) if x < hi else (x + t) / (1 + t))
@@ -138,7 +138,9 @@ def test_paper_blend_drift_follows_the_design_cdf():
 
 
 def test_image_tone_drifts_without_equalization_and_interpolation_correction():
-    base = dict(source="image", texture="brick", scale=1.0, specular=False, filter="pcf", samples=1)
+    base = dict(
+        source="image", texture="brick", uv_scale=1.0, specular=False, filter="pcf", samples=1
+    )
     # CLAHE alone (no rank equalization): the brick texture's thresholds are not uniform
     raw = tone_errors(ThresholdStyle(**base, rank_equalize=False))
     assert np.max(np.abs(raw)) > 0.15
@@ -150,7 +152,7 @@ def test_image_tone_drifts_without_equalization_and_interpolation_correction():
 
 
 def test_paper_stipple_blend_drifts_where_tone_table_does_not():
-    params = dict(source="stipple", period=6.0, scale=1.7, specular=False)
+    params = dict(source="stipple", period=6.0, uv_scale=1.7, specular=False)
     paper = tone_errors(ThresholdStyle(**params))
     assert np.max(np.abs(paper)) > 0.05
     assert np.max(np.abs(tone_errors(ThresholdStyle(**params, uniform=True)))) < 0.01

@@ -21,9 +21,9 @@ Pipeline: ``fit_fragments(ids, t, x, y)`` = min/max of t, x, y per stroke -> ``n
 renderer calls) -> ``StrokeFit.visible_segments`` -> ``extrude_stroke``. The GPU's double-hashed
 routing of fragments to aggregate texels is modelled separately by :class:`StrokeHashTable`.
 
-The module is split into private helpers: ``_tamiss_moments`` (regressors, aggregation),
-``_tamiss_solve`` (CG, visibility prior), ``_tamiss_fit`` (fits), ``_tamiss_segments`` (visible
-segments, extrusion) and ``_tamiss_hash`` (double hashing).
+The package is split by stage: ``moments`` (regressors, aggregation), ``solve`` (CG, visibility
+prior), ``fit`` (fits), ``segments`` (visible segments, extrusion) and ``hashing`` (double
+hashing); this module re-exports their public API.
 """
 
 from __future__ import annotations

@@ -18,8 +18,8 @@ Conventions used throughout (see ``docs/paper-notes.md``, "Barla et al. 2006 (X-
 - Texels are sampled at their centres, (j + 0.5) / cols along tone and (i + 0.5) / rows along D,
   bilinearly and clamped to the edge (OpenGL ``GL_LINEAR`` + ``GL_CLAMP_TO_EDGE``).
 
-The texture builders (paper's recipes, Figs. 7-11) live in ``_xtoon_textures`` and the abstracted
-normal fields (Fig. 5) in ``_xtoon_shapes``; both are re-exported here.
+The texture builders (paper's recipes, Figs. 7-11) live in ``textures`` and the abstracted normal
+fields (Fig. 5) in ``shapes``; both are re-exported here.
 """
 
 from __future__ import annotations

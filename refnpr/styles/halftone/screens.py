@@ -11,7 +11,7 @@ A screen spec is a string or a table (scene files, ``--param``):
   ``{kind = "strokes", layers = ["dark.png", "light.png"], levels = [0.0, 0.5],
   normal_map = "n.png"}`` reads hand-drawn layers (darkest first).
 * ``"material"``, a built-in texture name (``"brick"``, ``"grass"``, ...) or an image path, or
-  ``{kind = "dither", texture = "brick", window = 16, clip_limit = 0.01, uniform = true}``: a
+  ``{kind = "dither", texture = "brick", window = 16, clip_limit = 0.01, rank_equalize = true}``: a
   dither screen, the texture through :func:`refnpr.texture.clahe_pyramid` (shared with Veryovka's
   threshold textures); ``texture = "material"`` (the default) uses each object's own
   ``material.texture``.
@@ -39,6 +39,8 @@ from refnpr.texture import (
 )
 from refnpr.texture import screens as S
 
+from ..base import renamed_params
+
 __all__ = [
     "Screen",
     "normalize_spec",
@@ -57,7 +59,9 @@ STROKE_SETS = {"hatching": S.hatching_set, "bricks": S.brick_set}
 #: Built-in stroke sets that come with a normal map (individual stroke lighting, sec. 5.2).
 SETS_WITH_NORMALS = ("bricks",)
 _ENGRAVING_KEYS = {"profile": "triangle", "angle": 90.0, "size": 256}
-_DITHER_KEYS = {"texture": "material", "window": 16, "clip_limit": 0.01, "uniform": True}
+_DITHER_KEYS = {"texture": "material", "window": 16, "clip_limit": 0.01, "rank_equalize": True}
+#: Deprecated dither keys -> the threshold style's names for the same CLAHE settings.
+_DITHER_RENAMED = {"uniform": "rank_equalize"}
 _STROKE_FILE_KEYS = ("layers", "levels", "normal_map")
 _HOW = (
     "a screen is 'engraving', 'hatching', 'bricks', 'material', a built-in texture name "
@@ -119,6 +123,7 @@ def normalize_spec(spec: Any) -> dict[str, Any]:
         if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a):
             raise TypeError(f"screen.angle: expected a number of degrees, got {a!r}")
     elif kind == "dither":
+        spec = renamed_params("screen", spec, _DITHER_RENAMED, stacklevel=4)
         out = _with_defaults("dither", spec, _DITHER_KEYS)
         if not isinstance(out["texture"], str) or not out["texture"]:
             raise TypeError(
@@ -199,7 +204,7 @@ def build_screen(spec: dict[str, Any], material_texture: str | None) -> Screen:
             load_texture(name),
             window=spec["window"],
             clip_limit=spec["clip_limit"],
-            uniform=spec["uniform"],
+            uniform=spec["rank_equalize"],
         )
         return Screen("dither", pyr)
     if "layers" in spec:

@@ -12,7 +12,7 @@ import numpy as np
 
 from refnpr.formulas import halftone
 
-from .._common import check_choice, check_number, needs_position, rgba_from
+from .._common import check_choice, check_number, check_uv_scale, needs_position, rgba_from
 from ..base import ShadeContext, Style, register
 from . import screens as HS
 from .shading import lit_intensity, parse_indication, sample_indication, tangent_frame
@@ -32,21 +32,6 @@ def _colour(name: str, value: Any) -> tuple[float, float, float]:
     return (float(c[0]), float(c[1]), float(c[2]))
 
 
-def _uv_scale(name: str, value: Any) -> tuple[float, float] | None:
-    if value is None:
-        return None
-    v = [value, value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
-    try:
-        arr = np.array(v, dtype=np.float64)
-    except (TypeError, ValueError):
-        arr = np.array([np.nan])
-    if arr.shape != (2,) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise ValueError(
-            f"{name}: expected a positive number or two ([su, sv]) multiplying uv, got {value!r}"
-        )
-    return (float(arr[0]), float(arr[1]))
-
-
 @register
 class HalftoneStyle(Style):
     """Halftoning against a screen in texture space (Freudenberg et al. 2002).
@@ -64,7 +49,7 @@ class HalftoneStyle(Style):
         Centre the smooth ramp on the binary threshold (no tone bias; the paper's one-sided ramp
         lightens the mean tone by 1/(2c)).
     screen : str or table
-        Default screen of every object (see :mod:`refnpr.styles._halftone_screens`):
+        Default screen of every object (see :mod:`refnpr.styles.halftone.screens`):
         "hatching" (default), "bricks", "engraving", "material", a texture name or path, or a
         table such as ``{kind = "engraving", profile = "triangle", angle = 90}``.
     uv_scale : float or [su, sv], optional
@@ -93,14 +78,15 @@ class HalftoneStyle(Style):
         screen. "per_level": threshold the two bilinear level samples separately and blend the
         results with the trilinear weight (Veryovka's filtered thresholding); each level keeps
         its own tone, which blending screens does not.
-    equalize : bool
+    tone_correct : bool
         Map each bilinear level sample through the CDF of that level's interpolated values
-        (:func:`~refnpr.styles._halftone_screens.tone_luts`), so that thresholding keeps the tone
+        (:func:`~refnpr.styles.halftone.screens.tone_luts`), so that thresholding keeps the tone
         under bilinear filtering; implies per-level sampling. Engraving and dither screens only
         (a stroke map's layer greys are its design and are left alone).
     """
 
     name = "halftone"
+    renamed = {"equalize": "tone_correct"}  # the threshold style's name for the same correction
     description = "halftoning against engraving/dither/stroke-map screens (Freudenberg et al. 2002)"
 
     def __init__(
@@ -119,7 +105,7 @@ class HalftoneStyle(Style):
         lod_bias: float = 0.0,
         sample_lod: bool = False,
         mip: str = "trilinear",
-        equalize: bool = False,
+        tone_correct: bool = False,
     ) -> None:
         self.threshold = check_choice("threshold", threshold, ("smooth", "binary"))
         if isinstance(c, str) and c != "auto":
@@ -129,15 +115,15 @@ class HalftoneStyle(Style):
             "centred": centred,
             "specular": specular,
             "sample_lod": sample_lod,
-            "equalize": equalize,
+            "tone_correct": tone_correct,
         }
         for flag, val in flags.items():
             if not isinstance(val, (bool, np.bool_)):  # 1 and 0 are not flags
                 raise TypeError(f"{flag}: expected a bool (true/false), got {val!r}")
         self.centred, self.specular = bool(centred), bool(specular)
-        self.sample_lod, self.equalize = bool(sample_lod), bool(equalize)
+        self.sample_lod, self.tone_correct = bool(sample_lod), bool(tone_correct)
         self.screen_spec = HS.normalize_spec(screen)
-        self.uv_scale = _uv_scale("uv_scale", uv_scale)
+        self.uv_scale = check_uv_scale("uv_scale", uv_scale)
         self.indication = parse_indication(indication)
         self.ink, self.paper = _colour("ink", ink), _colour("paper", paper)
         self.lod_bias = check_number("lod_bias", lod_bias, lo=-16.0, hi=16.0)
@@ -159,7 +145,7 @@ class HalftoneStyle(Style):
             "lod_bias": self.lod_bias,
             "sample_lod": self.sample_lod,
             "mip": self.mip,
-            "equalize": self.equalize,
+            "tone_correct": self.tone_correct,
         }
 
     @staticmethod
@@ -188,11 +174,11 @@ class HalftoneStyle(Style):
                     table["indication"], f"objects.{name}.indication"
                 )
             if "indication_scale" in table:
-                entry["indication_scale"] = _uv_scale(
+                entry["indication_scale"] = check_uv_scale(
                     f"objects.{name}.indication_scale", table["indication_scale"]
                 )
             if "uv_scale" in table:
-                entry["uv_scale"] = _uv_scale(f"objects.{name}.uv_scale", table["uv_scale"])
+                entry["uv_scale"] = check_uv_scale(f"objects.{name}.uv_scale", table["uv_scale"])
             out[str(name)] = entry
         return out
 
@@ -292,7 +278,7 @@ class HalftoneStyle(Style):
                 iscale = np.asarray(settings.get("indication_scale") or (1.0, 1.0))
                 ind = sample_indication(imap, uv * iscale)
                 intensity = halftone.apply_indication(intensity, ind)  # sec. 5.1
-            equalize = self.equalize and screen.kind != "strokes"
+            equalize = self.tone_correct and screen.kind != "strokes"
             c_auto = None
             if self.c == "auto" and self.threshold == "smooth":
                 c_auto = self._auto_c(screen, coords, cdx, cdy, lod, n_axis)

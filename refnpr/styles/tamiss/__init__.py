@@ -1,6 +1,6 @@
 """TAMISS (Szécsi, Szirányi, Kacsó): tonal art maps with image-space strokes.
 
-The surfaces are hatched with an RPTAM stroke field (``_tamiss_field``), but instead of drawing the
+The surfaces are hatched with an RPTAM stroke field (``field``), but instead of drawing the
 strokes in texture space every covered sample emits a fragment (x, y, t, id) per stroke over it
 (fragment gathering); fragments are summed per stroke id (exactly, or by the paper's double-hashed
 table), a cubic x(t), y(t) and a visibility v(t) are fitted per stroke by four conjugate-gradient

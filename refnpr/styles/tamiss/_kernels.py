@@ -2,7 +2,7 @@
 
 * ``chart_labels``: connected components of a mesh's faces through shared vertex indices.
 * ``field_pass``: per G-buffer sample, enumerate the strokes of the RPTAM field
-  (``_tamiss_field``) that cover it, then either count/emit TAMISS fragments or accumulate the
+  (``field``) that cover it, then either count/emit TAMISS fragments or accumulate the
   anti-aliased TAM/RPTAM ink.
 * ``raster_strips``: anti-aliased rasterization of image-space triangle strips (supersampled
   coverage of the union of a strip's triangles), composited in order with "over".

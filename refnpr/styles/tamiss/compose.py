@@ -47,16 +47,16 @@ def composite_ink(
     ink_color: tuple[float, float, float],
     *,
     base: Style | None,
-    fill: tuple[float, float, float] | None,
+    paper: tuple[float, float, float] | None,
 ) -> np.ndarray:
     """(nH, nW, 4) float32 straight-alpha RGBA: ink (coverage ``ink``) over the base style, or over
-    the ``fill`` colour on covered samples, or over nothing (alpha = ink: the scene background
+    the ``paper`` colour on covered samples, or over nothing (alpha = ink: the scene background
     shows through, also where strokes run past the silhouette)."""
     shape = ink.shape
     if base is not None:
         under = np.asarray(base.shade(ctx), dtype=np.float64)
-    elif fill is not None:
-        under = rgba_from(np.asarray(fill), ctx.mask).astype(np.float64)
+    elif paper is not None:
+        under = rgba_from(np.asarray(paper), ctx.mask).astype(np.float64)
     else:
         under = np.zeros(shape + (4,))
     a = np.clip(ink, 0.0, 1.0)

@@ -2,7 +2,7 @@
 
 TAMISS (Szécsi et al.) gathers its fragments from an RPTAM (Szécsi and Szirányi 2014), which the
 paper only cites; DESIGN.md's notes fix what is needed. This module is the pure definition (numpy,
-no rasterization); ``_tamiss_kernels`` evaluates the same definition per G-buffer sample.
+no rasterization); ``_kernels`` evaluates the same definition per G-buffer sample.
 
 Coordinates. Per hatching layer with angle ``a`` (0: strokes along u, 90: along v), the scaled
 texture coordinates uv' = uv * uv_scale are rotated into stroke coordinates::

@@ -1,6 +1,6 @@
 """Fragment gathering (TAMISS sec. 3.1, fig. 6) and the texture-space TAM/RPTAM baseline.
 
-Both evaluate the stroke field of ``_tamiss_field`` at every covered G-buffer sample:
+Both evaluate the stroke field of ``field`` at every covered G-buffer sample:
 
 * :func:`gather_fragments`: every stroke whose band (``gather_width`` pixels across, t in [0, 1])
   covers the sample and that passes the tone/density test tau < rho * gain emits a fragment

@@ -38,18 +38,19 @@ class TamissStyle(Style):
     end_jitter (0), samples (16 per interval), aa (4 sub-samples per axis), brush (None),
     opacity (1)
     constant_tone : float or None, darkness to use instead of lighting
-    ink : colour of the strokes (black); fill : colour of the paper under them on the object
-    (None: the background shows); base : a style drawn under the strokes (overrides fill)
+    ink : colour of the strokes (black); paper : colour of the paper under them on the object
+    (None: the background shows); base : a style drawn under the strokes (overrides paper)
     """
 
     name = "tamiss"
+    renamed = {"fill": "paper"}  # the halftone style's name for the same colour
     description = "TAMISS: stroke-ID TAM fragments fitted to image-space strokes (Szécsi et al.)"
 
     def __init__(
         self,
         *,
         ink: Any = (0.0, 0.0, 0.0),
-        fill: Any = None,
+        paper: Any = None,
         base: Any = None,
         **params: Any,
     ) -> None:
@@ -60,11 +61,11 @@ class TamissStyle(Style):
                 raise TypeError(f"tamiss: {exc}".replace("from_params() ", "")) from None
             raise
         self.ink = check_color("ink", ink)
-        self.fill = check_color("fill", fill)
+        self.paper = check_color("paper", paper)
         self.base = base_style(base)
         self._params = self.pipeline_params.as_dict() | {
             "ink": list(self.ink),
-            "fill": None if self.fill is None else list(self.fill),
+            "paper": None if self.paper is None else list(self.paper),
             "base": None if self.base is None else self.base.params() | {"name": self.base.name},
         }
 
@@ -85,4 +86,4 @@ class TamissStyle(Style):
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
         result = self.run(ctx)
-        return composite_ink(ctx, result.ink, self.ink, base=self.base, fill=self.fill)
+        return composite_ink(ctx, result.ink, self.ink, base=self.base, paper=self.paper)

@@ -1,6 +1,6 @@
 """TAM/RPTAM baseline: the TAMISS stroke field drawn in texture space (Figure 1 left, Figure 3).
 
-Every covered sample is inked by the strokes of the RPTAM field over it (``_tamiss_field``: nested
+Every covered sample is inked by the strokes of the RPTAM field over it (``field``: nested
 seeds, levels from the dyadic scale with a fade-in of the next level, per-stroke tone thresholds),
 anti-aliased across the stroke at a pixel width and at its ends. Density is decided per sample, so
 a stroke is clipped (``density_mode="clip"``: binary test tau < rho) or faded
@@ -36,10 +36,11 @@ class TamStyle(Style):
     density_mode : 'clip' | 'fade' (per-sample binary or smooth density decision)
     fade : float, threshold range of the smooth decision (0.15)
     constant_tone : float or None, darkness to use instead of lighting
-    ink, fill, base : as for the ``tamiss`` style
+    ink, paper, base : as for the ``tamiss`` style
     """
 
     name = "tam"
+    renamed = {"fill": "paper"}  # the halftone style's name for the same colour
     description = "TAM/RPTAM texture-space hatching on the TAMISS stroke field (baseline)"
 
     def __init__(
@@ -58,7 +59,7 @@ class TamStyle(Style):
         fade: float = 0.15,
         constant_tone: float | None = None,
         ink: Any = (0.0, 0.0, 0.0),
-        fill: Any = None,
+        paper: Any = None,
         base: Any = None,
     ) -> None:
         self.field = StrokeField.from_params(
@@ -80,7 +81,7 @@ class TamStyle(Style):
             else check_number("constant_tone", constant_tone, lo=0.0, hi=1.0)
         )
         self.ink = check_color("ink", ink)
-        self.fill = check_color("fill", fill)
+        self.paper = check_color("paper", paper)
         self.base = base_style(base)
         self._params = self.field.as_dict() | {
             "width": self.width,
@@ -88,7 +89,7 @@ class TamStyle(Style):
             "fade": self.fade,
             "constant_tone": self.constant_tone,
             "ink": list(self.ink),
-            "fill": None if self.fill is None else list(self.fill),
+            "paper": None if self.paper is None else list(self.paper),
             "base": None if self.base is None else self.base.params() | {"name": self.base.name},
         }
 
@@ -111,4 +112,6 @@ class TamStyle(Style):
         )
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        return composite_ink(ctx, self.ink_coverage(ctx), self.ink, base=self.base, fill=self.fill)
+        return composite_ink(
+            ctx, self.ink_coverage(ctx), self.ink, base=self.base, paper=self.paper
+        )

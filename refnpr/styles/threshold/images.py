@@ -156,7 +156,7 @@ def image_thresholds(
         ``filter="none"``: one trilinear threshold per sample. ``filter="pcf"``: K samples on a
         k x k grid over the footprint, each thresholded at the two mip levels that trilinear
         filtering would blend, weighted (1 - Frac(lambda)) / K and Frac(lambda) / K; K = 1 is the
-        paper's two-level filtered thresholding. With ``p.pcf_levels == 1`` each footprint sample
+        paper's two-level filtered thresholding. With ``p.mip == "trilinear"`` each footprint sample
         is one trilinear threshold instead (the PCF of the binary image itself).
     tone_maps : list of ToneMaps or None, optional
         Per group (``p.tone_correct``): each level's bilinear samples are mapped through that
@@ -167,7 +167,7 @@ def image_thresholds(
     pcf = p.filter == "pcf"
     k = int(round(p.samples**0.5)) if pcf else 1
     kk = k * k
-    two = pcf and p.pcf_levels == 2
+    two = pcf and p.mip == "per_level"
     width = 2 * kk if two else kk
     t = np.full((m, width), p.t)
     w = np.full((m, width), 1.0 / width) if pcf else None

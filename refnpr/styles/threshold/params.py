@@ -3,16 +3,31 @@
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from .._common import check_choice, check_count, check_number
+from .._common import check_choice, check_count, check_number, check_uv_scale
+from ..base import renamed_params
 
-__all__ = ["SOURCES", "FILTERS", "CLAHE_LEVELS", "ThresholdParams", "parse_params"]
+__all__ = [
+    "SOURCES",
+    "FILTERS",
+    "CLAHE_LEVELS",
+    "MIPS",
+    "RENAMED",
+    "ThresholdParams",
+    "parse_params",
+]
 
 SOURCES = ("constant", "image", "lines", "stipple")
 FILTERS = ("none", "pcf", "analytic")
 CLAHE_LEVELS = ("all", "base", "none")
+MIPS = ("per_level", "trilinear")
+#: Deprecated names -> the names the other styles use for the same thing (accepted with a
+#: DeprecationWarning). ``scale`` and ``pcf_levels`` changed form too; see :func:`parse_params`.
+RENAMED = {"angles": "directions"}
+_WHERE = "style 'threshold'"
 
 
 def _bool(name: str, value: Any) -> bool:
@@ -45,7 +60,9 @@ class ThresholdParams:
     facing_fade: float = 0.0
     facing_power: float = 1.0
     tone_fade: tuple[float, float] = (0.0, 0.0)
-    scale: float = 1.0
+    uv_scale: tuple[float, float] | None = None
+    #: Deprecated (use ``uv_scale``): multiplies the material's uv_scale.
+    scale: float | None = None
     # image threshold textures (sec. 3.1)
     texture: str | None = None
     window: int = 16
@@ -54,11 +71,11 @@ class ThresholdParams:
     rank_equalize: bool = True
     clahe_levels: str = "all"
     tone_correct: bool = False
-    pcf_levels: int = 2
+    mip: str = "per_level"
     lod_bias: float = 0.0
     # procedural lines and dots (sec. 3.2)
     period: float = 8.0
-    angles: tuple[float, ...] = (0.0,)
+    directions: tuple[float, ...] = (0.0,)
     onsets: tuple[float, ...] | None = None
     uniform: bool = False
     multiscale: bool = True
@@ -76,8 +93,48 @@ class ThresholdParams:
         return out
 
 
+def _directions(value: Any) -> tuple[float, ...]:
+    """Hatching directions: 'u' (0 degrees), 'v' (90) or angles in degrees, as for ``tamiss``."""
+    vals = value if isinstance(value, (list, tuple)) else [value]
+    named = [{"u": 0.0, "v": 90.0}.get(d, d) if isinstance(d, str) else d for d in vals]
+    bad = [d for d in named if isinstance(d, str)]
+    if bad:
+        raise ValueError(
+            f"directions: each layer is 'u', 'v' or an angle in degrees from u towards v, "
+            f"got {bad[0]!r}"
+        )
+    return _numbers("directions", named, lo=-360.0, hi=360.0, what="hatching angles, degrees")
+
+
+def _deprecated_forms(kw: dict[str, Any]) -> dict[str, Any]:
+    """Old parameter names whose value changed form: ``pcf_levels`` (2 | 1) is ``mip``
+    ("per_level" | "trilinear", the halftone style's name); ``scale`` (a multiplier of the
+    material's uv_scale) gives way to ``uv_scale`` (replaces it, as in every other style)."""
+    if "pcf_levels" in kw:
+        levels = check_count("pcf_levels", kw["pcf_levels"], lo=1, hi=2)
+        kw = renamed_params(_WHERE, kw, {"pcf_levels": "mip"}, stacklevel=5)
+        kw["mip"] = MIPS[0] if levels == 2 else MIPS[1]
+    if "scale" in kw:
+        warnings.warn(
+            f"{_WHERE}: parameter 'scale' is deprecated, use 'uv_scale' (one name across styles;"
+            " it replaces the material's uv_scale, while 'scale' multiplied it)",
+            DeprecationWarning,
+            stacklevel=4,
+        )
+        if kw.get("uv_scale") is not None:
+            raise TypeError(
+                f"{_WHERE}: got both 'scale' (deprecated) and 'uv_scale'; pass only 'uv_scale'"
+            )
+    return kw
+
+
 def parse_params(**kw: Any) -> ThresholdParams:
-    """Validate keyword parameters into :class:`ThresholdParams` (clear errors naming each)."""
+    """Validate keyword parameters into :class:`ThresholdParams` (clear errors naming each).
+
+    Deprecated names (``angles``, ``pcf_levels``, ``scale``) are accepted with a
+    ``DeprecationWarning``.
+    """
+    kw = _deprecated_forms(renamed_params(_WHERE, kw, RENAMED, stacklevel=4))
     defaults = ThresholdParams()
     unknown = set(kw) - set(asdict(defaults))
     if unknown:
@@ -116,13 +173,13 @@ def parse_params(**kw: Any) -> ThresholdParams:
         )
     window = check_count("window", p["window"], lo=2, hi=4096)
     clip_limit = check_number("clip_limit", p["clip_limit"], lo=0.0, lo_open=True, hi=1.0)
-    angles = _numbers("angles", p["angles"], lo=-360.0, hi=360.0, what="hatching angles, degrees")
+    directions = _directions(p["directions"])
     onsets = p["onsets"]
     if onsets is not None:
-        onsets = _numbers("onsets", onsets, lo=0.0, hi=1.0, what="onset intensity per angle")
-        if len(onsets) != len(angles):
+        onsets = _numbers("onsets", onsets, lo=0.0, hi=1.0, what="onset intensity per direction")
+        if len(onsets) != len(directions):
             raise ValueError(
-                f"onsets: expected one onset per angle ({len(angles)}), got {list(onsets)}"
+                f"onsets: expected one onset per direction ({len(directions)}), got {list(onsets)}"
             )
         if min(onsets) <= 0.0 or max(onsets) != 1.0:
             raise ValueError(
@@ -144,7 +201,10 @@ def parse_params(**kw: Any) -> ThresholdParams:
         facing_fade=check_number("facing_fade", p["facing_fade"], lo=0.0, hi=1.0),
         facing_power=check_number("facing_power", p["facing_power"], lo=0.0, lo_open=True),
         tone_fade=(tone_fade[0], tone_fade[1]),
-        scale=check_number("scale", p["scale"], lo=0.0, lo_open=True),
+        uv_scale=check_uv_scale("uv_scale", p["uv_scale"]),
+        scale=None
+        if p["scale"] is None
+        else check_number("scale", p["scale"], lo=0.0, lo_open=True),
         texture=texture,
         window=window,
         clip_limit=clip_limit,
@@ -152,10 +212,10 @@ def parse_params(**kw: Any) -> ThresholdParams:
         rank_equalize=_bool("rank_equalize", p["rank_equalize"]),
         clahe_levels=check_choice("clahe_levels", p["clahe_levels"], CLAHE_LEVELS),
         tone_correct=_bool("tone_correct", p["tone_correct"]),
-        pcf_levels=check_count("pcf_levels", p["pcf_levels"], lo=1, hi=2),
+        mip=check_choice("mip", p["mip"], MIPS),
         lod_bias=check_number("lod_bias", p["lod_bias"], lo=-16.0, hi=16.0),
         period=check_number("period", p["period"], lo=0.0, lo_open=True),
-        angles=angles,
+        directions=directions,
         onsets=onsets,
         uniform=_bool("uniform", p["uniform"]),
         multiscale=_bool("multiscale", p["multiscale"]),

@@ -116,13 +116,13 @@ class LineLayer:
 
 
 def line_layers(fp: Footprint, p: ThresholdParams, s0: np.ndarray | None = None) -> list:
-    """The hatching layers of ``p.angles`` (degrees in texture space; 0 = lines parallel to u).
+    """The hatching layers of ``p.directions`` (degrees in texture space; 0 = lines parallel to u).
 
     ``s0`` optionally gives angle 0's dyadic scale (the G-buffer ``dyadic_scale`` channel).
     Without ``p.multiscale`` the scale is floored: eq. 6 alone, which pops at integer scales.
     """
     layers = []
-    for deg in p.angles:
+    for deg in p.directions:
         a = np.radians(deg)
         v = thr.hatch_coordinate(fp.uv, a)
         dvx = thr.hatch_coordinate(fp.gx, a)

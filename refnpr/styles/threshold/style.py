@@ -53,9 +53,11 @@ class ThresholdStyle(Style):
         "analytic": exact box filter of the thresholded lines (source "lines" only).
     samples : int, a square (1, 4, 9, 16, ...)
         K of "pcf".
-    pcf_levels : {2, 1}
-        Image "pcf": threshold every footprint sample at the two mip levels (sec. 4, default) or
-        against one trilinear threshold (converges to the supersampled binary image).
+    mip : {"per_level", "trilinear"}
+        Image "pcf": threshold every footprint sample at the two mip levels and blend (sec. 4,
+        default) or against one trilinear threshold (converges to the supersampled binary
+        image). The same name and values as the ``halftone`` style's ``mip``. Deprecated:
+        ``pcf_levels`` = 2 | 1.
     strength : float in [0, 1]
         Blend between eq. 1 (0) and eq. 2 (1) (sec. 5).
     facing_fade, facing_power : float
@@ -63,8 +65,9 @@ class ThresholdStyle(Style):
     tone_fade : [dark, bright], widths in [0, 0.5]
         Illumination fade: no effect at x = 0 and x = 1, smoothstep over these widths (Fig. 5
         right).
-    scale : float > 0
-        Multiplies texture coordinates (after the material's ``uv_scale``).
+    uv_scale : float > 0 or [su, sv], optional
+        Multiplies texture coordinates in place of each material's ``uv_scale`` (as in every
+        style). Deprecated: ``scale``, which multiplied the material's ``uv_scale``.
     texture : str or None
         Image threshold texture (built-in name or path) for every object; None: the materials'.
     window, clip_limit, nbins, rank_equalize : CLAHE settings (``refnpr.texture.clahe_pyramid``)
@@ -80,11 +83,12 @@ class ThresholdStyle(Style):
         Added to the mip LOD.
     period : float > 0
         Line period w of eq. 5 in pixels (lines and dots; the screen period lies in [w, 2w)).
-    angles : list of float
-        Hatching directions in texture space, degrees; 0 = lines parallel to u (functions of v).
-        Several angles give cross-hatching (``combine_thresholds``).
+    directions : list of 'u', 'v' or float
+        Hatching directions in texture space, degrees; 0 or 'u' = lines parallel to u (functions
+        of v), 'v' = 90. Several give cross-hatching (``combine_thresholds``). The same name and
+        convention as the ``tam`` and ``tamiss`` styles. Deprecated: ``angles``.
     onsets : list of float or None
-        Per-angle intensity below which that layer appears (the largest must be 1).
+        Per-direction intensity below which that layer appears (the largest must be 1).
     uniform : bool
         Tone-preserving multi-scale blend (``multiscale_line(uniform=True)``; dots: tone table)
         instead of the paper's eq. 8, which drifts in tone between integer scales.
@@ -125,7 +129,7 @@ class ThresholdStyle(Style):
     def _channel_scale(self) -> bool:
         """Single unfiltered lines read eq. 5 from the G-buffer's ``dyadic_scale`` channel."""
         p = self.p
-        return p.source == "lines" and p.filter == "none" and p.angles == (0.0,)
+        return p.source == "lines" and p.filter == "none" and p.directions == (0.0,)
 
     def requires(self, scene: Any) -> frozenset[str]:
         p = self.p
@@ -143,10 +147,20 @@ class ThresholdStyle(Style):
 
     # ----------------------------------------------------------------------------- per frame
 
+    def uv_scales(self, ctx: ShadeContext, mask: np.ndarray) -> np.ndarray:
+        """Per covered sample ``[su, sv]`` multiplying uv: the style's ``uv_scale`` or the
+        material's (times the deprecated ``scale``), ``(M, 2)`` float64."""
+        p = self.p
+        if p.uv_scale is None:
+            uvs = ctx.material_field("uv_scale", mask)
+        else:
+            uvs = np.broadcast_to(np.asarray(p.uv_scale, dtype=np.float64), (int(mask.sum()), 2))
+        return uvs if p.scale is None else uvs * p.scale
+
     def footprint(self, ctx: ShadeContext, mask: np.ndarray) -> Footprint:
         """Scaled texture coordinates and per-pixel derivatives of the covered samples."""
         gb = ctx.gb
-        uvs = ctx.material_field("uv_scale", mask) * self.p.scale
+        uvs = self.uv_scales(ctx, mask)
         uv = gb["uv"][mask].astype(np.float64) * uvs
         if "duv_dx" in gb and "duv_dy" in gb:
             gx = gb["duv_dx"][mask].astype(np.float64) * uvs
@@ -165,7 +179,7 @@ class ThresholdStyle(Style):
         if p.source == "lines":
             s0 = None
             if self._channel_scale() and "dyadic_scale" in ctx.gb:
-                sv = ctx.material_field("uv_scale", mask)[:, 1] * p.scale
+                sv = self.uv_scales(ctx, mask)[:, 1]
                 s0 = ctx.gb["dyadic_scale"][mask].astype(np.float64) - np.log2(sv)  # eq. 5
             return line_thresholds(fp, p, s0)
         if p.source == "stipple":
