@@ -422,11 +422,19 @@ RANK = {
 }
 #: Stricter than the ranks: what DESIGN.md says these parts may import.
 ONLY = {"formulas": set(), "raster": {"_jit"}, "_jit": set(), "refnpr": set()}
-#: Paper packages that must not import one another, per layer.
-PAPERS = {
-    "styles": {"threshold", "halftone", "xtoon", "tamiss"},
-    "formulas": {"threshold", "halftone", "xtoon", "tamiss"},
+#: Which paper each package speaks for: a module of one paper must not import another paper's,
+#: in any layer (the ``tam`` module is the documented path of the tamiss package's RPTAM style).
+PAPER_OF = {
+    **{("styles", p): p for p in ("threshold", "halftone", "xtoon", "tamiss")},
+    ("styles", "tam"): "tamiss",
+    **{("formulas", p): p for p in ("threshold", "halftone", "xtoon", "tamiss")},
+    ("texture", "screens"): "halftone",
 }
+
+
+def paper_of(name: str) -> str | None:
+    parts = name.split(".")
+    return PAPER_OF.get(tuple(parts[1:3])) if len(parts) >= 3 else None
 
 
 def module_files(root: Path, package: str) -> dict[str, Path]:
@@ -440,9 +448,30 @@ def module_files(root: Path, package: str) -> dict[str, Path]:
     return out
 
 
+def _is_type_checking(node: ast.AST) -> bool:
+    test = getattr(node, "test", None)
+    return isinstance(node, ast.If) and (
+        (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING")
+        or (isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+    )
+
+
+def _dynamic_target(node: ast.AST) -> str | None:
+    """``importlib.import_module("x")`` / ``import_module("x")`` / ``__import__("x")``."""
+    if not isinstance(node, ast.Call) or not node.args:
+        return None
+    f = node.func
+    fname = f.attr if isinstance(f, ast.Attribute) else getattr(f, "id", None)
+    arg = node.args[0]
+    if fname in ("import_module", "__import__") and isinstance(arg, ast.Constant):
+        return arg.value if isinstance(arg.value, str) else None
+    return None
+
+
 def imports_of(name: str, path: Path, modules: dict[str, Path], *, top_level_only: bool):
     """Modules of the package that ``name`` imports (``from a import b`` -> ``a.b`` when that is a
-    module). ``top_level_only``: only statements run at import time (not inside functions)."""
+    module; dynamic imports by a constant name too). ``top_level_only``: only what runs at import
+    time (not inside functions, not under ``if TYPE_CHECKING:``)."""
     tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     root = next(iter(modules)).split(".")[0]
@@ -452,6 +481,9 @@ def imports_of(name: str, path: Path, modules: dict[str, Path], *, top_level_onl
         while stack:
             node = stack.pop()
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+                continue
+            if _is_type_checking(node):
+                stack.extend(node.orelse)
                 continue
             nodes.append(node)
             stack.extend(ast.iter_child_nodes(node))
@@ -471,6 +503,8 @@ def imports_of(name: str, path: Path, modules: dict[str, Path], *, top_level_onl
                 f"{target}.{a.name}" if f"{target}.{a.name}" in modules else target
                 for a in node.names
             ]
+        elif _dynamic_target(node):
+            targets = [_dynamic_target(node)]
         else:
             continue
         for t in targets:
@@ -491,15 +525,12 @@ def layer_violations(root: Path, package: str) -> list[str]:
         for tgt_name in imports_of(name, path, modules, top_level_only=False):
             tgt_parts = tgt_name.split(".")
             tgt = tgt_parts[1] if len(tgt_parts) > 1 else package
-            if tgt == src:
-                layer = PAPERS.get(src, set())
-                a = src_parts[2] if len(src_parts) > 2 else None
-                b = tgt_parts[2] if len(tgt_parts) > 2 else None
-                if a in layer and b in layer and a != b:
-                    bad.append(f"{name} imports {tgt_name}: one paper's package uses another's")
+            a, b = paper_of(name), paper_of(tgt_name)
+            if a and b and a != b:
+                bad.append(f"{name} imports {tgt_name}: one paper's package uses another's")
                 continue
-            if tgt == package:
-                continue  # the root package (__version__)
+            if tgt == src or tgt == package:
+                continue  # within a part, or the root package (__version__)
             src_key = src if src in RANK else "refnpr"
             if tgt not in RANK:
                 bad.append(f"{name} imports {tgt_name}: unknown part {tgt!r}; give it a RANK")
@@ -611,6 +642,28 @@ def test_checker_reports_papers_importing_each_other_and_sideways_parts(tmp_path
     assert any("one paper's package uses another's" in b for b in bad)
 
 
+def test_checker_reports_dynamic_and_cross_layer_paper_imports(tmp_path):
+    root = _tree(
+        tmp_path,
+        {
+            "__init__.py": "",
+            "formulas/__init__.py": "",
+            "formulas/tamiss/__init__.py": "",
+            "styles/__init__.py": "",
+            "styles/tam.py": "",
+            "styles/xtoon/__init__.py": "from refnpr.formulas import tamiss\n",  # other paper
+            "styles/xtoon/a.py": "from .. import tam\n",  # tamiss through its shim
+            "texture/__init__.py": "import importlib\nR = importlib.import_module('refnpr.render')\n",
+            "render.py": "",
+        },
+    )
+    bad = layer_violations(root, "refnpr")
+    assert len(bad) == 3, bad
+    assert any("refnpr.styles.xtoon imports refnpr.formulas.tamiss" in b for b in bad)
+    assert any("refnpr.styles.xtoon.a imports refnpr.styles.tam" in b for b in bad)
+    assert any("refnpr.texture imports refnpr.render: render is not below" in b for b in bad)
+
+
 def test_checker_reports_a_cycle_but_not_lazy_imports(tmp_path):
     root = _tree(
         tmp_path,
@@ -622,6 +675,8 @@ def test_checker_reports_a_cycle_but_not_lazy_imports(tmp_path):
             "styles/c.py": "from .a import g\n",
             "styles/d.py": "from . import e\n",
             "styles/e.py": "def h():\n    from . import d\n",  # lazy: no import-time cycle
+            "styles/f.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from . import g\n",
+            "styles/g.py": "from . import f\n",  # f imports g for type checkers only
         },
     )
     assert import_cycles(root, "refnpr") == [
@@ -657,6 +712,15 @@ def test_no_prefix_modules_stand_in_for_packages(layer):
 )
 def test_each_paper_has_its_package(package):
     assert (ROOT / package / "__init__.py").is_file()
+
+
+def test_no_module_beside_a_package_of_the_same_name():
+    shadowed = [
+        p
+        for p in ROOT.rglob("*.py")
+        if p.name != "__init__.py" and (p.with_suffix("") / "__init__.py").exists()
+    ]
+    assert shadowed == [], f"remove {shadowed}: the package of the same name wins on import"
 
 
 def test_numba_code_lives_in_kernel_modules():

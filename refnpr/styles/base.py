@@ -8,12 +8,14 @@ without textures never interpolates uv.
 from __future__ import annotations
 
 import functools
-import warnings
+import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+
+from ._names import check_known, renamed_params
 
 __all__ = [
     "Style",
@@ -22,41 +24,7 @@ __all__ = [
     "get_style",
     "list_styles",
     "style_from_spec",
-    "renamed_params",
 ]
-
-
-def renamed_params(
-    where: str, params: Mapping[str, Any], renamed: Mapping[str, str], *, stacklevel: int = 3
-) -> dict[str, Any]:
-    """``params`` with deprecated parameter names replaced by the current ones.
-
-    Each old name found gives a ``DeprecationWarning`` naming both; passing both names is a
-    ``TypeError``. Styles list their old names in ``Style.renamed`` (applied by :func:`register`);
-    nested tables (contours, screens) call this where they are parsed.
-
-    Parameters
-    ----------
-    where : str
-        What the parameters belong to, for the message (``"style 'halftone'"``, ``"contours"``).
-    params : mapping of str to any
-    renamed : mapping of old name -> current name
-    """
-    out = dict(params)
-    for old, new in renamed.items():
-        if old not in out:
-            continue
-        if new in out:
-            raise TypeError(
-                f"{where}: got both {old!r} (the deprecated name) and {new!r}; pass only {new!r}"
-            )
-        warnings.warn(
-            f"{where}: parameter {old!r} is deprecated, use {new!r} (one name across styles)",
-            DeprecationWarning,
-            stacklevel=stacklevel,
-        )
-        out[new] = out.pop(old)
-    return out
 
 
 class Style:
@@ -70,6 +38,17 @@ class Style:
     description: ClassVar[str] = ""
     #: Deprecated parameter names -> current names, still accepted with a DeprecationWarning.
     renamed: ClassVar[Mapping[str, str]] = {}
+    #: Deprecated names whose value changed form; the style converts them itself (with a warning).
+    deprecated: ClassVar[tuple[str, ...]] = ()
+
+    @classmethod
+    def parameters(cls) -> tuple[str, ...]:
+        """The parameter names ``__init__`` takes (current names; sorted)."""
+        sig = inspect.signature(inspect.unwrap(cls.__init__))
+        kinds = (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
+        return tuple(
+            sorted(n for n, p in sig.parameters.items() if n != "self" and p.kind not in kinds)
+        )
 
     def requires(self, scene: Any) -> frozenset[str]:
         """G-buffer channels this style reads for ``scene``."""
@@ -159,17 +138,21 @@ _REGISTRY: dict[str, Callable[..., Style]] = {}
 def register(cls: type[Style]) -> type[Style]:
     """Class decorator adding a style to the registry under ``cls.name``.
 
-    When the class lists ``renamed`` parameters, its ``__init__`` accepts the old names too (a
-    ``DeprecationWarning`` each), for direct construction as for :func:`get_style`.
+    Its ``__init__`` is wrapped so that, for direct construction as for :func:`get_style`,
+    deprecated names (``cls.renamed``) are accepted with a ``DeprecationWarning`` and an unknown
+    name is a ``TypeError`` that lists the valid ones (``cls.parameters()``).
     """
     if not cls.name:
         raise ValueError(f"{cls.__name__}: a registered style needs a non-empty `name`")
-    if cls.renamed and "renamed" in cls.__dict__:
+    if "__init__" in cls.__dict__:
         init = cls.__init__
 
         @functools.wraps(init)
         def __init__(self, *args: Any, **params: Any) -> None:
-            init(self, *args, **renamed_params(f"style {cls.name!r}", params, cls.renamed))
+            where = f"style {cls.name!r}"
+            params = renamed_params(where, params, cls.renamed)
+            check_known(where, set(params) - set(cls.deprecated), cls.parameters())
+            init(self, *args, **params)
 
         cls.__init__ = __init__
     _REGISTRY[cls.name] = cls

@@ -13,14 +13,16 @@ silhouette borders a farther surface or the background); ``depth_tolerance`` is 
 
 from __future__ import annotations
 
-from dataclasses import InitVar, dataclass, fields
+import functools
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from . import _kernels as K
 from ._common import check_number
-from .base import ShadeContext, Style, get_style, register, renamed_params, style_from_spec
+from ._names import renamed_params, warn_deprecated
+from .base import ShadeContext, Style, get_style, register, style_from_spec
 
 __all__ = ["EdgeTable", "ContourLayer", "Contoured", "edge_table"]
 
@@ -106,16 +108,8 @@ class ContourLayer:
     boundaries: bool = True
     crease_angle: float | None = None
     depth_tolerance: float = 0.01
-    color: InitVar[Any] = None  # deprecated name of ``ink``
 
-    def __post_init__(self, color: Any) -> None:
-        if color is not None:
-            kw = renamed_params("contours", {"color": color}, {"color": "ink"}, stacklevel=4)
-            if self.ink != (0.0, 0.0, 0.0):
-                raise TypeError(
-                    "contours: got both 'color' (the deprecated name) and 'ink'; pass only 'ink'"
-                )
-            object.__setattr__(self, "ink", kw["ink"])
+    def __post_init__(self) -> None:
         check_number("width", self.width, lo=0.0, lo_open=True, hi=_MAX_WIDTH)
         try:
             c = np.asarray(self.ink, dtype=np.float64)
@@ -129,6 +123,20 @@ class ContourLayer:
         if self.crease_angle is not None:
             check_number("crease_angle", self.crease_angle, lo=0.0, lo_open=True, hi=180.0)
         check_number("depth_tolerance", self.depth_tolerance, lo=0.0)
+
+    @property
+    def color(self) -> tuple[float, float, float]:
+        """Deprecated name of :attr:`ink`."""
+        warn_deprecated(
+            "contours: attribute 'color' is deprecated, use 'ink' (one name across styles)"
+        )
+        return self.ink
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        state = dict(state)
+        if "color" in state:  # pickled before the rename
+            state.setdefault("ink", state.pop("color"))
+        self.__dict__.update(state)
 
     def selected_edges(
         self, table: EdgeTable, positions: np.ndarray, faces: np.ndarray, eye: np.ndarray
@@ -178,6 +186,17 @@ class ContourLayer:
         return cov
 
 
+_layer_init = ContourLayer.__init__
+
+
+@functools.wraps(_layer_init)
+def _layer_init_renamed(self: ContourLayer, *args: Any, **params: Any) -> None:
+    _layer_init(self, *args, **renamed_params("contours", params, {"color": "ink"}))
+
+
+ContourLayer.__init__ = _layer_init_renamed  # deprecated ``color`` -> ``ink``, with a warning
+
+
 @register
 class Contoured(Style):
     """Any style with the contour layer composited over it.
@@ -198,7 +217,7 @@ class Contoured(Style):
         if contours is True:
             contours = ContourLayer()
         elif isinstance(contours, dict):
-            contours = renamed_params("contours", contours, {"color": "ink"}, stacklevel=5)
+            contours = renamed_params("contours", contours, {"color": "ink"})
             valid = sorted(f.name for f in fields(ContourLayer))
             unknown = sorted(set(contours) - set(valid))
             if unknown:

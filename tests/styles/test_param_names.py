@@ -6,7 +6,7 @@ The table ``CONCEPTS`` is the rule: every style that has the concept takes it un
 from __future__ import annotations
 
 import dataclasses
-import inspect
+import pickle
 import warnings
 
 import numpy as np
@@ -18,23 +18,17 @@ from refnpr.styles import get_style, style_from_spec
 from refnpr.styles.contours import ContourLayer
 from refnpr.styles.halftone import HalftoneStyle, screens
 from refnpr.styles.tam import TamStyle
-from refnpr.styles.tamiss import TamissParams, TamissStyle
+from refnpr.styles.tamiss import TamissStyle
 from refnpr.styles.threshold import ThresholdStyle
-from refnpr.styles.threshold.params import ThresholdParams
 
 from .test_threshold_tone import flat_scene
 
 
 def accepted(cls) -> set[str]:
     """Every parameter name a style (or the contour layer) takes."""
-    if cls is ThresholdStyle:
-        return {f.name for f in dataclasses.fields(ThresholdParams)} - {"scale"}
     if cls is ContourLayer:
         return {f.name for f in dataclasses.fields(ContourLayer)}
-    names = set(inspect.signature(cls.__init__).parameters) - {"self", "params", "args"}
-    if cls is TamissStyle:  # the rest goes to the pipeline's parameters and its stroke field
-        names |= set(inspect.signature(TamissParams.from_params).parameters) - {"cls", "params"}
-    return names
+    return set(cls.parameters())
 
 
 #: concept -> (its one name, the classes that have the concept)
@@ -167,3 +161,79 @@ def test_dither_screen_uniform_is_rank_equalize():
 def test_material_uv_scale_default_is_one():
     # the agreement of `scale` and `uv_scale` on the golden scenes rests on this default
     assert Material().uv_scale == (1.0, 1.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# where the warnings point, unknown names, odd values
+# ---------------------------------------------------------------------------------------------
+OLD_SPELLINGS = [
+    lambda: get_style("threshold", angles=[0.0]),
+    lambda: style_from_spec({"name": "threshold", "pcf_levels": 1}),
+    lambda: ThresholdStyle(scale=2.0),
+    lambda: HalftoneStyle(equalize=True),
+    lambda: HalftoneStyle(screen={"kind": "dither", "texture": "brick", "uniform": True}),
+    lambda: get_style("halftone", objects={"a": {"screen": {"kind": "dither", "uniform": True}}}),
+    lambda: style_from_spec({"name": "tam", "fill": 0.5}),
+    lambda: style_from_spec({"name": "toon", "contours": {"color": [1.0, 0.0, 0.0]}}),
+    lambda: get_style("contoured", contours={"color": [1.0, 0.0, 0.0]}),
+    lambda: ContourLayer(color=(1.0, 0.0, 0.0)),
+]
+
+
+@pytest.mark.parametrize("make", OLD_SPELLINGS)
+def test_deprecation_warnings_point_at_the_caller(make):
+    """Attributed to the first frame outside refnpr, so Python's default filters show them in a
+    user's script (and for the `refnpr` command, whose frames are refnpr's, at its entry point)."""
+    with pytest.warns(DeprecationWarning, match=r"is deprecated, use") as record:
+        make()
+    assert {w.filename for w in record} == {__file__}
+
+
+@pytest.mark.parametrize(
+    "name", ["smooth", "toon", "threshold", "halftone", "xtoon", "tam", "tamiss", "contoured"]
+)
+def test_unknown_parameter_lists_the_valid_ones(name):
+    cls = type(get_style(name))
+    valid = cls.parameters()
+    assert valid and "bogus" not in valid
+    with pytest.raises(
+        TypeError,
+        match=rf"style '{name}': unknown parameter\(s\) \['bogus'\]; valid parameters: \[",
+    ):
+        get_style(name, bogus=1)
+    with pytest.raises(TypeError, match=r"unknown parameter\(s\) \['bogus'\]"):
+        cls(bogus=1)  # direct construction too
+    for param in valid:  # every listed name is accepted at all (its default or None is valid)
+        assert param.isidentifier()
+
+
+def test_threshold_directions_accept_arrays_and_single_values():
+    assert ThresholdStyle(directions=np.array([0.0, 90.0])).p.directions == (0.0, 90.0)
+    assert ThresholdStyle(directions=45).p.directions == (45.0,)
+    with pytest.warns(DeprecationWarning):
+        assert ThresholdStyle(angles=np.array([30, -60])).p.directions == (30.0, -60.0)
+
+
+def test_contour_layer_color_attribute_and_old_pickles():
+    layer = ContourLayer(ink=(0.0, 0.0, 1.0))
+    with pytest.warns(DeprecationWarning, match=r"attribute 'color' is deprecated, use 'ink'"):
+        assert layer.color == (0.0, 0.0, 1.0)
+    assert dataclasses.replace(layer, width=3.0).ink == (0.0, 0.0, 1.0)
+    assert layer == pickle.loads(pickle.dumps(layer))
+    old = object.__new__(ContourLayer)  # the state a pickle made before the rename restores
+    old.__setstate__(
+        {
+            **{
+                f.name: getattr(layer, f.name) for f in dataclasses.fields(layer) if f.name != "ink"
+            },
+            "color": (1.0, 0.0, 0.0),
+        }
+    )
+    assert old.ink == (1.0, 0.0, 0.0) and old == ContourLayer(ink=(1.0, 0.0, 0.0))
+
+
+def test_halftone_params_use_current_screen_keys():
+    with pytest.warns(DeprecationWarning):
+        old = HalftoneStyle(screen={"kind": "dither", "texture": "brick", "uniform": False})
+    new = HalftoneStyle(screen={"kind": "dither", "texture": "brick", "rank_equalize": False})
+    assert old.params() == new.params()

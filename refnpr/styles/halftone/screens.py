@@ -39,10 +39,11 @@ from refnpr.texture import (
 )
 from refnpr.texture import screens as S
 
-from ..base import renamed_params
+from .._names import renamed_params
 
 __all__ = [
     "Screen",
+    "current_names",
     "normalize_spec",
     "has_normal_map",
     "build_screen",
@@ -94,6 +95,14 @@ def _bad(spec: Any, why: str) -> ValueError:
     return ValueError(f"screen: {why}, got {spec!r}; {_HOW}")
 
 
+def current_names(spec: Any) -> Any:
+    """A screen spec as given, with deprecated keys under their current names (no warning:
+    :func:`normalize_spec` warns); for a style's ``params()``."""
+    if isinstance(spec, dict) and spec.get("kind") == "dither":
+        return renamed_params("screen", spec, _DITHER_RENAMED, warn=False)
+    return spec
+
+
 def normalize_spec(spec: Any) -> dict[str, Any]:
     """A screen spec as a full table (kind and every option), validating keys and values."""
     if isinstance(spec, str):
@@ -123,7 +132,7 @@ def normalize_spec(spec: Any) -> dict[str, Any]:
         if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a):
             raise TypeError(f"screen.angle: expected a number of degrees, got {a!r}")
     elif kind == "dither":
-        spec = renamed_params("screen", spec, _DITHER_RENAMED, stacklevel=4)
+        spec = renamed_params("screen", spec, _DITHER_RENAMED)
         out = _with_defaults("dither", spec, _DITHER_KEYS)
         if not isinstance(out["texture"], str) or not out["texture"]:
             raise TypeError(

@@ -135,9 +135,14 @@ class HalftoneStyle(Style):
             "threshold": self.threshold,
             "c": self.c,
             "centred": self.centred,
-            "screen": screen,
+            "screen": HS.current_names(screen),
             "uv_scale": uv_scale,
-            "objects": objects,
+            "objects": None
+            if objects is None
+            else {
+                k: {**v, "screen": HS.current_names(v["screen"])} if "screen" in v else v
+                for k, v in objects.items()
+            },
             "indication": indication,
             "specular": self.specular,
             "ink": list(self.ink),

@@ -4,6 +4,7 @@ docstring (:mod:`refnpr.styles.tamiss`) describes the technique and the pipeline
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 import numpy as np
@@ -46,6 +47,12 @@ class TamissStyle(Style):
     renamed = {"fill": "paper"}  # the halftone style's name for the same colour
     description = "TAMISS: stroke-ID TAM fragments fitted to image-space strokes (Szécsi et al.)"
 
+    @classmethod
+    def parameters(cls) -> tuple[str, ...]:
+        own = super().parameters()
+        sig = inspect.signature(TamissParams.from_params)
+        return tuple(sorted((*own, *(n for n in sig.parameters if n != "cls"))))
+
     def __init__(
         self,
         *,
@@ -54,12 +61,7 @@ class TamissStyle(Style):
         base: Any = None,
         **params: Any,
     ) -> None:
-        try:
-            self.pipeline_params = TamissParams.from_params(**params)
-        except TypeError as exc:
-            if "unexpected keyword" in str(exc):
-                raise TypeError(f"tamiss: {exc}".replace("from_params() ", "")) from None
-            raise
+        self.pipeline_params = TamissParams.from_params(**params)
         self.ink = check_color("ink", ink)
         self.paper = check_color("paper", paper)
         self.base = base_style(base)

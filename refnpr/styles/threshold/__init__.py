@@ -15,15 +15,16 @@ Scene files and the CLI reach every parameter::
     [style]
     name = "threshold"
     source = "lines"
-    angles = [45.0, -45.0]
+    directions = [45.0, -45.0]
     filter = "analytic"
     contours = { width = 1.5 }
 
-    refnpr render --scene vase --style threshold --param source='"lines"' --param angles=[0,90]
+    refnpr render --scene vase --style threshold --param source='"lines"' --param directions=[0,90]
 """
 
 from __future__ import annotations
 
+from .params import ThresholdParams
 from .style import ThresholdStyle
 
-__all__ = ["ThresholdStyle"]
+__all__ = ["ThresholdStyle", "ThresholdParams"]

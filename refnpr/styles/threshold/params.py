@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import math
-import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from typing import Any
 
+import numpy as np
+
 from .._common import check_choice, check_count, check_number, check_uv_scale
-from ..base import renamed_params
+from .._names import check_known, renamed_params, warn_deprecated
 
 __all__ = [
     "SOURCES",
@@ -27,6 +28,7 @@ MIPS = ("per_level", "trilinear")
 #: Deprecated names -> the names the other styles use for the same thing (accepted with a
 #: DeprecationWarning). ``scale`` and ``pcf_levels`` changed form too; see :func:`parse_params`.
 RENAMED = {"angles": "directions"}
+DEPRECATED = ("scale", "pcf_levels")
 _WHERE = "style 'threshold'"
 
 
@@ -93,9 +95,15 @@ class ThresholdParams:
         return out
 
 
+#: The names the style takes (``scale`` is the deprecated form of ``uv_scale``).
+PARAMETERS = tuple(sorted({f.name for f in fields(ThresholdParams)} - {"scale"}))
+
+
 def _directions(value: Any) -> tuple[float, ...]:
-    """Hatching directions: 'u' (0 degrees), 'v' (90) or angles in degrees, as for ``tamiss``."""
-    vals = value if isinstance(value, (list, tuple)) else [value]
+    """Hatching directions: 'u' (0 degrees), 'v' (90) or angles in degrees, as for ``tamiss``;
+    a list (tuple, 1-D array) of them or a single one."""
+    one = isinstance(value, (str, bytes, dict)) or np.ndim(value) == 0
+    vals = [value] if one else list(value)
     named = [{"u": 0.0, "v": 90.0}.get(d, d) if isinstance(d, str) else d for d in vals]
     bad = [d for d in named if isinstance(d, str)]
     if bad:
@@ -112,14 +120,12 @@ def _deprecated_forms(kw: dict[str, Any]) -> dict[str, Any]:
     material's uv_scale) gives way to ``uv_scale`` (replaces it, as in every other style)."""
     if "pcf_levels" in kw:
         levels = check_count("pcf_levels", kw["pcf_levels"], lo=1, hi=2)
-        kw = renamed_params(_WHERE, kw, {"pcf_levels": "mip"}, stacklevel=5)
+        kw = renamed_params(_WHERE, kw, {"pcf_levels": "mip"})
         kw["mip"] = MIPS[0] if levels == 2 else MIPS[1]
     if "scale" in kw:
-        warnings.warn(
+        warn_deprecated(
             f"{_WHERE}: parameter 'scale' is deprecated, use 'uv_scale' (one name across styles;"
-            " it replaces the material's uv_scale, while 'scale' multiplied it)",
-            DeprecationWarning,
-            stacklevel=4,
+            " it replaces the material's uv_scale, while 'scale' multiplied it)"
         )
         if kw.get("uv_scale") is not None:
             raise TypeError(
@@ -134,13 +140,9 @@ def parse_params(**kw: Any) -> ThresholdParams:
     Deprecated names (``angles``, ``pcf_levels``, ``scale``) are accepted with a
     ``DeprecationWarning``.
     """
-    kw = _deprecated_forms(renamed_params(_WHERE, kw, RENAMED, stacklevel=4))
+    kw = _deprecated_forms(renamed_params(_WHERE, kw, RENAMED))
     defaults = ThresholdParams()
-    unknown = set(kw) - set(asdict(defaults))
-    if unknown:
-        raise TypeError(
-            f"unknown parameter(s) {sorted(unknown)}; valid parameters: {sorted(asdict(defaults))}"
-        )
+    check_known(_WHERE, set(kw) - {"scale"}, PARAMETERS)
     p = {**asdict(defaults), **kw}
     source = check_choice("source", p["source"], SOURCES)
     filt = check_choice("filter", p["filter"], FILTERS)

@@ -14,7 +14,7 @@ from refnpr.texture import MipPyramid
 from .._common import needs_position, rgba_from, specular_field
 from ..base import ShadeContext, Style, register
 from .images import PyramidCache, image_thresholds
-from .params import ThresholdParams, parse_params
+from .params import DEPRECATED, PARAMETERS, RENAMED, ThresholdParams, parse_params
 from .sources import (
     Footprint,
     constant_thresholds,
@@ -83,7 +83,7 @@ class ThresholdStyle(Style):
         Added to the mip LOD.
     period : float > 0
         Line period w of eq. 5 in pixels (lines and dots; the screen period lies in [w, 2w)).
-    directions : list of 'u', 'v' or float
+    directions : 'u', 'v', float, or a list of them
         Hatching directions in texture space, degrees; 0 or 'u' = lines parallel to u (functions
         of v), 'v' = 90. Several give cross-hatching (``combine_thresholds``). The same name and
         convention as the ``tam`` and ``tamiss`` styles. Deprecated: ``angles``.
@@ -102,10 +102,16 @@ class ThresholdStyle(Style):
     """
 
     name = "threshold"
+    renamed = RENAMED
+    deprecated = DEPRECATED
     description = (
         "threshold-texture shading (Veryovka 2002): constant, CLAHE image pyramid, multi-scale "
         "lines/cross-hatching/stipple; filtered thresholding; strength blending"
     )
+
+    @classmethod
+    def parameters(cls) -> tuple[str, ...]:
+        return tuple(sorted((*PARAMETERS, "pyramid")))
 
     def __init__(self, *, pyramid: MipPyramid | None = None, **params: Any) -> None:
         self.p: ThresholdParams = parse_params(**params)

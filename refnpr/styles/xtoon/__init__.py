@@ -35,9 +35,18 @@ same attribute map, evaluated with the mesh normals), a grey texture at uv, or a
 
 from __future__ import annotations
 
+from .params import DETAILS
 from .presets import PRESETS
-from .shape import AbstractedNormals, abstract_normals
+from .shape import SHAPES, AbstractedNormals, abstract_normals
 from .style import XToonStyle
 from .texture import resolve_texture
 
-__all__ = ["XToonStyle", "AbstractedNormals", "abstract_normals", "resolve_texture", "PRESETS"]
+__all__ = [
+    "XToonStyle",
+    "AbstractedNormals",
+    "abstract_normals",
+    "resolve_texture",
+    "PRESETS",
+    "DETAILS",
+    "SHAPES",
+]

@@ -13,7 +13,7 @@ import numpy as np
 from .._common import check_choice, rgba_from
 from ..base import ShadeContext, Style, register
 from .detail import DetailParams
-from .evaluate import Config, evaluate, plan, vertex_values
+from .evaluation import Config, evaluate, plan, vertex_values
 from .geometry import VertexGeometry
 from .params import DETAILS, camera_spec, number, unit_map, vec3, weight_spec
 from .shape import SHAPES, AbstractedNormals
