@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from . import _memory
 from .image import Image
 from .raster import Camera, rasterize
+from .raster.rasterize import attribute_widths
 from .styles import ShadeContext, Style, style_from_spec
 
 __all__ = ["render", "required_channels", "DEFAULT_STYLE"]
@@ -38,6 +41,44 @@ def _style_of(style: Any, scene: Any) -> Style:
         spec = getattr(scene, "style", None) or DEFAULT_STYLE
         return style_from_spec(spec)
     return style_from_spec(style)
+
+
+def _check_int(name: str, value: Any, lo: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}")
+    if value < lo:
+        raise ValueError(f"{name}: expected an integer >= {lo}, got {value}")
+    return int(value)
+
+
+def _check_args(width: Any, height: Any, spp: Any, camera: Any, progress: Any, gbuf: Any):
+    """render's own arguments, checked before any scene work (spp's square-ness: rasterize)."""
+    width = _check_int("width", width, 1)
+    height = _check_int("height", height, 1)
+    spp = _check_int("spp", spp, 1)
+    if camera is not None and not isinstance(camera, Camera):
+        raise TypeError(
+            f"camera: expected a refnpr.raster.Camera or None (the scene's camera), "
+            f"got {type(camera).__name__} {camera!r}"
+        )
+    if progress is not None and not callable(progress):
+        raise TypeError(
+            "progress: expected a callable progress(phase: str, fraction: float) or None, "
+            f"got {type(progress).__name__} {progress!r}"
+        )
+    if not isinstance(gbuf, (bool, np.bool_)):
+        raise TypeError(f"return_gbuffer: expected a bool, got {type(gbuf).__name__} {gbuf!r}")
+    return width, height, spp
+
+
+def _check_memory(scene: Any, style: Style, channels, width: int, height: int, spp: int):
+    """Refuse a render whose sample grid would not fit, before the rasterizer allocates."""
+    if spp > _memory.MAX_SPP or math.isqrt(spp) ** 2 != spp:
+        return  # rasterize says what is wrong with spp
+    meshes = list(scene.world_meshes())  # memoized per object: rasterize reuses them
+    attrs = attribute_widths(meshes) if meshes else {}
+    parts = _memory.render_bytes(width, height, spp, channels, style.name, attributes=attrs)
+    _memory.check_fits(width, height, spp, parts)
 
 
 def required_channels(scene: Any, style: Any = None) -> frozenset[str]:
@@ -83,15 +124,17 @@ def render(
         ``rgba`` (H, W, 4) float32 linear straight-alpha, composited over ``scene.background``.
     """
     t0 = time.perf_counter()
+    width, height, spp = _check_args(width, height, spp, camera, progress, return_gbuffer)
     scene = _scene_of(scene)
     style = _style_of(style, scene)
     cam = camera if camera is not None else scene.camera
     channels = sorted(style.requires(scene))
-    if progress:
+    _check_memory(scene, style, channels, width, height, spp)
+    if progress is not None:
         progress("rasterize", 0.0)
     gb = rasterize(scene, cam, width, height, channels, spp, **style.raster_options(scene))
     t1 = time.perf_counter()
-    if progress:
+    if progress is not None:
         progress("shade", 0.4)
     rgba = np.asarray(style.shade(ShadeContext(gb, scene.with_camera(cam))), dtype=np.float32)
     if rgba.shape != gb.sample_shape + (4,):
@@ -101,7 +144,7 @@ def render(
     if not np.all(np.isfinite(rgba)):
         raise ValueError(f"style {style.name!r} produced NaN or inf; this is a bug in the style")
     t2 = time.perf_counter()
-    if progress:
+    if progress is not None:
         progress("resolve", 0.9)
     # composite per sample (premultiplied "over" the background), box-resolve, unpremultiply
     bg = np.asarray(scene.background, dtype=np.float64)
@@ -121,7 +164,7 @@ def render(
         "total": t3 - t0,
         **{f"raster.{k}": v for k, v in gb.timings.items()},
     }
-    if progress:
+    if progress is not None:
         progress("done", 1.0)
     image = Image(out, timings)
     return (image, gb) if return_gbuffer else image

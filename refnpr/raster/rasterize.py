@@ -8,6 +8,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+from .. import _memory
 from . import _kernels as K
 from .camera import Camera
 from .channels import attribute_names, check_vertex_data, interpolated_channels
@@ -67,12 +68,27 @@ def _check_int(name: str, value, lo: int) -> int:
 def _spp_side(spp) -> int:
     spp = _check_int("spp", spp, 1)
     n = math.isqrt(spp)
+    if spp > _memory.MAX_SPP:
+        m = math.isqrt(_memory.MAX_SPP)
+        raise ValueError(
+            f"spp: expected at most {_memory.MAX_SPP} samples per pixel (a {m} x {m} grid), "
+            f"got {spp}; use a square such as 16, 64 or 256"
+        )
     if n * n != spp:
         raise ValueError(
             f"spp: expected a square number of samples per pixel (1, 4, 9, 16, ...), got {spp}; "
             f"use {n * n} or {(n + 1) ** 2}"
         )
     return n
+
+
+def attribute_widths(meshes: Sequence[Mesh]) -> dict[str, int]:
+    """Components of each common vertex attribute (1 for a scalar one), for memory estimates."""
+    first = meshes[0].attributes
+    return {
+        a: 1 if first[a].ndim == 1 else int(np.prod(first[a].shape[1:]))
+        for a in attribute_names(meshes)
+    }
 
 
 def _parse_channels(channels: Iterable[str], attr_names: set[str]) -> set[str]:
@@ -182,6 +198,20 @@ def rasterize(
         raise ValueError(f"line_period: expected a positive number of pixels, got {line_period}")
     if dyadic_coord not in ("u", "v"):
         raise ValueError(f"dyadic_coord: expected 'u' or 'v', got {dyadic_coord!r}")
+    _memory.check_fits(
+        width,
+        height,
+        n * n,
+        _memory.rasterize_bytes(
+            width,
+            height,
+            n * n,
+            wanted,
+            attributes=attribute_widths(meshes),
+            itemsize=dtype.itemsize,
+            tile=tile,
+        ),
+    )
     nw, nh = n * width, n * height
     guard = min(_MAX_GUARD, 2.0 * _FIXED_LIMIT / (max(nw, nh) * 512.0) - 1.0)
     if guard < 1.5:

@@ -1,0 +1,310 @@
+"""Memory estimates and size limits, checked before a rasterize or render call allocates anything.
+
+A sample grid nobody checked (``--size 100000x100000``, ``--spp 1000000``) must end in a clear
+``ValueError`` naming the size, the bytes it would need and the bytes available, not in numpy's
+``_ArrayMemoryError`` from deep inside (or in the kernel's OOM killer). The estimates here count
+every array proportional to the sample grid (``n H x n W`` for ``spp = n * n``) that the call
+allocates, final channels and internal buffers alike; ``tests/raster/test_memory_estimate.py``
+pins them to within a stated factor of the measured peak.
+
+This module imports nothing of refnpr and may be imported by every subpackage.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import resource
+from collections.abc import Iterable, Mapping
+
+__all__ = [
+    "MAX_SPP",
+    "MAX_SAMPLES",
+    "rasterize_bytes",
+    "render_bytes",
+    "available_bytes",
+    "check_fits",
+    "format_bytes",
+]
+
+#: Largest samples per pixel (a 64 x 64 grid inside each pixel).
+MAX_SPP = 4096
+#: Largest sample grid (n H * n W); ids and tile lists are int32, so stay below 2**31.
+MAX_SAMPLES = 2**31
+#: Bytes per tile of the binning pass: 64 chunk counts (int64) held three times over (counts,
+#: their running sum and the per-chunk offsets), plus about two int32 list entries per tile.
+_BIN_BYTES_PER_TILE = 3 * 64 * 8 + 2 * 4
+#: Per-sample bytes of a style's own shading work (its temporaries and its float32 RGBA), by
+#: style name, measured with tracemalloc on the golden suite's scenes (the growth of the peak from
+#: the suite's sizes to twice their width and height), plus about 15 %; other styles get 300.
+SHADE_BYTES_PER_SAMPLE: dict[str, int] = {
+    "toon": 210,
+    "smooth": 260,
+    "threshold": 230,
+    "halftone": 210,
+    "xtoon": 170,
+    "tam": 215,
+    "tamiss": 260,
+}
+_SHADE_DEFAULT = 300
+#: Per-sample bytes of render's composite-and-resolve (float64 alpha, premultiplied RGBA, the
+#: background term and the composite; the style's float32 RGBA is counted by the style).
+_RESOLVE_BYTES_PER_SAMPLE = 8 + 32 + 8 + 32 + 32
+#: Per-pixel bytes of the resolved image (float64 mean, rgb, float32 RGBA, sRGB bytes).
+_IMAGE_BYTES_PER_PIXEL = 32 + 24 + 32 + 16 + 4
+
+#: Channels that go through the barycentric interpolation pass.
+_INTERPOLATED = frozenset(
+    {
+        "ndc_z",
+        "bary",
+        "position",
+        "normal",
+        "uv",
+        "duv_dx",
+        "duv_dy",
+        "lod",
+        "dyadic_scale",
+        "dposition_dx",
+        "dposition_dy",
+    }
+)
+_UV_D = frozenset({"duv_dx", "duv_dy", "lod", "dyadic_scale"})
+
+
+def _interp_parts(
+    wanted: set[str], attributes: Mapping[str, int], s: int, f: int
+) -> dict[str, int]:
+    """Per-sample-grid buffers of the interpolation pass (mirrors ``raster/channels.py``)."""
+    attrs = set(attributes)
+    derived = {f"d{a}_{x}" for a in attrs for x in "xy"}
+    need_depth = bool({"depth", "ndc_z"} & wanted)
+    parts: dict[str, int] = {}
+    if not (wanted & _INTERPOLATED or wanted & (attrs | derived)):
+        if need_depth:
+            parts["depth"] = s * f
+        return parts
+    need_uv_d = bool(_UV_D & wanted)
+    ndc = "ndc_z" in wanted
+    d_groups: list[int] = []
+    v_groups: list[int] = []
+    widths = {"uv": 2, "position": 3, **attributes}
+    for name, c in widths.items():
+        if {f"d{name}_dx", f"d{name}_dy"} & wanted or (name == "uv" and need_uv_d):
+            d_groups.append(c)
+        elif name in wanted:
+            v_groups.append(c)
+    if ndc:
+        v_groups.append(1)
+    dcols, vcols = sum(d_groups), sum(v_groups)
+    if dcols:  # value, d/dx and d/dy slabs
+        parts["derivatives"] = 3 * dcols * s * f
+    if vcols:
+        parts["values"] = vcols * s * (8 if ndc else f)
+    if "normal" in wanted:
+        parts["normal"] = 3 * s * f
+    if need_depth:
+        parts["depth"] = s * (8 if ndc else f)
+    if "bary" in wanted:
+        parts["bary"] = 3 * s * f
+    # a slab holding several quantities is cut into contiguous copies
+    copies = (3 * dcols if len(d_groups) > 1 else 0) + (vcols if len(v_groups) > 1 else 0)
+    if copies:
+        parts["channel copies"] = copies * s * f
+    # temporaries after the slabs (one at a time): ndc_z's masks and float64 quotients, or the
+    # float64 derivative copies and the lod/dyadic_scale chains
+    temp = 0
+    if ndc:
+        temp = 3 * 8 * s + s + s * f
+    if "lod" in wanted or "dyadic_scale" in wanted:
+        temp = max(temp, 2 * 16 * s + 5 * 8 * s + s + s * f)
+    if temp:
+        parts["temporaries"] = temp
+    return parts
+
+
+def rasterize_bytes(
+    width: int,
+    height: int,
+    spp: int,
+    channels: Iterable[str],
+    *,
+    attributes: Mapping[str, int] | None = None,
+    itemsize: int = 4,
+    tile: int = 32,
+) -> dict[str, int]:
+    """Bytes a ``rasterize`` call allocates in proportion to its sample grid, by part.
+
+    Parameters
+    ----------
+    width, height : int
+        Image size in pixels.
+    spp : int
+        Samples per pixel (a square n * n); the sample grid is ``(n H, n W)``.
+    channels : iterable of str
+        Requested channel names.
+    attributes : mapping of str to int, optional
+        Vertex attribute name -> components (1 for a scalar attribute), for attribute channels.
+    itemsize : int
+        Bytes per element of floating channels (4 for float32, 8 for float64).
+    tile : int
+        Tile edge in samples (binning allocates per tile).
+
+    Returns
+    -------
+    dict of str to int
+        Part name (``"tri_id"``, ``"binning"``, ``"derivatives"``, ...) -> bytes. The sum is the
+        estimate of the call's peak; per-triangle and per-vertex arrays are not counted.
+    """
+    n = math.isqrt(spp)
+    s = (n * height) * (n * width)
+    p = height * width
+    wanted = set(channels)
+    f = int(itemsize)
+    n_tiles = -(-(n * width) // tile) * -(-(n * height) // tile)
+    parts = {"tri_id": 4 * s, "binning": _BIN_BYTES_PER_TILE * n_tiles}
+    if "coverage_count" in wanted:
+        parts["coverage_count"] = 4 * s
+    if "mesh_id" in wanted:
+        parts["mesh_id"] = 4 * s
+    if "coverage" in wanted:
+        parts["coverage"] = p * f
+    interp = _interp_parts(wanted, dict(attributes or {}), s, f)
+    if "mesh_id" in wanted and not interp:
+        interp["temporaries"] = 8 * s + 4 * s + s  # int64 searchsorted, its int32 cast, a mask
+    parts.update(interp)
+    return parts
+
+
+def render_bytes(
+    width: int,
+    height: int,
+    spp: int,
+    channels: Iterable[str],
+    style: str,
+    *,
+    attributes: Mapping[str, int] | None = None,
+    tile: int = 32,
+) -> dict[str, int]:
+    """Bytes a ``render`` call allocates in proportion to its sample grid, by part.
+
+    The G-buffer (:func:`rasterize_bytes` of the style's channels, float32), the style's
+    per-sample shading (its temporaries and float32 RGBA, ``SHADE_BYTES_PER_SAMPLE``) or the
+    composite and box resolve, whichever is larger (they do not overlap), and the image.
+
+    Parameters
+    ----------
+    width, height, spp, channels, attributes, tile
+        As for :func:`rasterize_bytes`.
+    style : str
+        The style's name (its shading cost per sample).
+
+    Returns
+    -------
+    dict of str to int
+        Part name -> bytes.
+    """
+    parts = rasterize_bytes(width, height, spp, channels, attributes=attributes, tile=tile)
+    n = math.isqrt(spp)
+    s = (n * height) * (n * width)
+    shade = SHADE_BYTES_PER_SAMPLE.get(style, _SHADE_DEFAULT)
+    parts["shading"] = max(shade, 16 + _RESOLVE_BYTES_PER_SAMPLE) * s
+    parts["image"] = _IMAGE_BYTES_PER_PIXEL * width * height
+    return parts
+
+
+def _meminfo_available() -> int | None:
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def _address_space_used() -> int:
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmSize:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return 0
+
+
+def available_bytes() -> tuple[int | None, str]:
+    """Memory this process can still allocate, and where the figure comes from.
+
+    The smaller of the system's available memory (``MemAvailable`` in ``/proc/meminfo``, else
+    ``os.sysconf``'s available pages) and, when ``RLIMIT_AS`` is set, the address space left
+    under it. ``(None, "unknown")`` when neither can be read (nothing is refused then).
+    """
+    avail, source = _meminfo_available(), "available memory"
+    soft, _hard = resource.getrlimit(resource.RLIMIT_AS)
+    if soft != resource.RLIM_INFINITY and soft > 0:
+        left = max(0, soft - _address_space_used())
+        if avail is None or left < avail:
+            avail, source = left, "address space left under RLIMIT_AS"
+    if avail is None:
+        return None, "unknown"
+    return avail, source
+
+
+def format_bytes(n: float) -> str:
+    """``123.4 GB`` (decimal units, one decimal; MB below 0.1 GB)."""
+    if n < 1e8:
+        return f"{n / 1e6:.1f} MB"
+    return f"{n / 1e9:.1f} GB"
+
+
+def check_fits(width: int, height: int, spp: int, parts: Mapping[str, int]) -> None:
+    """Refuse a sample grid above ``MAX_SAMPLES`` or an estimate above the memory available.
+
+    Parameters
+    ----------
+    width, height, spp : int
+        The call's size (validated already).
+    parts : mapping of str to int
+        The call's estimate by part (:func:`rasterize_bytes` or :func:`render_bytes`).
+
+    Raises
+    ------
+    ValueError
+        ``size: WxH at spp=N needs about X GB (parts); Y GB are available ...`` with a size
+        that would fit.
+    """
+    n = math.isqrt(spp)
+    samples = (n * width) * (n * height)
+    need = int(sum(parts.values()))
+    avail, source = available_bytes()
+    too_many = samples > MAX_SAMPLES
+    too_big = avail is not None and need > avail
+    if not (too_many or too_big):
+        return
+    top = sorted(parts.items(), key=lambda kv: -kv[1])
+    names = ", ".join(f"{k} {format_bytes(v)}" for k, v in top[:4] if v > 0)
+    budget = min(avail if avail is not None else need, need, MAX_SAMPLES / samples * need)
+    k = math.sqrt(0.8 * budget / need) if need else 1.0
+    sw, sh = max(1, int(width * k)), max(1, int(height * k))
+    have = (
+        f"{format_bytes(avail)} are available ({source})"
+        if avail is not None
+        else "the available memory is unknown"
+    )
+    grid = (
+        f"; the sample grid {n * width} x {n * height} = {samples:.3g} samples is over the "
+        f"limit of 2**31 = {MAX_SAMPLES}"
+        if too_many
+        else ""
+    )
+    raise ValueError(
+        f"size: {width}x{height} at spp={spp} needs about {format_bytes(need)} ({names}); "
+        f"{have}{grid}. Render smaller (e.g. {sw}x{sh} at spp={spp}) or with fewer samples "
+        "per pixel (spp)."
+    )
