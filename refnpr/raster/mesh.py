@@ -9,10 +9,40 @@ import numpy as np
 
 from .gbuffer import BUILTIN_CHANNELS
 
-__all__ = ["Mesh", "RESERVED_NAMES"]
+__all__ = ["Mesh", "RESERVED_NAMES", "MAX_COORDINATE"]
 
 #: Names that are G-buffer channels and therefore cannot be vertex attribute names.
 RESERVED_NAMES = frozenset(BUILTIN_CHANNELS)
+
+#: Largest accepted ``|coordinate|`` of a vertex position (absolute, in world units).
+#:
+#: Why a bound, and why this one: the rasterizer clips in float64 homogeneous space against a
+#: guard band of G = 16 NDC units. An edge whose two endpoints lie far outside the view is cut
+#: at ``a + s (b - a)``, which cancels catastrophically: the clipped corner is off by about
+#: ``2**-53 * |clip|`` in clip units, i.e. ``2**-53 * f |p_eye| / w`` in NDC (f = cot(fov_y/2),
+#: w >= near after clipping). Once that exceeds the guard margin G - 1 = 15, clipped corners land
+#: inside the view and whole quadrants of a screen-covering triangle vanish (measured: the
+#: failure sets in at |NDC| ~ 1.4e17 = 15 * 2**53 for any depth). For the default camera
+#: (near = 0.1) and fields of view down to 30 degrees (f <= 3.73), with the eye itself within the
+#: limit, ``|p_eye| <= sqrt(3) * 2 * MAX_COORDINATE`` keeps |NDC| below ~1.3e17: geometry is then
+#: never dropped. The bound is absolute because a Mesh has no camera; a camera-relative check
+#: (|clip| / near per view, which also governs sub-pixel exactness) belongs to the rasterizer.
+MAX_COORDINATE = 1e15
+
+
+def _check_magnitude(pos: np.ndarray, mesh_name: str, prefix: str) -> None:
+    """Refuse positions beyond :data:`MAX_COORDINATE` (see there for the derivation)."""
+    mag = np.abs(pos)
+    big = float(mag.max()) if mag.size else 0.0
+    if big > MAX_COORDINATE:
+        row = int(np.argmax(mag.max(axis=1)))
+        raise ValueError(
+            f"{prefix}: mesh {mesh_name!r} has a vertex coordinate of magnitude {big:.3g} "
+            f"(vertex {row}: {pos[row].tolist()}), above the limit {MAX_COORDINATE:.0e} "
+            "beyond which float64 clipping loses geometry; rescale the model (e.g. to metres or "
+            "kilometres) so that every |coordinate| is <= "
+            f"{MAX_COORDINATE:.0e}"
+        )
 
 
 def _as_float_array(name: str, value, ncols: int | None, nverts: int | None) -> np.ndarray:
@@ -79,6 +109,7 @@ class Mesh:
             raise ValueError(
                 f"positions: mesh {self.name!r} is empty (0 vertices); give at least 3 vertices"
             )
+        _check_magnitude(pos, self.name, "positions")
         try:
             faces_in = np.asarray(self.faces)
         except (TypeError, ValueError) as exc:
@@ -92,11 +123,30 @@ class Mesh:
             )
         if faces_in.shape[0] == 0:
             raise ValueError(f"faces: mesh {self.name!r} has no triangles; give at least one face")
-        if faces_in.dtype.kind not in "iu":
-            if faces_in.dtype.kind == "f" and np.all(faces_in == np.round(faces_in)):
-                faces_in = faces_in.astype(np.int64)
-            else:
-                raise TypeError(f"faces: expected integer indices, got dtype {faces_in.dtype}")
+        if faces_in.dtype.kind == "b" or faces_in.dtype.kind not in "iuf":
+            raise TypeError(
+                f"faces: expected integer indices, got dtype {faces_in.dtype}; "
+                "pass an integer array of shape (M, 3)"
+            )
+        if faces_in.dtype.kind == "f":
+            whole = np.isfinite(faces_in) & (faces_in == np.round(faces_in))
+            if not np.all(whole):
+                bad = tuple(int(i) for i in np.argwhere(~whole)[0])
+                raise TypeError(
+                    f"faces: expected integer indices, got dtype {faces_in.dtype} with the "
+                    f"non-integer value {faces_in[bad]} at index {bad}; pass integer indices"
+                )
+            if np.abs(faces_in).max() >= 2.0**62:
+                raise ValueError(
+                    f"faces: index {np.abs(faces_in).max():.3g} is out of range for "
+                    f"{pos.shape[0]} vertices; indices are zero-based and must be < len(positions)"
+                )
+            faces_in = faces_in.astype(np.int64)
+        elif faces_in.dtype.kind == "u" and faces_in.max() > np.iinfo(np.int64).max:
+            raise ValueError(
+                f"faces: index {int(faces_in.max())} is out of range for {pos.shape[0]} vertices; "
+                "indices are zero-based and must be < len(positions)"
+            )
         faces = np.ascontiguousarray(faces_in, dtype=np.int64)
         lo, hi = int(faces.min()), int(faces.max())
         if lo < 0 or hi >= pos.shape[0]:
@@ -156,18 +206,26 @@ class Mesh:
                 f"matrix: last row must be (0, 0, 0, 1) for an affine transform, got {m[3]}"
             )
         lin = m[:3, :3]
-        if abs(np.linalg.det(lin)) < 1e-300:
+        with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported below
+            det = np.linalg.det(lin)
+            pos = self.positions @ lin.T + m[:3, 3]
+        if abs(det) < 1e-300:
             raise ValueError(
                 "matrix: the 3x3 part is singular; a mesh transform must be invertible"
             )
-        pos = self.positions @ lin.T + m[:3, 3]
+        if not np.all(np.isfinite(pos)):
+            raise ValueError(
+                f"matrix: transforming mesh {self.name!r} gives non-finite positions (largest "
+                f"|matrix entry| {float(np.abs(m).max()):.3g}); use a smaller scale or translation"
+            )
+        _check_magnitude(pos, self.name, "matrix")
         normals = None
         if self.normals is not None:
             nrm = self.normals @ np.linalg.inv(lin)
             length = np.linalg.norm(nrm, axis=1, keepdims=True)
             normals = np.divide(nrm, length, out=np.zeros_like(nrm), where=length > 0)
         faces = self.faces
-        if np.linalg.det(lin) < 0:  # a mirror flips winding; keep faces counter-clockwise
+        if det < 0:  # a mirror flips winding; keep faces counter-clockwise
             faces = faces[:, ::-1]
         return Mesh(pos, faces, normals, self.uv, self.attributes, self.name)
 

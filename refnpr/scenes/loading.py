@@ -1,15 +1,26 @@
-"""User meshes through trimesh: OBJ, PLY, STL, OFF, GLB/glTF (and whatever else trimesh reads)."""
+"""User meshes through trimesh: OBJ, PLY, STL, OFF, GLB/glTF.
+
+Before trimesh reads a file, :func:`load_mesh` checks it against its own format (a raw parse of
+OBJ, PLY, STL and OFF, the GLB header), because trimesh silently drops non-finite vertices with
+their faces, reads a truncated ASCII PLY as a partial mesh and reports a truncated binary STL with
+an unrelated message. Every error names the file as the caller gave it.
+"""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 
 from ..raster import Mesh
+from ._mesh_files import CHECKS, FIX, BadMeshFile, check_geometry
 from .uv_projection import UV_PROJECTIONS, project_uv
 
-__all__ = ["load_mesh", "from_trimesh"]
+__all__ = ["load_mesh", "from_trimesh", "MESH_EXTENSIONS"]
+
+#: File extensions :func:`load_mesh` reads (case-insensitive).
+MESH_EXTENSIONS = ("obj", "ply", "stl", "off", "glb", "gltf")
 
 
 def from_trimesh(tm, *, name: str = "mesh") -> Mesh:
@@ -18,28 +29,39 @@ def from_trimesh(tm, *, name: str = "mesh") -> Mesh:
     Positions and faces are taken as they are; normals are trimesh's ``vertex_normals`` (the
     file's normals when it has them, else area-weighted face normals); uv are the texture
     coordinates of a ``TextureVisuals`` when present (one row per vertex), else ``None``.
+
+    Raises
+    ------
+    ValueError
+        If the geometry has no triangles, or the arrays fail :class:`~refnpr.raster.Mesh`'s checks.
     """
     positions = np.asarray(tm.vertices, dtype=np.float64)
     faces = np.asarray(tm.faces, dtype=np.int64)
     if faces.ndim != 2 or faces.shape[0] == 0:
-        raise ValueError(f"{name}: the geometry has no triangles (a point cloud or a path?)")
+        raise ValueError(
+            f"faces: mesh {name!r} has no triangles (a point cloud or a path?); "
+            "give a surface with at least one face"
+        )
     uv = getattr(getattr(tm, "visual", None), "uv", None)
     if uv is not None:
         uv = np.asarray(uv, dtype=np.float64)
-        if uv.shape != (positions.shape[0], 2):
-            uv = None  # per-corner or malformed uv: treat as missing (see require_uv)
+        if uv.shape != (positions.shape[0], 2) or not np.all(np.isfinite(uv)):
+            uv = None  # per-corner, malformed or non-finite uv: treat as missing (see require_uv)
     normals = np.asarray(tm.vertex_normals, dtype=np.float64)
+    if normals.shape != positions.shape or not np.all(np.isfinite(normals)):
+        normals = None
     return Mesh(positions, faces, normals, uv, name=name)
 
 
-def load_mesh(path: str | Path, *, uv_projection: str | None = None) -> Mesh | list[Mesh]:
-    """Read a mesh file with trimesh.
+def load_mesh(path: str | os.PathLike, *, uv_projection: str | None = None) -> Mesh | list[Mesh]:
+    """Read a mesh file with trimesh, after checking it.
 
     Parameters
     ----------
-    path : str or Path
-        OBJ, PLY, STL, OFF, GLB/glTF, ... (anything ``trimesh.load`` reads). trimesh merges
-        vertices that agree in position, uv and normal, keeping uv seams.
+    path : str or PathLike
+        An OBJ, PLY (ASCII or binary), STL (ASCII or binary), OFF, GLB or glTF file (see
+        :data:`MESH_EXTENSIONS`). trimesh merges vertices that agree in position, uv and normal,
+        keeping uv seams.
     uv_projection : {"planar", "box", "spherical", "cylindrical"}, optional
         Compute texture coordinates by :func:`~refnpr.scenes.project_uv` (replacing the file's).
         Without it a mesh may have ``uv=None``; styles that need uv then fail with the message of
@@ -57,31 +79,76 @@ def load_mesh(path: str | Path, *, uv_projection: str | None = None) -> Mesh | l
     FileNotFoundError
         If ``path`` does not exist.
     ValueError
-        If the file cannot be read as triangles, or ``uv_projection`` is unknown.
+        If ``path`` is a directory or has an unsupported extension; if the file is truncated or
+        corrupt, holds non-finite vertices, faces that reference missing vertices or faces of
+        fewer than 3 vertices, no triangles (or only zero-area ones), or coordinates beyond
+        :data:`~refnpr.raster.mesh.MAX_COORDINATE`; or if ``uv_projection`` is unknown. The
+        message names ``path`` as given.
     """
-    import trimesh  # deferred: trimesh pulls in a lot at import time
-
-    path = Path(path)
+    given = os.fsdecode(path) if isinstance(path, (str, bytes, os.PathLike)) else path
+    if not isinstance(given, str):
+        raise TypeError(f"path: expected a file path (str or Path), got {type(path).__name__}")
+    label = repr(given)
     if uv_projection is not None and uv_projection not in UV_PROJECTIONS:
         raise ValueError(
             f"uv_projection: unknown projection {uv_projection!r}; expected one of {UV_PROJECTIONS}"
         )
-    if not path.is_file():
-        raise FileNotFoundError(f"path: mesh file {str(path)!r} does not exist")
+    p = Path(given)
+    if not p.exists():
+        raise FileNotFoundError(f"path: mesh file {label} does not exist")
+    if p.is_dir():
+        raise ValueError(
+            f"path: {label} is a directory; expected a mesh file "
+            f"({', '.join('.' + e for e in MESH_EXTENSIONS)})"
+        )
+    ext = p.suffix.lower().lstrip(".")
+    if ext not in MESH_EXTENSIONS:
+        raise ValueError(
+            f"path: {label} has "
+            + (f"the unsupported extension {p.suffix!r}" if ext else "no file extension")
+            + f"; supported mesh formats: {', '.join('.' + e for e in MESH_EXTENSIONS)}"
+        )
+    data = p.read_bytes()
+    what = f"path: mesh file {label}"
+    if not data.strip():
+        raise ValueError(f"{what} is empty (0 bytes of geometry); {FIX}")
+    check = CHECKS.get(ext)
     try:
-        loaded = trimesh.load(path, process=True)
-    except Exception as exc:  # trimesh raises many types for unreadable files
-        raise ValueError(f"path: trimesh could not read {str(path)!r}: {exc}") from exc
+        if check is not None:
+            check(data)
+    except BadMeshFile as exc:
+        raise ValueError(f"{what}: {exc}; {FIX}") from None
+
+    import trimesh  # deferred: trimesh pulls in a lot at import time
+
+    try:
+        loaded = trimesh.load(p, file_type=ext, process=False)
+    except Exception as exc:  # noqa: BLE001 -- trimesh raises many types for unreadable files
+        raise ValueError(
+            f"path: trimesh could not read {label} as {ext.upper()}: {type(exc).__name__}: "
+            f"{' '.join(str(exc).split())[:200]}; {FIX}"
+        ) from exc
     if isinstance(loaded, trimesh.Scene):
-        geometries = [g for g in loaded.dump() if isinstance(g, trimesh.Trimesh)]
-        names = [
-            str(g.metadata.get("name") or f"{path.stem}[{i}]") for i, g in enumerate(geometries)
-        ]
+        try:
+            dumped = loaded.dump()
+        except Exception as exc:  # noqa: BLE001
+            raise ValueError(f"{what}: its scene graph cannot be resolved ({exc}); {FIX}") from exc
+        geometries = [g for g in dumped if isinstance(g, trimesh.Trimesh)]
+        names = [str(g.metadata.get("name") or f"{p.stem}[{i}]") for i, g in enumerate(geometries)]
     else:
-        geometries, names = [loaded], [path.stem]
+        geometries, names = [loaded], [p.stem]
     if not geometries or not all(isinstance(g, trimesh.Trimesh) for g in geometries):
-        raise ValueError(f"path: {str(path)!r} contains no triangle mesh")
-    meshes = [from_trimesh(g, name=n) for g, n in zip(geometries, names, strict=True)]
+        raise ValueError(f"path: {label} contains no triangle mesh (a point cloud or a path?)")
+    meshes = []
+    for g, n in zip(geometries, names, strict=True):
+        try:
+            check_geometry(g, f"geometry {n!r}" if len(geometries) > 1 else "the geometry")
+            g.process()  # what trimesh.load(process=True) does: merge duplicate vertices
+            meshes.append(from_trimesh(g, name=n))
+        except BadMeshFile as exc:
+            raise ValueError(f"{what}: {exc}; {FIX}") from None
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"{what}: {exc}") from exc
     if uv_projection is not None:
         meshes = [project_uv(m, uv_projection) for m in meshes]
     return meshes[0] if len(meshes) == 1 else meshes
