@@ -29,9 +29,14 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def _param(text: str) -> tuple[str, object]:
-    if "=" not in text:
-        raise argparse.ArgumentTypeError(f"--param: expected KEY=VALUE, got {text!r}")
+    if "=" not in text or not text.split("=", 1)[0].strip():
+        raise argparse.ArgumentTypeError(f"--param: expected KEY=VALUE such as n=3, got {text!r}")
     key, raw = text.split("=", 1)
+    if not raw.strip():
+        raise argparse.ArgumentTypeError(
+            f"--param: {text!r} has no value; give KEY=VALUE such as n=3 (a TOML value, or a "
+            "bare word for a string)"
+        )
     import tomllib
 
     try:
@@ -86,20 +91,25 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from .scenes import load_scene
 
     check_png_path(args.output)  # before rendering, not after
+    if args.style is not None and not args.style.strip():
+        raise ValueError(
+            f"--style: expected a style name, got {args.style!r}; list them with `refnpr styles`, "
+            "or leave --style out to use the scene's own style"
+        )
+    params = _style_params(args.param or [])
     scene = load_scene(args.scene)
     style = None
-    if args.style or args.param:
+    if args.style or params:
         if args.style:
-            style = {"name": args.style, **dict(args.param or [])}
+            style = {"name": args.style, **params}
         else:
             base = dict(scene.style or {})
             if not base:
-                print(
-                    "refnpr render: --param needs --style (the scene names no style)",
-                    file=sys.stderr,
+                raise ValueError(
+                    f"--param needs --style: the scene {args.scene!r} names no style; "
+                    "add --style NAME (list them with `refnpr styles`)"
                 )
-                return 2
-            style = {**base, **dict(args.param)}
+            style = {**base, **params}
     width, height = args.size
     progress = _Progress() if not args.quiet else None
     try:
@@ -111,6 +121,23 @@ def _cmd_render(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(f"wrote {out} ({width}x{height}, spp={args.spp}) in {image.timings['total']:.2f} s")
     return 0
+
+
+def _style_params(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    """--param pairs as a dict: each key once, and never the style's name."""
+    params: dict[str, object] = {}
+    for key, value in pairs:
+        if key == "name":
+            raise ValueError(
+                f"--param: 'name' is not a style parameter (got name={value!r}); choose the "
+                f"style with --style {value}"
+            )
+        if key in params:
+            raise ValueError(
+                f"--param: {key!r} given twice ({params[key]!r} and {value!r}); give it once"
+            )
+        params[key] = value
+    return params
 
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
@@ -157,6 +184,12 @@ def _cmd_golden(args: argparse.Namespace) -> int:
     from .golden import check_suite, update_suite
 
     suite = Path(args.suite)
+    if args.suite == str(DEFAULT_SUITE) and not suite.exists():
+        raise ValueError(
+            f"--suite: no suite file at {str(suite.absolute())!r} (the default is "
+            f"{str(DEFAULT_SUITE)!r}, relative to the current directory); run refnpr golden in "
+            "a refnpr checkout, or pass --suite FILE"
+        )
     if args.update:
         update_suite(suite, only=args.only)
         return 0
@@ -184,11 +217,29 @@ def _fraction(name: str):
 
 def _cmd_compare(args: argparse.Namespace) -> int:
     from .compare import compare_dirs, format_table
+    from .image import atomic_file
 
+    if args.out is not None and Path(args.out).exists() and not Path(args.out).is_dir():
+        raise ValueError(f"--out: {args.out!r} is a file; give a directory for the diff images")
+    if args.json is not None and Path(args.json).is_dir():
+        raise ValueError(
+            f"--json: {args.json!r} is a directory; give a file name such as "
+            f"{str(Path(args.json) / 'metrics.json')!r}"
+        )
     results = compare_dirs(
         args.reference, args.candidate, out_dir=args.out, tolerance=args.tolerance
     )
     print(format_table(results))
+    cand_dir = Path(args.candidate)
+    compared = {f"{m.name}.png" for m in results}
+    extra = sorted(p.name for p in cand_dir.glob("*.png") if p.name not in compared)
+    if not any(cand_dir.glob("*.png")):
+        print(f"note: candidate directory {args.candidate!r} has no .png files")
+    elif extra:
+        print(
+            f"note: {len(extra)} candidate file(s) without a reference image, not compared: "
+            + ", ".join(extra)
+        )
     bad = [
         m for m in results if not m.passes(max_frac_over=args.max_frac_over, min_ssim=args.min_ssim)
     ]
@@ -200,7 +251,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
             }
             for m in results
         ]
-        Path(args.json).write_text(json.dumps(rows, indent=2))
+        with atomic_file(args.json, suffix=".json") as tmp:
+            tmp.write_text(json.dumps(rows, indent=2))
     print(f"{len(results) - len(bad)} passed, {len(bad)} failed")
     return 1 if bad else 0
 

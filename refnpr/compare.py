@@ -12,12 +12,12 @@ over the image's own alpha onto black so that transparent pixels compare by cove
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from .image import write_png_atomic
+from .image import atomic_file, read_image_file, write_png_atomic
 
 __all__ = ["ImageMetrics", "compare_images", "compare_dirs", "load_image", "difference_image"]
 
@@ -30,31 +30,54 @@ class ImageMetrics:
     frac_over: float
     ssim: float
     tolerance: float
-    status: str = "ok"  # "ok", "missing" (no candidate), "size" (shape mismatch)
+    #: "ok", "missing" (no candidate), "size" (sizes differ), "unreadable" (a file that is not
+    #: a readable image)
+    status: str = "ok"
+    #: Why the status is not "ok": the two sizes, the file and the decoder's reason
+    message: str = ""
 
     def passes(self, *, max_frac_over: float, min_ssim: float) -> bool:
         return self.status == "ok" and self.frac_over <= max_frac_over and self.ssim >= min_ssim
 
 
-def load_image(path: str | Path) -> np.ndarray:
-    """PNG (8 or 16 bit, gray/RGB/RGBA) -> (H, W, 4) float64 in [0, 1] (alpha 1 if absent)."""
-    import imageio.v3 as iio
+def load_image(path: str | Path, *, what: str = "image") -> np.ndarray:
+    """An image file as (H, W, 4) float64 in [0, 1] (alpha 1 if absent).
 
-    path = Path(path)
-    try:
-        a = np.asarray(iio.imread(path))
-    except Exception as exc:  # imageio raises many types for unreadable files
-        raise ValueError(f"{path}: cannot read the image ({exc}); is it a valid PNG?") from exc
-    if a.dtype == np.uint8:
+    Parameters
+    ----------
+    path : str or path
+        PNG (1, 8 or 16 bit; gray, gray + alpha, RGB, RGBA), or another format imageio reads.
+    what : str
+        What the file is, the start of error messages (``"reference image"``).
+
+    Raises
+    ------
+    ValueError
+        Naming the file: missing, a directory, not a readable image (with the reason), or of an
+        unsupported pixel type or channel count.
+    """
+    a = read_image_file(path, what=what)
+    if a.dtype == np.bool_:
+        f = a.astype(np.float64)
+    elif a.dtype == np.uint8:
         f = a.astype(np.float64) / 255.0
     elif a.dtype == np.uint16:
         f = a.astype(np.float64) / 65535.0
     elif a.dtype.kind == "f":
         f = a.astype(np.float64)
     else:
-        raise ValueError(f"{path}: unsupported pixel type {a.dtype}; write 8- or 16-bit PNG")
+        raise ValueError(
+            f"{what}: {str(path)!r} has unsupported pixel type {a.dtype}; write 8- or 16-bit PNG"
+        )
     if f.ndim == 2:
-        f = np.repeat(f[..., None], 3, axis=2)
+        f = f[..., None]
+    if f.ndim != 3 or not 1 <= f.shape[2] <= 4:
+        raise ValueError(
+            f"{what}: {str(path)!r} has shape {a.shape}; expected a single gray, gray + alpha, "
+            "RGB or RGBA image"
+        )
+    if f.shape[2] == 1:
+        f = np.repeat(f, 3, axis=2)
     if f.shape[2] == 2:  # gray + alpha
         f = np.concatenate([np.repeat(f[..., :1], 3, axis=2), f[..., 1:]], axis=2)
     if f.shape[2] == 3:
@@ -93,7 +116,16 @@ def compare_images(
     if not (isinstance(tolerance, (int, float)) and 0.0 <= tolerance <= 1.0):
         raise ValueError(f"tolerance: expected a number in [0, 1], got {tolerance!r}")
     if reference.shape != candidate.shape:
-        return ImageMetrics(name, np.inf, np.inf, 1.0, 0.0, tolerance, status="size")
+        return ImageMetrics(
+            name,
+            np.inf,
+            np.inf,
+            1.0,
+            0.0,
+            tolerance,
+            status="size",
+            message=f"sizes differ: reference {_wxh(reference)}, candidate {_wxh(candidate)}",
+        )
     ref, cand = _flatten(reference), _flatten(candidate)
     diff = np.abs(cand - ref)
     lum_r = ref[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
@@ -114,6 +146,10 @@ def compare_images(
     )
 
 
+def _wxh(a: np.ndarray) -> str:
+    return f"{a.shape[1]}x{a.shape[0]}"
+
+
 def compare_dirs(
     reference_dir: str | Path,
     candidate_dir: str | Path,
@@ -122,32 +158,74 @@ def compare_dirs(
     tolerance: float = 2.0 / 255,
 ) -> list[ImageMetrics]:
     """Compare every ``*.png`` of ``reference_dir`` with the file of the same name in
-    ``candidate_dir``. A missing candidate is reported with status "missing". With ``out_dir``,
-    writes ``<name>.diff.png`` per image and ``report.json``."""
+    ``candidate_dir``.
+
+    A missing candidate is reported with status "missing", images of different sizes with
+    "size", a file that cannot be read (either side) with "unreadable"; ``message`` says why, with
+    the paths. With ``out_dir``, writes ``<name>.diff.png`` per image and ``report.json``.
+
+    Raises
+    ------
+    ValueError
+        A directory that does not exist or holds no ``.png`` files, the same directory twice, or
+        an ``out_dir`` that is a file.
+    """
     ref_dir, cand_dir = Path(reference_dir), Path(candidate_dir)
     for label, d in (("reference_dir", ref_dir), ("candidate_dir", cand_dir)):
         if not d.is_dir():
-            raise ValueError(f"{label}: {str(d)!r} is not a directory")
+            why = "it is a file" if d.exists() else "it does not exist"
+            raise ValueError(f"{label}: {str(d)!r} is not a directory ({why})")
+    if ref_dir.resolve() == cand_dir.resolve():
+        raise ValueError(
+            f"candidate_dir: {str(cand_dir)!r} is the same directory as reference_dir "
+            f"{str(ref_dir)!r}; every image would match itself: give the other backend's renders"
+        )
+    if out_dir is not None and Path(out_dir).exists() and not Path(out_dir).is_dir():
+        raise ValueError(f"out_dir: {str(out_dir)!r} is a file; expected a directory")
     names = sorted(p.name for p in ref_dir.glob("*.png"))
     if not names:
         raise ValueError(f"reference_dir: no .png files in {str(ref_dir)!r}")
     results = []
     for fname in names:
         stem = fname[:-4]
-        cand_path = cand_dir / fname
+        ref_path, cand_path = ref_dir / fname, cand_dir / fname
         if not cand_path.exists():
             results.append(
-                ImageMetrics(stem, np.inf, np.inf, 1.0, 0.0, tolerance, status="missing")
+                ImageMetrics(
+                    stem,
+                    np.inf,
+                    np.inf,
+                    1.0,
+                    0.0,
+                    tolerance,
+                    status="missing",
+                    message=f"no candidate {str(cand_path)!r}",
+                )
             )
             continue
-        ref = load_image(ref_dir / fname)
-        cand = load_image(cand_path)
+        try:
+            ref = load_image(ref_path, what="reference image")
+            cand = load_image(cand_path, what="candidate image")
+        except ValueError as exc:  # one bad file must not hide the others
+            results.append(
+                ImageMetrics(
+                    stem, np.inf, np.inf, 1.0, 0.0, tolerance, status="unreadable", message=str(exc)
+                )
+            )
+            continue
         m = compare_images(ref, cand, name=stem, tolerance=tolerance)
+        if m.status == "size":
+            m = replace(
+                m,
+                message=(
+                    f"sizes differ: reference {str(ref_path)!r} is {_wxh(ref)}, "
+                    f"candidate {str(cand_path)!r} is {_wxh(cand)}"
+                ),
+            )
         results.append(m)
         if out_dir is not None and m.status == "ok":
             write_png_atomic(Path(out_dir) / f"{stem}.diff.png", difference_image(ref, cand))
     if out_dir is not None:
-        Path(out_dir).mkdir(parents=True, exist_ok=True)
         report = [
             {
                 k: (None if isinstance(v, float) and not np.isfinite(v) else v)
@@ -155,17 +233,20 @@ def compare_dirs(
             }
             for m in results
         ]
-        (Path(out_dir) / "report.json").write_text(json.dumps(report, indent=2))
+        with atomic_file(Path(out_dir) / "report.json", suffix=".json") as tmp:
+            tmp.write_text(json.dumps(report, indent=2))
     return results
 
 
 def format_table(results: list[ImageMetrics]) -> str:
     """Plain-text table of metrics."""
     lines = [
-        f"{'image':32s} {'status':8s} {'max_abs':>8s} {'rmse':>8s} {'frac>tol':>9s} {'ssim':>7s}"
+        f"{'image':32s} {'status':10s} {'max_abs':>8s} {'rmse':>8s} {'frac>tol':>9s} {'ssim':>7s}"
     ]
     for m in results:
         lines.append(
-            f"{m.name:32s} {m.status:8s} {m.max_abs:8.4f} {m.rmse:8.4f} {m.frac_over:9.5f} {m.ssim:7.4f}"
+            f"{m.name:32s} {m.status:10s} {m.max_abs:8.4f} {m.rmse:8.4f} {m.frac_over:9.5f} {m.ssim:7.4f}"
         )
+        if m.message:
+            lines.append(f"    {m.message}")
     return "\n".join(lines)

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from .compare import ImageMetrics, compare_images, difference_image, load_image
-from .image import write_png_atomic
+from .image import atomic_file, write_png_atomic
 from .raster import rasterize
 from .render import render
 
@@ -93,12 +93,17 @@ class CaseResult:
 def load_suite(path: str | Path) -> list[GoldenCase]:
     """Parse ``suite.toml`` into cases (clear ValueError naming the file and key on errors)."""
     path = Path(path)
+    if path.is_dir():
+        raise ValueError(
+            f"suite: {str(path)!r} is a directory; give the suite file in it, such as "
+            f"{str(path / 'suite.toml')!r}"
+        )
     if not path.is_file():
-        raise ValueError(f"suite: {str(path)!r} does not exist; expected golden/suite.toml")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: invalid TOML: {exc}") from None
+        raise ValueError(
+            f"suite: {str(path)!r} does not exist (looked for {str(path.absolute())!r}); "
+            "expected a suite file such as golden/suite.toml of a refnpr checkout"
+        )
+    data = _read_toml(path)
     unknown = set(data) - {"defaults", "case", "include"}
     if unknown:
         raise ValueError(
@@ -114,10 +119,7 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
             raise ValueError(
                 f"{path}: include {inc!r} does not exist (paths are relative to the suite)"
             )
-        try:
-            inc_data = tomllib.loads(inc_path.read_text())
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"{inc_path}: invalid TOML: {exc}") from None
+        inc_data = _read_toml(inc_path)
         if set(inc_data) - {"case"}:
             raise ValueError(f"{inc_path}: an included file holds only [[case]] tables")
         raw_cases += list(inc_data.get("case", []))
@@ -161,6 +163,23 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
     if not cases:
         raise ValueError(f"{path}: the suite has no [[case]] entries")
     return cases
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    """A suite file parsed; a ValueError naming the file (and the line) on any failure."""
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise ValueError(
+            f"{path}: not a UTF-8 text file (byte 0x{raw[exc.start]:02x} on line {line}); "
+            "suite files are TOML and must be UTF-8 encoded"
+        ) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: invalid TOML: {exc}") from None
 
 
 def _check_case(path: Path, name: str, params: dict[str, Any]) -> None:
@@ -215,9 +234,8 @@ def update_suite(suite_path: str | Path, *, only: list[str] | None = None, log=p
         result = render_case(case)
         target = _files(root, case)
         if case.kind == "gbuffer":
-            tmp = target.with_suffix(".tmp.npz")
-            np.savez_compressed(tmp, **result)
-            tmp.replace(target)
+            with atomic_file(target, suffix=".npz") as tmp:
+                np.savez_compressed(tmp, **result)
         else:
             write_png_atomic(target, result)
         written.append(target)
@@ -235,9 +253,26 @@ def _select(cases: list[GoldenCase], only: list[str] | None) -> list[GoldenCase]
     return [c for c in cases if c.name in only]
 
 
+def _load_golden_npz(target: Path) -> dict[str, np.ndarray]:
+    """The channels of a G-buffer golden file (ValueError naming it if it is not a valid .npz)."""
+    try:
+        with np.load(target, allow_pickle=False) as ref:
+            if not hasattr(ref, "files"):
+                raise ValueError("a single array, not an .npz archive of channels")
+            return {k: ref[k] for k in ref.files}
+    except Exception as exc:  # noqa: BLE001 -- zipfile, pickle and numpy raise many types
+        first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise ValueError(
+            f"cannot read golden file {str(target)!r} ({first}); expected an .npz archive "
+            "of float32/int32 channels: run `refnpr golden --update` to rewrite it"
+        ) from None
+
+
 def _check_gbuffer(case: GoldenCase, target: Path, got: dict[str, np.ndarray]) -> CaseResult:
-    with np.load(target) as ref:
-        ref = {k: ref[k] for k in ref.files}
+    try:
+        ref = _load_golden_npz(target)
+    except ValueError as exc:
+        return CaseResult(case.name, False, str(exc))
     if set(ref) != set(got):
         return CaseResult(
             case.name, False, f"channels differ: golden {sorted(ref)}, got {sorted(got)}"
@@ -292,9 +327,28 @@ def check_suite(
         if case.kind == "gbuffer":
             results.append(_check_gbuffer(case, target, got))
             continue
-        ref = load_image(target)
+        try:
+            ref = load_image(target, what="golden file")
+        except ValueError as exc:  # a corrupt golden file fails its case, not the suite
+            results.append(
+                CaseResult(case.name, False, f"{exc}; run `refnpr golden --update` to rewrite it")
+            )
+            continue
         cand = got.astype(np.float64) / 255.0
         m = compare_images(ref, cand, name=case.name, tolerance=case.tolerance)
+        if m.status == "size":
+            gh, gw = ref.shape[:2]
+            results.append(
+                CaseResult(
+                    case.name,
+                    False,
+                    f"size: golden file {str(target)!r} is {gw}x{gh} but the case renders "
+                    f"{case.width}x{case.height}; if the suite's size changed on purpose, "
+                    "run `refnpr golden --update`",
+                    m,
+                )
+            )
+            continue
         ok = m.passes(max_frac_over=case.max_frac_over, min_ssim=case.min_ssim)
         if not ok:
             d = fail_root / case.name

@@ -117,6 +117,11 @@ def _material(source: str, where: str, value, base_dir: Path) -> Material:
     texture = spec.get("texture")
     if isinstance(texture, str) and ("/" in texture or "\\" in texture or Path(texture).suffix):
         path = base_dir / texture
+        if path.is_dir():
+            raise SceneFileError(
+                f"{source}: {where}: texture: {str(path)!r} is a directory; expected an image "
+                "file (PNG, JPEG, TIFF or BMP) or a built-in texture name"
+            )
         if not path.is_file():
             raise SceneFileError(
                 f"{source}: {where}: texture: file {str(path)!r} not found (a texture with a "
@@ -240,10 +245,25 @@ def _data_dir() -> Path:
 
 
 def _read(path: Path, source: str) -> dict:
+    """Parse a scene file; every failure is a SceneFileError naming ``source`` (and the line)."""
+    if path.is_dir():
+        raise SceneFileError(f"{source}: is a directory; expected a .toml scene file")
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise SceneFileError(f"{source}: cannot read the scene file ({exc.strerror})") from exc
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise SceneFileError(
+            f"{source}: not a UTF-8 text file (byte 0x{raw[exc.start]:02x} on line {line}); "
+            "TOML scene files must be UTF-8 encoded: re-save the file as UTF-8"
+        ) from None
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneFileError(f"{source}: invalid TOML: {exc}") from exc
+        raise SceneFileError(f"{source}: invalid TOML: {exc}") from None
 
 
 def list_scenes() -> dict[str, str]:
@@ -275,7 +295,8 @@ def load_scene(name_or_path: str | Path) -> Scene:
     ------
     ValueError
         For an unknown built-in name (listing the valid names) or an invalid file
-        (:class:`SceneFileError`, naming the file and the key).
+        (:class:`SceneFileError`, naming the file and the key): not UTF-8 (with the line),
+        invalid TOML (with the line), a directory, or an existing file without ``.toml``.
     FileNotFoundError
         If a scene file path does not exist.
     """
@@ -284,6 +305,10 @@ def load_scene(name_or_path: str | Path) -> Scene:
         and (name_or_path.endswith(".toml") or "/" in name_or_path or "\\" in name_or_path)
     ):
         path = Path(name_or_path)
+        if path.is_dir():
+            raise SceneFileError(
+                f"scene: {str(path)!r} is a directory; expected a .toml scene file"
+            )
         if not path.is_file():
             raise FileNotFoundError(f"scene: file {str(path)!r} does not exist")
         return parse_scene(_read(path, str(path)), path.parent, source=str(path))
@@ -291,5 +316,14 @@ def load_scene(name_or_path: str | Path) -> Scene:
         raise TypeError(
             f"name_or_path: expected a scene name or a path, got {type(name_or_path).__name__}"
         )
-    path = builtin_scene_path(name_or_path)
+    try:
+        path = builtin_scene_path(name_or_path)
+    except ValueError:
+        if name_or_path and Path(name_or_path).is_file():
+            raise SceneFileError(
+                f"scene: {name_or_path!r} is a file but not a built-in scene, and scene file "
+                "names end in .toml: rename it to .toml (built-in scenes: "
+                f"{', '.join(list_scenes())})"
+            ) from None
+        raise
     return parse_scene(_read(path, path.name), path.parent, source=path.name)

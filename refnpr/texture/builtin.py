@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 
+from ..image import IMAGE_FORMATS, read_image_file
 from .pyramid import as_texture
 
 __all__ = ["BUILTIN_TEXTURES", "load_texture"]
@@ -20,30 +22,48 @@ def load_texture(name_or_path: str | Path, *, gray: bool = True) -> np.ndarray:
     Parameters
     ----------
     name_or_path : str or path
+        A name of ``BUILTIN_TEXTURES``, or the path of a PNG, JPEG, TIFF or BMP image.
     gray : bool
         Convert colour images to gray (luminance, scikit-image ``rgb2gray``).
 
     Returns
     -------
     (rows, cols) float32 (or (rows, cols, C) with ``gray=False``)
+
+    Raises
+    ------
+    ValueError
+        Naming the texture as given: neither a built-in name nor a file (listing the built-in
+        names), a directory, or a file that is not a readable image (with the reason).
     """
     import skimage.data
 
     if isinstance(name_or_path, str) and name_or_path in BUILTIN_TEXTURES:
         img = getattr(skimage.data, name_or_path)()
+        tex = as_texture(img, name=f"texture {name_or_path!r}")
     else:
-        path = Path(name_or_path)
-        if not path.is_file():
-            raise ValueError(
-                f"texture: {str(name_or_path)!r} is neither a built-in texture "
-                f"{list(BUILTIN_TEXTURES)} nor an existing image file"
+        if not isinstance(name_or_path, (str, os.PathLike)):
+            raise TypeError(
+                f"texture: expected a built-in texture name {list(BUILTIN_TEXTURES)} or an image "
+                f"path, got {type(name_or_path).__name__} {name_or_path!r}"
             )
-        import imageio.v3 as iio
-
-        img = iio.imread(path)
-    tex = as_texture(img, name="texture")
+        shown = str(name_or_path)
+        path = Path(name_or_path)
+        if not path.exists():
+            raise ValueError(
+                f"texture: {shown!r} is neither a built-in texture {list(BUILTIN_TEXTURES)} "
+                f"nor an existing image file (no such file; expected {IMAGE_FORMATS} file)"
+            )
+        img = read_image_file(name_or_path, what="texture")
+        tex = as_texture(img, name=f"texture {shown!r}")
     if gray and tex.ndim == 3:
         from skimage.color import rgb2gray
 
+        if tex.shape[2] == 2:  # gray + alpha
+            return np.ascontiguousarray(tex[..., 0])
+        if tex.shape[2] not in (3, 4):
+            raise ValueError(
+                f"texture {str(name_or_path)!r}: expected 1 to 4 channels, got {tex.shape[2]}"
+            )
         tex = rgb2gray(tex[..., :3]).astype(np.float32)
     return tex
