@@ -8,6 +8,8 @@ import numpy as np
 
 from refnpr.formulas import lighting
 
+from ._names import warn_caller
+
 __all__ = [
     "scatter_rgba",
     "rgba_from",
@@ -16,6 +18,10 @@ __all__ = [
     "check_count",
     "needs_position",
     "specular_field",
+    "check_uv_scale",
+    "short_repr",
+    "refuse_unused",
+    "warn_unused",
 ]
 
 
@@ -104,18 +110,51 @@ def specular_field(
     return out
 
 
+#: Range of a style's ``uv_scale`` factors: beyond it the texture LOD (log2 of the scaled uv
+#: derivatives) and the lattice coordinates of procedural textures stop being finite or exact.
+UV_SCALE_RANGE = (1e-6, 1e6)
+
+
 def check_uv_scale(name: str, value: Any) -> tuple[float, float] | None:
     """A style's ``uv_scale``: None (each material's own) or a positive number or ``[su, sv]``
-    that multiplies uv in place of the material's ``uv_scale``; the same meaning in every style."""
+    that multiplies uv in place of the material's ``uv_scale``; the same meaning in every style.
+
+    Each factor must lie in ``UV_SCALE_RANGE`` (1e-6 to 1e6), where the scaled texture
+    coordinates, their derivatives and the LOD stay finite.
+    """
     if value is None:
         return None
     v = [value, value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
     try:
         arr = np.array(v, dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         arr = np.array([np.nan])
     if arr.shape != (2,) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         raise ValueError(
-            f"{name}: expected a positive number or two ([su, sv]) multiplying uv, got {value!r}"
+            f"{name}: expected a positive number or two ([su, sv]) multiplying uv, got "
+            f"{short_repr(value)}"
+        )
+    lo, hi = UV_SCALE_RANGE
+    if np.any(arr < lo) or np.any(arr > hi):
+        raise ValueError(
+            f"{name}: expected factors in [{lo:g}, {hi:g}] (beyond them the texture LOD is no "
+            f"longer finite), got {short_repr(value)}; use a factor in that range"
         )
     return (float(arr[0]), float(arr[1]))
+
+
+def short_repr(value: Any, limit: int = 80) -> str:
+    """``repr(value)``, cut to ``limit`` characters (a huge list stays readable)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 5] + " ...]"
+
+
+def refuse_unused(name: str, value: Any, mode: str, fix: str) -> None:
+    """``ValueError``: parameter ``name`` was given (``value``) but ``mode`` does not use it."""
+    raise ValueError(f"{name}: got {short_repr(value)}, but {mode} does not use it; {fix}")
+
+
+def warn_unused(name: str, value: Any, mode: str, fix: str) -> None:
+    """``UserWarning``: parameter ``name`` (``value``, not its default) is ignored by ``mode``;
+    attributed to the first caller outside refnpr."""
+    warn_caller(f"{name}: {short_repr(value)} is ignored with {mode}; {fix}", UserWarning)

@@ -13,7 +13,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["warn_deprecated", "renamed_params", "check_known"]
+__all__ = ["warn_caller", "warn_deprecated", "renamed_params", "check_known"]
 
 _PACKAGE = str(Path(__file__).resolve().parents[1])  # .../refnpr
 _INTERNAL_FILES = ("<string>",)  # dataclass-generated __init__
@@ -21,7 +21,7 @@ _INTERNAL_FILES = ("<string>",)  # dataclass-generated __init__
 
 def _outside_level() -> int:
     """``stacklevel`` (for a ``warnings.warn`` in our caller) of the first frame outside refnpr."""
-    frame = sys._getframe(2)  # the caller of warn_deprecated
+    frame = sys._getframe(2)  # the caller of warn_caller
     level = 1
     while frame is not None:
         name = frame.f_code.co_filename
@@ -32,9 +32,14 @@ def _outside_level() -> int:
     return level
 
 
+def warn_caller(message: str, category: type[Warning] = UserWarning) -> None:
+    """A warning attributed to the first caller outside refnpr."""
+    warnings.warn(message, category, stacklevel=_outside_level() + 1)
+
+
 def warn_deprecated(message: str) -> None:
     """A ``DeprecationWarning`` attributed to the first caller outside refnpr."""
-    warnings.warn(message, DeprecationWarning, stacklevel=_outside_level() + 1)
+    warn_caller(message, DeprecationWarning)
 
 
 def renamed_params(

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from . import _kernels as K
-from ._common import check_number
+from ._common import check_number, short_repr
 from ._names import renamed_params, warn_deprecated
 from .base import ShadeContext, Style, get_style, register, style_from_spec
 
@@ -197,6 +197,20 @@ def _layer_init_renamed(self: ContourLayer, *args: Any, **params: Any) -> None:
 ContourLayer.__init__ = _layer_init_renamed  # deprecated ``color`` -> ``ink``, with a warning
 
 
+def nested_style(name: str, value: Any) -> Style:
+    """The style a parameter ``name`` (``base``) holds: a Style, a style name or a table
+    ``{name = ..., **params}``; errors name the parameter and the value."""
+    if not isinstance(value, (Style, str, dict)):
+        raise TypeError(
+            f"{name}: expected a style name, a table {{name = ..., ...}} or a Style, got "
+            f"{type(value).__name__} {short_repr(value)}"
+        )
+    try:
+        return style_from_spec(value)
+    except (TypeError, ValueError) as exc:
+        raise type(exc)(f"{name}: {exc} (got {short_repr(value)})") from None
+
+
 @register
 class Contoured(Style):
     """Any style with the contour layer composited over it.
@@ -213,7 +227,7 @@ class Contoured(Style):
     description = "any style (base=...) with silhouette/crease contours drawn over it"
 
     def __init__(self, *, base: Any = "toon", contours: Any = True) -> None:
-        self.base = style_from_spec(base)
+        self.base = nested_style("base", base)
         if contours is True:
             contours = ContourLayer()
         elif isinstance(contours, dict):
@@ -222,7 +236,10 @@ class Contoured(Style):
             unknown = sorted(set(contours) - set(valid))
             if unknown:
                 raise ValueError(f"contours: unknown keys {unknown}; valid keys are {valid}")
-            contours = ContourLayer(**contours)
+            try:
+                contours = ContourLayer(**contours)
+            except (TypeError, ValueError) as exc:  # name the key as the user wrote it
+                raise type(exc)(f"contours.{exc}") from None
         elif not isinstance(contours, ContourLayer):
             raise TypeError(f"contours: expected a ContourLayer, a table or True, got {contours!r}")
         self.layer = contours

@@ -394,7 +394,8 @@ def test_cli_reaches_the_parameters(tmp_path):
 @pytest.mark.parametrize("source", ["constant", "image", "lines", "stipple"])
 def test_output_is_float32_rgba_with_alpha_zero_where_empty(source):
     scene = load_scene("sphere")
-    style = ThresholdStyle(source=source, texture="brick", filter="pcf", samples=4)
+    image = {"texture": "brick"} if source == "image" else {}  # texture: image thresholds only
+    style = ThresholdStyle(source=source, **image, filter="pcf", samples=4)
     gb, rgba = _shade(scene, style, 40, 30, spp=4)
     assert rgba.dtype == np.float32 and rgba.shape == (60, 80, 4)
     assert np.all(np.isfinite(rgba)) and np.all((rgba >= 0) & (rgba <= 1))

@@ -12,7 +12,14 @@ import numpy as np
 
 from refnpr.formulas import halftone
 
-from .._common import check_choice, check_number, check_uv_scale, needs_position, rgba_from
+from .._common import (
+    check_choice,
+    check_number,
+    check_uv_scale,
+    needs_position,
+    rgba_from,
+    warn_unused,
+)
 from ..base import ShadeContext, Style, register
 from . import screens as HS
 from .shading import lit_intensity, parse_indication, sample_indication, tangent_frame
@@ -122,6 +129,13 @@ class HalftoneStyle(Style):
                 raise TypeError(f"{flag}: expected a bool (true/false), got {val!r}")
         self.centred, self.specular = bool(centred), bool(specular)
         self.sample_lod, self.tone_correct = bool(sample_lod), bool(tone_correct)
+        if self.threshold == "binary":
+            if c != 4.0:
+                warn_unused("c", c, "threshold='binary'", "remove c or use threshold='smooth'")
+            if self.centred:
+                warn_unused("centred", True, "threshold='binary'", "remove centred or use 'smooth'")
+        elif self.c == "auto" and self.centred:
+            warn_unused("centred", True, "c='auto' (always centred)", "remove centred")
         self.screen_spec = HS.normalize_spec(screen)
         self.uv_scale = check_uv_scale("uv_scale", uv_scale)
         self.indication = parse_indication(indication)

@@ -6,23 +6,31 @@ from typing import Any
 
 import numpy as np
 
-from .._common import rgba_from
-from ..base import ShadeContext, Style, style_from_spec
+from .._common import rgba_from, short_repr
+from ..base import ShadeContext, Style
+from ..contours import nested_style
 
 __all__ = ["check_color", "field_channels", "base_style", "composite_ink"]
 
 
-def check_color(name: str, value: Any) -> tuple[float, float, float] | None:
-    """A linear RGB triple in [0, 1] (a single number means grey); None passes through."""
+def check_color(
+    name: str, value: Any, *, optional: bool = True
+) -> tuple[float, float, float] | None:
+    """A linear RGB triple in [0, 1] (a single number means grey); None passes through where
+    ``optional`` (``paper``), else is refused (``ink``)."""
     if value is None:
-        return None
+        if optional:
+            return None
+        raise TypeError(f"{name}: expected 3 numbers in [0, 1] (linear RGB), got None")
     vals = [value] * 3 if isinstance(value, (int, float)) and not isinstance(value, bool) else value
     try:
         c = np.asarray(vals, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name}: expected 3 numbers in [0, 1], got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise TypeError(f"{name}: expected 3 numbers in [0, 1], got {short_repr(value)}") from None
     if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
-        raise ValueError(f"{name}: expected 3 numbers in [0, 1] (linear RGB), got {value!r}")
+        raise ValueError(
+            f"{name}: expected 3 numbers in [0, 1] (linear RGB), got {short_repr(value)}"
+        )
     return tuple(float(x) for x in c)
 
 
@@ -37,8 +45,8 @@ def field_channels(scene: Any, constant_tone: float | None) -> set[str]:
 
 
 def base_style(base: Any) -> Style | None:
-    """The style drawn under the strokes (None: none)."""
-    return None if base is None else style_from_spec(base)
+    """The style drawn under the strokes (None: none); errors name ``base``."""
+    return None if base is None else nested_style("base", base)
 
 
 def composite_ink(

@@ -37,6 +37,10 @@ from .strokes import (
 
 __all__ = ["TamissParams", "PipelineResult", "run_pipeline"]
 
+#: Largest ``prior_weight`` (zero-visibility points per fragment): the prior's moment sums are
+#: float32 in the default precision, and a larger weight drowns every fragment anyway.
+MAX_PRIOR_WEIGHT = 1e6
+
 
 def _check_bool(name: str, value: Any) -> bool:
     if not isinstance(value, (bool, np.bool_)):  # 1 and 0 are not flags
@@ -145,7 +149,7 @@ class TamissParams:
             warmup_frames=check_count("warmup_frames", warmup_frames, lo=0, hi=16),
             dtype=check_choice("dtype", dtype, ("float32", "float64")),
             iterations=check_count("iterations", iterations, lo=0, hi=64),
-            prior_weight=check_number("prior_weight", prior_weight, lo=0.0),
+            prior_weight=check_number("prior_weight", prior_weight, lo=0.0, hi=MAX_PRIOR_WEIGHT),
             visibility_threshold=visibility_threshold,
             min_fragments=check_count("min_fragments", min_fragments, lo=4),
             min_t_span=check_number("min_t_span", min_t_span, lo=0.0, hi=1.0),

@@ -62,7 +62,7 @@ class TamissStyle(Style):
         **params: Any,
     ) -> None:
         self.pipeline_params = TamissParams.from_params(**params)
-        self.ink = check_color("ink", ink)
+        self.ink = check_color("ink", ink, optional=False)
         self.paper = check_color("paper", paper)
         self.base = base_style(base)
         self._params = self.pipeline_params.as_dict() | {

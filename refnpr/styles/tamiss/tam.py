@@ -80,7 +80,7 @@ class TamStyle(Style):
             if constant_tone is None
             else check_number("constant_tone", constant_tone, lo=0.0, hi=1.0)
         )
-        self.ink = check_color("ink", ink)
+        self.ink = check_color("ink", ink, optional=False)
         self.paper = check_color("paper", paper)
         self.base = base_style(base)
         self._params = self.field.as_dict() | {

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._common import check_choice, check_count, check_number, check_uv_scale
+from .._common import check_choice, check_count, check_number, check_uv_scale, warn_unused
 from .._names import check_known, renamed_params, warn_deprecated
 
 __all__ = [
@@ -38,9 +38,22 @@ def _bool(name: str, value: Any) -> bool:
     return bool(value)
 
 
-def _numbers(name: str, value: Any, *, lo: float, hi: float, what: str) -> tuple[float, ...]:
+#: Most hatching layers (``directions``): each is a full threshold pass per sample.
+MAX_LAYERS = 16
+#: Largest ``noise_scale`` (noise cells per texture unit) and deprecated ``scale``: the noise
+#: lattice coordinates uv * uv_scale * noise_scale must stay exact integers in float64.
+MAX_NOISE_SCALE = 1e6
+
+
+def _numbers(
+    name: str, value: Any, *, lo: float, hi: float, what: str, most: int = MAX_LAYERS
+) -> tuple[float, ...]:
     if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
         raise TypeError(f"{name}: expected a list of numbers ({what}), got {value!r}")
+    if len(value) > most:
+        raise ValueError(
+            f"{name}: expected at most {most} values ({what}), got a list of {len(value)}"
+        )
     out = tuple(check_number(f"{name}[{i}]", x, lo=lo, hi=hi) for i, x in enumerate(value))
     if not out:
         raise ValueError(f"{name}: expected at least one value ({what}), got an empty list")
@@ -134,6 +147,20 @@ def _deprecated_forms(kw: dict[str, Any]) -> dict[str, Any]:
     return kw
 
 
+def _warn_unused(kw: dict[str, Any], source: str, filt: str) -> None:
+    """A UserWarning for each parameter given that the chosen source or filter ignores."""
+    if kw.get("texture") is not None and source != "image":
+        warn_unused(
+            "texture", kw["texture"], f"source={source!r}", "remove it or use source='image'"
+        )
+    if kw.get("onsets") is not None and source != "lines":
+        warn_unused(
+            "onsets", kw["onsets"], f"source={source!r}", "onsets order hatching layers only"
+        )
+    if "samples" in kw and filt != "pcf" and kw["samples"] != ThresholdParams.samples:
+        warn_unused("samples", kw["samples"], f"filter={filt!r}", "use filter='pcf'")
+
+
 def parse_params(**kw: Any) -> ThresholdParams:
     """Validate keyword parameters into :class:`ThresholdParams` (clear errors naming each).
 
@@ -188,6 +215,7 @@ def parse_params(**kw: Any) -> ThresholdParams:
                 f"onsets: expected values in (0, 1] whose largest is 1 (the first layer shows at "
                 f"every tone below white), got {list(onsets)}"
             )
+    _warn_unused(kw, source, filt)
     noise_seed = p["noise_seed"]
     if isinstance(noise_seed, bool) or not isinstance(noise_seed, int):
         raise TypeError(f"noise_seed: expected an integer, got {noise_seed!r}")
@@ -204,9 +232,7 @@ def parse_params(**kw: Any) -> ThresholdParams:
         facing_power=check_number("facing_power", p["facing_power"], lo=0.0, lo_open=True),
         tone_fade=(tone_fade[0], tone_fade[1]),
         uv_scale=check_uv_scale("uv_scale", p["uv_scale"]),
-        scale=None
-        if p["scale"] is None
-        else check_number("scale", p["scale"], lo=0.0, lo_open=True),
+        scale=None if p["scale"] is None else check_number("scale", p["scale"], lo=1e-6, hi=1e6),
         texture=texture,
         window=window,
         clip_limit=clip_limit,
@@ -222,6 +248,8 @@ def parse_params(**kw: Any) -> ThresholdParams:
         uniform=_bool("uniform", p["uniform"]),
         multiscale=_bool("multiscale", p["multiscale"]),
         noise=check_number("noise", p["noise"], lo=0.0, hi=1.0),
-        noise_scale=check_number("noise_scale", p["noise_scale"], lo=0.0, lo_open=True),
+        noise_scale=check_number(
+            "noise_scale", p["noise_scale"], lo=0.0, lo_open=True, hi=MAX_NOISE_SCALE
+        ),
         noise_seed=int(noise_seed),
     )

@@ -142,11 +142,19 @@ class ThresholdStyle(Style):
         req = {"normal", "mesh_id"}
         if needs_position(scene, p.specular or p.facing_fade > 0.0):
             req.add("position")
-        if p.source == "constant":
-            return frozenset(req)
+        if p.source == "constant" or (p.source == "image" and not self._textured(scene)):
+            return frozenset(req)  # constant thresholds: no uv
         if self._channel_scale():
             return frozenset(req | {"uv", "dyadic_scale"})
         return frozenset(req | {"uv", "duv_dx", "duv_dy"})
+
+    def _textured(self, scene: Any) -> bool:
+        """Whether source "image" reads a texture on some object of ``scene`` (else every
+        object gets the constant ``t`` and uv is not needed)."""
+        p = self.p
+        if p.texture is not None or self.pyramid is not None:
+            return True
+        return any(obj.material.texture is not None for obj in scene.objects)
 
     def raster_options(self, scene: Any) -> dict[str, Any]:
         return {"line_period": self.p.period} if self._channel_scale() else {}
@@ -167,6 +175,9 @@ class ThresholdStyle(Style):
         """Scaled texture coordinates and per-pixel derivatives of the covered samples."""
         gb = ctx.gb
         uvs = self.uv_scales(ctx, mask)
+        if "uv" not in gb:  # source "image" without textures: only the constant t is read
+            zero = np.zeros_like(uvs)
+            return Footprint(zero, zero, zero, gb.n)
         uv = gb["uv"][mask].astype(np.float64) * uvs
         if "duv_dx" in gb and "duv_dy" in gb:
             gx = gb["duv_dx"][mask].astype(np.float64) * uvs

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from .._common import check_choice, rgba_from
+from .._common import check_choice, refuse_unused, rgba_from
 from ..base import ShadeContext, Style, register
 from .detail import DetailParams
 from .evaluation import Config, evaluate, plan, vertex_values
@@ -111,6 +111,14 @@ class XToonStyle(Style):
         if isinstance(light, bool) or not isinstance(light, (int, np.integer)) or light < 0:
             raise ValueError(f"light: expected a light index >= 0, got {light!r}")
         tex = resolve_texture(texture)
+        _refuse_unused_detail_params(
+            detail,
+            z_min=z_min,
+            r=r,
+            focus_point=focus_point,
+            prev_camera=prev_camera,
+            detail_map=detail_map,
+        )
         if z_min is not None:
             z_min = number(
                 "z_min",
@@ -193,11 +201,14 @@ class XToonStyle(Style):
                 "a few tens of iterations already give a smooth field"
             )
         if shape_objects is not None:
-            if isinstance(shape_objects, str) or not all(isinstance(o, str) for o in shape_objects):
-                raise TypeError(
-                    f"shape_objects: expected a list of object names, got {shape_objects!r}"
+            shape_objects = _object_names(shape_objects)
+            if shape is None:
+                refuse_unused(
+                    "shape_objects",
+                    list(shape_objects),
+                    "shape=None (no shape abstraction)",
+                    "choose a shape (e.g. shape='smoothed') or remove shape_objects",
                 )
-            shape_objects = tuple(shape_objects)
         modulate = _bool("modulate", modulate)
         pyramid = None
         if weight.kind == "texture":
@@ -325,6 +336,41 @@ class XToonStyle(Style):
         rgb[ev.mask] = col
         alpha[ev.mask] = ev.rgba[:, 3]  # texture alpha: composited over the background
         return rgba_from(rgb, ev.mask, alpha)
+
+
+#: Detail maps that read each optional parameter (the others ignore it).
+_USED_BY = {
+    "z_min": ("depth", "focus"),
+    "r": ("depth", "focus", "orientation"),
+    "focus_point": ("focus",),
+    "prev_camera": ("flow",),
+    "detail_map": ("map",),
+}
+
+
+def _refuse_unused_detail_params(detail: str, **given: Any) -> None:
+    """A ValueError for an optional parameter given with a detail map that ignores it."""
+    for name, value in given.items():
+        users = _USED_BY[name]
+        if value is not None and detail not in users:
+            want = " or ".join(repr(d) for d in users)
+            refuse_unused(
+                name,
+                value,
+                f"detail={detail!r}",
+                f"remove {name} or use detail={want}",
+            )
+
+
+def _object_names(value: Any) -> tuple[str, ...]:
+    """``shape_objects`` as a tuple of object names (a list of str)."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+        raise TypeError(
+            f"shape_objects: expected a list of object names, got {type(value).__name__} {value!r}"
+        )
+    if not all(isinstance(o, str) for o in value):
+        raise TypeError(f"shape_objects: expected a list of object names (str), got {value!r}")
+    return tuple(value)
 
 
 def _camera_table(cam: Any) -> dict[str, Any]:
