@@ -2,6 +2,12 @@
 of inputs and messages (``docs/errors.md``), ``--json FILE`` the raw outcomes.
 
     python -m tests.robustness.report [--markdown docs/errors.md] [--json out.json]
+    python -m tests.robustness.report --isolate [--limit-mb 4000]   # each case in a child
+
+``--isolate`` runs every case in a child process under an address-space limit and a timeout, so
+that code which allocates whatever size it is asked for (as refnpr did before the hardening)
+is counted as it fails (``unclear`` for a MemoryError, ``crash`` for a killed child) instead of
+taking the report down with it.
 """
 
 from __future__ import annotations
@@ -10,12 +16,14 @@ import argparse
 import importlib
 import json
 import pkgutil
+import subprocess
+import sys
 import tempfile
 from collections import Counter
 from pathlib import Path
 
 from tests import robustness
-from tests.robustness.catalogue import CLASSES, OUTCOMES, classify
+from tests.robustness.catalogue import CLASSES, OUTCOMES, Outcome, classify
 
 
 def all_cases():
@@ -27,17 +35,60 @@ def all_cases():
     return cases
 
 
+def _one(case_id: str, tmp: Path) -> dict:
+    """Classify one case in this process (the child side of ``--isolate``)."""
+    for _module, case in all_cases():
+        if case.id == case_id:
+            got = classify(case, tmp)
+            return {"outcome": got.outcome, "detail": got.detail}
+    raise SystemExit(f"no case {case_id!r}")
+
+
+def _isolated(case_id: str, tmp: Path, limit_mb: int, timeout: float):
+    def limit():
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, (limit_mb << 20, limit_mb << 20))
+
+    code = (
+        "import json, sys; from pathlib import Path; from tests.robustness.report import _one; "
+        f"print('@@' + json.dumps(_one({case_id!r}, Path({str(tmp)!r}))))"
+    )
+    try:
+        r = subprocess.run(
+            [sys.executable, "-c", code],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            preexec_fn=limit,
+        )
+    except subprocess.TimeoutExpired:
+        return Outcome("crash", f"child timed out after {timeout} s")
+    marks = [ln for ln in r.stdout.splitlines() if ln.startswith("@@")]
+    if not marks:
+        tail = " ".join(r.stderr.split())[-200:]
+        return Outcome("crash", f"child exit {r.returncode}: {tail}")
+    d = json.loads(marks[-1][2:])
+    return Outcome(d["outcome"], d["detail"])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--markdown", type=Path)
     ap.add_argument("--json", type=Path)
+    ap.add_argument("--isolate", action="store_true", help="each case in a child process")
+    ap.add_argument("--limit-mb", type=int, default=4000, help="child address-space limit")
+    ap.add_argument("--timeout", type=float, default=300.0, help="child time limit, seconds")
     args = ap.parse_args(argv)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for i, (module, case) in enumerate(all_cases()):
             d = Path(tmp) / f"c{i}"
             d.mkdir()
-            got = classify(case, d)
+            if args.isolate:
+                got = _isolated(case.id, d, args.limit_mb, args.timeout)
+            else:
+                got = classify(case, d)
             rows.append(
                 {
                     "id": case.id,
