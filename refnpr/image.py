@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import os
+import secrets
 import signal
-import tempfile
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
@@ -142,53 +142,170 @@ def check_png_path(path: str | os.PathLike) -> Path:
 
 
 #: Signals whose default action ends the process: while an atomic write runs (main thread),
-#: they first remove the temporary file (unless a Python handler is installed for them).
+#: they first remove the temporary files (unless a Python handler is installed for them).
 _TERMINATING = tuple(
     getattr(signal, n) for n in ("SIGTERM", "SIGHUP", "SIGINT") if hasattr(signal, n)
 )
 
+#: Temporary files of the atomic writes under way, in every thread: what the signal handler
+#: removes. Changed and read under ``_LIVE_LOCK``, re-entrant because the handler runs in the
+#: main thread between any two bytecodes, possibly while that thread holds the lock.
+_LIVE: set[str] = set()
+_LIVE_LOCK = threading.RLock()
+#: How many atomic writes of the main thread are open (nested or interleaved blocks): the
+#: handlers are installed by the first and restored when this returns to 0.
+_DEPTH = 0
+#: Signal number -> the handler ours replaced (always ``SIG_DFL``), for those ours was set on.
+_INSTALLED: dict[int, Any] = {}
+#: Where Linux reports the process's umask; read instead of setting it (see ``_current_umask``).
+_PROC_STATUS = "/proc/self/status"
 
-@contextmanager
-def _signals_remove(tmp: list[str]) -> Iterator[None]:
-    """While the block runs, a terminating signal whose handler is the default one removes the
-    files named in ``tmp`` and then ends the process as the default action would (re-raised with
-    the default handler, so the exit status is the conventional one). Handlers set from Python
-    (KeyboardInterrupt for SIGINT, a caller's own) are left alone: those that raise unwind
-    through the caller's cleanup. Outside the main thread, where handlers cannot be set, this
-    does nothing (the caller's ``try``/``except`` still cleans up)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    installed: dict[int, Any] = {}
 
-    def restore() -> None:
-        while installed:
-            signum, previous = installed.popitem()
-            signal.signal(signum, previous)
+def _on_signal(signum: int, frame: Any) -> None:
+    """Temporary handler: put the previous handler back, remove the temporary files, and end the
+    process with the same signal (the default action, so the exit status is the usual one).
 
-    def handler(signum: int, frame: Any) -> None:
-        for name in tmp:
-            with suppress(OSError):
-                os.unlink(name)
-        restore()
-        os.kill(os.getpid(), signum)  # the default action: terminate with this signal
-        raise SystemExit(128 + signum)  # only if the signal was blocked
+    The previous handler is set first, so a second signal (one arriving while the files are
+    removed, or the one ``os.kill`` sends) never re-enters this function."""
+    with suppress(ValueError, OSError):
+        signal.signal(signum, _INSTALLED.get(signum) or signal.SIG_DFL)
+    got = _LIVE_LOCK.acquire(timeout=1.0)  # a worker holds it for a set operation at most
+    try:
+        names = tuple(_LIVE)
+    finally:
+        if got:
+            _LIVE_LOCK.release()
+    for name in names:
+        with suppress(OSError):
+            os.unlink(name)
+    os.kill(os.getpid(), signum)  # the default action: terminate with this signal
+    raise SystemExit(128 + signum)  # reached only if the signal is blocked
 
+
+def _install() -> None:
+    """Set ``_on_signal`` for each terminating signal whose handler is the default one."""
     for signum in _TERMINATING:
         with suppress(ValueError, OSError):
             if signal.getsignal(signum) == signal.SIG_DFL:
-                installed[signum] = signal.signal(signum, handler)
+                previous = signal.signal(signum, _on_signal)
+                _INSTALLED.setdefault(signum, previous)
+
+
+def _restore() -> None:
+    """Put back the handlers ``_on_signal`` replaced, where it is still the one set (a handler
+    installed meanwhile by the caller stays). Each is set before it is forgotten, so an
+    interrupt in between finds either ours, which still knows the previous one, or that one."""
+    for signum, previous in list(_INSTALLED.items()):
+        with suppress(ValueError, OSError):
+            if signal.getsignal(signum) is _on_signal:
+                signal.signal(signum, previous)
+        _INSTALLED.pop(signum, None)
+
+
+@contextmanager
+def _signals_remove() -> Iterator[None]:
+    """While the block runs, a terminating signal whose handler is the default one removes the
+    files registered in ``_LIVE`` and then ends the process as the default action would
+    (re-sent with the default handler, so the exit status is the conventional one).
+
+    Blocks nest: the outermost installs the handlers, the inner ones only count, and the
+    handlers are restored when the last one ends, each only if it is still ours (one the
+    caller installed inside the block is kept). Handlers set from Python (KeyboardInterrupt
+    for SIGINT, a caller's own) are left alone: those that raise unwind through the caller's
+    cleanup. Outside the main thread, where handlers cannot be set, this does nothing (the
+    caller's ``try``/``except`` still cleans up)."""
+    global _DEPTH
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _DEPTH += 1
     try:
+        _install()  # also at inner levels: a handler the caller reset to the default
         yield
     finally:
-        restore()
+        _DEPTH -= 1
+        if _DEPTH == 0:
+            _restore()
+
+
+def _current_umask() -> int:
+    """The process's umask, read from ``/proc/self/status`` without changing it (setting it,
+    even briefly, would give files other threads create meanwhile the wrong mode). Where that
+    is unavailable, falls back to setting and restoring it (to 0o077 meanwhile, not 0).
+
+    Returns
+    -------
+    int
+        The umask, such as ``0o022``.
+    """
+    try:
+        with open(_PROC_STATUS, encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    umask = os.umask(0o077)
+    os.umask(umask)
+    return umask
+
+
+_OPEN_FLAGS = (
+    os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
+)
+
+
+def _create_registered(parent: Path, prefix: str, suffix: str) -> str:
+    """Create a new empty file (mode 0600) named ``prefix + random + suffix`` in ``parent``.
+
+    The name is registered in ``_LIVE`` before the file is created, so a signal at any point
+    finds it there (removing a name not created yet is harmless). On failure it is
+    unregistered and the error raised; a name already taken is retried with another.
+
+    Parameters
+    ----------
+    parent : Path
+        The directory (it exists).
+    prefix, suffix : str
+        Around the random part of the name.
+
+    Returns
+    -------
+    str
+        The file's path, registered in ``_LIVE`` (the caller unregisters it).
+    """
+    for _ in range(1000):
+        name = os.path.join(parent, f"{prefix}{secrets.token_hex(5)}{suffix}")
+        with _LIVE_LOCK:
+            _LIVE.add(name)
+        try:
+            fd = os.open(name, _OPEN_FLAGS, 0o600)
+        except FileExistsError:
+            with _LIVE_LOCK:
+                _LIVE.discard(name)
+            continue
+        except BaseException:
+            with _LIVE_LOCK:
+                _LIVE.discard(name)
+            raise
+        os.close(fd)
+        return name
+    raise FileExistsError(f"cannot create a temporary file in {str(parent)!r}: names taken")
 
 
 @contextmanager
 def atomic_file(path: str | os.PathLike, *, suffix: str = "") -> Iterator[Path]:
     """A temporary file beside ``path`` that replaces ``path`` (atomic rename) when the block
-    ends normally, and is removed on every other exit: an exception, KeyboardInterrupt, or a
-    SIGTERM/SIGHUP while it is written (see ``write_png_atomic``). ``path`` is never partial.
+    ends normally, and is removed on every other exit. ``path`` is never partial.
+
+    The temporary file is removed on an exception or KeyboardInterrupt (``try``/``except``, in
+    every thread). In the main thread it is also removed on SIGTERM, SIGHUP or SIGINT whose
+    handler is the default one: a temporary handler removes the temporary files of all the
+    atomic writes under way (nested ones included) and re-sends the signal, so the process
+    ends with the conventional status; the previous handlers are restored when the outermost
+    block ends, unless the caller replaced ours meanwhile. Worker threads cannot set signal
+    handlers: there the cleanup is ``try``/``except`` only, and a signal that ends the process
+    leaves their temporary file unless a main-thread atomic write is under way at the time.
 
     Parameters
     ----------
@@ -200,26 +317,23 @@ def atomic_file(path: str | os.PathLike, *, suffix: str = "") -> Iterator[Path]:
     Yields
     ------
     Path
-        The temporary file to write (it exists, empty, mode 0600 until the rename).
+        The temporary file to write (it exists, empty, mode 0600 until the rename, then
+        ``0o666`` less the umask).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    names: list[str] = []
-    with _signals_remove(names):
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
-        names.append(tmp)
-        os.close(fd)
+    with _signals_remove():
+        tmp = _create_registered(path.parent, f".{path.stem}.", suffix)
         try:
             yield Path(tmp)
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual file mode
+            os.chmod(tmp, 0o666 & ~_current_umask())  # mkstemp-like 0600; the usual mode
             os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
             raise
         finally:
-            names.clear()
+            with _LIVE_LOCK:
+                _LIVE.discard(tmp)
 
 
 def write_png_atomic(path: str | os.PathLike, pixels: np.ndarray) -> Path:
