@@ -33,11 +33,17 @@ def fallback_cache_dir() -> str | None:
     """A private, writable numba cache directory under the temporary directory, or None.
 
     ``<tempdir>/refnpr-numba-<uid>``, created with mode 0700; an existing one is used only if
-    this user owns it and nobody else can write to it (numba's cache files are pickles).
+    this user owns it and nobody else can write to it (numba's cache files are pickles), and
+    only in a temporary directory that others cannot rename entries of (sticky, like /tmp, or
+    not writable by others).
     """
     uid = os.getuid() if hasattr(os, "getuid") else 0
     path = os.path.join(tempfile.gettempdir(), f"refnpr-numba-{uid}")
     try:
+        parent = os.stat(os.path.dirname(path))
+        shared = parent.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+        if shared and not parent.st_mode & stat.S_ISVTX and parent.st_uid != uid:
+            return None  # others could swap the directory after the checks below
         os.makedirs(path, mode=0o700, exist_ok=True)
         st = os.lstat(path)
         if not stat.S_ISDIR(st.st_mode) or st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
@@ -52,6 +58,8 @@ def fallback_cache_dir() -> str | None:
 
 #: Whether the no-cache warning was given (once per process, not once per kernel).
 _WARNED: list[bool] = []
+#: Where kernels went when numba had no cache locator: the fallback directory, or "" (uncached).
+FALLBACK: list[str] = []
 
 
 def _no_locator(exc: RuntimeError) -> bool:
@@ -69,12 +77,17 @@ def _jit(func, flags: dict):
         saved = _numba_config.CACHE_DIR
         _numba_config.CACHE_DIR = path  # read once, when the dispatcher picks its locator
         try:
-            return numba.njit(**flags)(func)
+            kernel = numba.njit(**flags)(func)
+            if path not in FALLBACK:
+                FALLBACK.append(path)
+            return kernel
         except RuntimeError as exc:
             if not _no_locator(exc):
                 raise
         finally:
             _numba_config.CACHE_DIR = saved
+    if "" not in FALLBACK:
+        FALLBACK.append("")
     if not _WARNED:
         _WARNED.append(True)
         warnings.warn(

@@ -14,7 +14,11 @@ from __future__ import annotations
 
 import math
 import os
-import resource
+
+try:
+    import resource
+except ImportError:  # not on Windows: no address-space limit to respect
+    resource = None
 from collections.abc import Iterable, Mapping
 
 __all__ = [
@@ -27,8 +31,8 @@ __all__ = [
     "format_bytes",
 ]
 
-#: Largest samples per pixel (a 64 x 64 grid inside each pixel).
-MAX_SPP = 4096
+#: Largest samples per pixel (a 256 x 256 grid inside each pixel); memory is checked as well.
+MAX_SPP = 65536
 #: Largest sample grid (n H * n W); ids and tile lists are int32, so stay below 2**31.
 MAX_SAMPLES = 2**31
 #: Bytes per tile of the binning pass: 64 chunk counts (int64) held three times over (counts,
@@ -227,6 +231,45 @@ def _meminfo_available() -> int | None:
         return None
 
 
+def _cgroup_available() -> int | None:
+    """Memory left under this process's cgroup memory limit (v2 ``memory.max -
+    memory.current``, v1 ``memory.limit_in_bytes - memory.usage_in_bytes``), or None without
+    one: a container's limit, which ``MemAvailable`` does not show."""
+    try:
+        with open("/proc/self/cgroup", encoding="ascii") as fh:
+            lines = [ln.strip().split(":", 2) for ln in fh if ln.count(":") >= 2]
+    except OSError:
+        return None
+    candidates = []
+    for _id, controllers, rel in lines:
+        rel = rel.lstrip("/")
+        if controllers == "":  # v2 unified
+            base = os.path.join("/sys/fs/cgroup", rel)
+            candidates.append(
+                (os.path.join(base, "memory.max"), os.path.join(base, "memory.current"))
+            )
+        elif "memory" in controllers.split(","):  # v1
+            for base in (os.path.join("/sys/fs/cgroup/memory", rel), "/sys/fs/cgroup/memory"):
+                candidates.append(
+                    (
+                        os.path.join(base, "memory.limit_in_bytes"),
+                        os.path.join(base, "memory.usage_in_bytes"),
+                    )
+                )
+    for limit_file, usage_file in candidates:
+        try:
+            with open(limit_file, encoding="ascii") as fh:
+                limit = fh.read().strip()
+            with open(usage_file, encoding="ascii") as fh:
+                usage = int(fh.read().strip())
+        except (OSError, ValueError):
+            continue
+        if limit == "max" or int(limit) >= 1 << 60:  # no limit
+            return None
+        return max(0, int(limit) - usage)
+    return None
+
+
 def _address_space_used() -> int:
     try:
         with open("/proc/self/status", encoding="ascii") as fh:
@@ -241,13 +284,16 @@ def _address_space_used() -> int:
 def available_bytes() -> tuple[int | None, str]:
     """Memory this process can still allocate, and where the figure comes from.
 
-    The smaller of the system's available memory (``MemAvailable`` in ``/proc/meminfo``, else
-    ``os.sysconf``'s available pages) and, when ``RLIMIT_AS`` is set, the address space left
-    under it. ``(None, "unknown")`` when neither can be read (nothing is refused then).
+    The smallest of the system's available memory (``MemAvailable`` in ``/proc/meminfo``, else
+    ``os.sysconf``'s available pages), what is left under a cgroup v2 memory limit (containers)
+    and, when ``RLIMIT_AS`` is set, the address space left under it. ``(None, "unknown")`` when neither can be read (nothing is refused then).
     """
     avail, source = _meminfo_available(), "available memory"
-    soft, _hard = resource.getrlimit(resource.RLIMIT_AS)
-    if soft != resource.RLIM_INFINITY and soft > 0:
+    group = _cgroup_available()
+    if group is not None and (avail is None or group < avail):
+        avail, source = group, "memory left under the cgroup limit"
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0] if resource is not None else -1
+    if resource is not None and soft != resource.RLIM_INFINITY and soft > 0:
         left = max(0, soft - _address_space_used())
         if avail is None or left < avail:
             avail, source = left, "address space left under RLIMIT_AS"

@@ -162,9 +162,12 @@ def _cmd_info(args: argparse.Namespace) -> int:
     import skimage
     import trimesh
 
-    from . import __version__
+    from . import __version__, _jit, raster  # noqa: F401  (importing raster decorates its kernels)
 
     cache = os.environ.get("NUMBA_CACHE_DIR") or "(next to each module, __pycache__)"
+    if _jit.FALLBACK:
+        where = [f or "none: compiled on every start" for f in _jit.FALLBACK]
+        cache += f"; where that is not writable: {', '.join(where)}"
     info = {
         "refnpr": __version__,
         "python": sys.version.split()[0],

@@ -20,7 +20,6 @@ __all__ = [
     "specular_field",
     "check_uv_scale",
     "short_repr",
-    "refuse_unused",
     "warn_unused",
 ]
 
@@ -147,11 +146,6 @@ def short_repr(value: Any, limit: int = 80) -> str:
     """``repr(value)``, cut to ``limit`` characters (a huge list stays readable)."""
     text = repr(value)
     return text if len(text) <= limit else text[: limit - 5] + " ...]"
-
-
-def refuse_unused(name: str, value: Any, mode: str, fix: str) -> None:
-    """``ValueError``: parameter ``name`` was given (``value``) but ``mode`` does not use it."""
-    raise ValueError(f"{name}: got {short_repr(value)}, but {mode} does not use it; {fix}")
 
 
 def warn_unused(name: str, value: Any, mode: str, fix: str) -> None:

@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ._common import short_repr
 from ._names import check_known, renamed_params
 
 __all__ = [
@@ -24,6 +25,7 @@ __all__ = [
     "get_style",
     "list_styles",
     "style_from_spec",
+    "nested_style",
 ]
 
 
@@ -200,3 +202,17 @@ def style_from_spec(spec: Any) -> Style:
             return get_style("contoured", base=style, contours=contours)
         return style
     raise TypeError(f"style: expected a Style, a name or a table, got {type(spec).__name__}")
+
+
+def nested_style(name: str, value: Any) -> Style:
+    """The style a parameter ``name`` (``base``) holds: a Style, a style name or a table
+    ``{name = ..., **params}``; errors name the parameter and the value."""
+    if not isinstance(value, (Style, str, dict)):
+        raise TypeError(
+            f"{name}: expected a style name, a table {{name = ..., ...}} or a Style, got "
+            f"{type(value).__name__} {short_repr(value)}"
+        )
+    try:
+        return style_from_spec(value)
+    except (TypeError, ValueError) as exc:
+        raise type(exc)(f"{name}: {exc} (got {short_repr(value)})") from None

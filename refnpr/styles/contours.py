@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from . import _kernels as K
-from ._common import check_number, short_repr
+from ._common import check_number
 from ._names import renamed_params, warn_deprecated
-from .base import ShadeContext, Style, get_style, register, style_from_spec
+from .base import ShadeContext, Style, get_style, nested_style, register
 
 __all__ = ["EdgeTable", "ContourLayer", "Contoured", "edge_table"]
 
@@ -195,20 +195,6 @@ def _layer_init_renamed(self: ContourLayer, *args: Any, **params: Any) -> None:
 
 
 ContourLayer.__init__ = _layer_init_renamed  # deprecated ``color`` -> ``ink``, with a warning
-
-
-def nested_style(name: str, value: Any) -> Style:
-    """The style a parameter ``name`` (``base``) holds: a Style, a style name or a table
-    ``{name = ..., **params}``; errors name the parameter and the value."""
-    if not isinstance(value, (Style, str, dict)):
-        raise TypeError(
-            f"{name}: expected a style name, a table {{name = ..., ...}} or a Style, got "
-            f"{type(value).__name__} {short_repr(value)}"
-        )
-    try:
-        return style_from_spec(value)
-    except (TypeError, ValueError) as exc:
-        raise type(exc)(f"{name}: {exc} (got {short_repr(value)})") from None
 
 
 @register

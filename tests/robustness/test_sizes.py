@@ -127,13 +127,13 @@ CASES = [
         "cli-spp-1000000",
         "refnpr render --spp 1000000",
         _render_cli("--spp", "1000000"),
-        Exits(2, r"spp: .*at most 4096.*got 1000000"),
+        Exits(2, r"spp: .*at most 65536.*got 1000000"),
     ),
     _c(
         "cli-spp-10000-512",
         "refnpr render --spp 10000 --size 512x512",
         _render_cli("--spp", "10000", "--size", "512x512"),
-        Exits(2, r"spp: .*at most 4096.*got 10000"),
+        Exits(2, _size_msg(512, 512, 10000)),
     ),
     _c(
         "cli-spp-1024-2048",
@@ -183,13 +183,13 @@ CASES = [
         "render-spp-1000000",
         "render('sphere', 'toon', 32, 24, spp=1000000)",
         _render(spp=1000000),
-        Raises(ValueError, r"spp: .*at most 4096.*got 1000000"),
+        Raises(ValueError, r"spp: .*at most 65536.*got 1000000"),
     ),
     _c(
         "render-spp-10000-512-child",
         "render(scene, 'toon', 512, 512, spp=10000) under a 3 GB address-space limit",
         _child("render('sphere', 'toon', 512, 512, spp=10000)"),
-        Exits(2, r"spp: .*at most 4096.*got 10000"),
+        Exits(2, _size_msg(512, 512, 10000)),
     ),
     _c(
         "render-size-8000-spp4-child",
@@ -295,9 +295,9 @@ CASES = [
         Raises(TypeError, r"camera: expected .*Camera.*got str 'front'"),
     ),
     _c(
-        "render-spp-4096-4x3",
-        "render('sphere', 'toon', 4, 3, spp=4096): the largest spp on a tiny image works",
-        _render(width=4, height=3, spp=4096),
+        "render-spp-65536-4x3",
+        "render('sphere', 'toon', 4, 3, spp=65536): the largest spp on a tiny image works",
+        _render(width=4, height=3, spp=65536),
         Correct(_image_of(4, 3)),
     ),
 ]

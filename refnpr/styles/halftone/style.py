@@ -133,7 +133,12 @@ class HalftoneStyle(Style):
             if c != 4.0:
                 warn_unused("c", c, "threshold='binary'", "remove c or use threshold='smooth'")
             if self.centred:
-                warn_unused("centred", True, "threshold='binary'", "remove centred or use 'smooth'")
+                warn_unused(
+                    "centred",
+                    True,
+                    "threshold='binary'",
+                    "remove centred or use threshold='smooth'",
+                )
         elif self.c == "auto" and self.centred:
             warn_unused("centred", True, "c='auto' (always centred)", "remove centred")
         self.screen_spec = HS.normalize_spec(screen)

@@ -7,8 +7,7 @@ from typing import Any
 import numpy as np
 
 from .._common import rgba_from, short_repr
-from ..base import ShadeContext, Style
-from ..contours import nested_style
+from ..base import ShadeContext, Style, nested_style
 
 __all__ = ["check_color", "field_channels", "base_style", "composite_ink"]
 

@@ -39,7 +39,7 @@ def _bool(name: str, value: Any) -> bool:
 
 
 #: Most hatching layers (``directions``): each is a full threshold pass per sample.
-MAX_LAYERS = 16
+MAX_LAYERS = 64
 #: Largest ``noise_scale`` (noise cells per texture unit) and deprecated ``scale``: the noise
 #: lattice coordinates uv * uv_scale * noise_scale must stay exact integers in float64.
 MAX_NOISE_SCALE = 1e6

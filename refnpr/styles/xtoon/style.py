@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from .._common import check_choice, refuse_unused, rgba_from
+from .._common import check_choice, rgba_from, warn_unused
 from ..base import ShadeContext, Style, register
 from .detail import DetailParams
 from .evaluation import Config, evaluate, plan, vertex_values
@@ -111,7 +111,7 @@ class XToonStyle(Style):
         if isinstance(light, bool) or not isinstance(light, (int, np.integer)) or light < 0:
             raise ValueError(f"light: expected a light index >= 0, got {light!r}")
         tex = resolve_texture(texture)
-        _refuse_unused_detail_params(
+        z_min, r, focus_point, prev_camera, detail_map = _without_unused_detail_params(
             detail,
             z_min=z_min,
             r=r,
@@ -203,7 +203,7 @@ class XToonStyle(Style):
         if shape_objects is not None:
             shape_objects = _object_names(shape_objects)
             if shape is None:
-                refuse_unused(
+                warn_unused(
                     "shape_objects",
                     list(shape_objects),
                     "shape=None (no shape abstraction)",
@@ -348,18 +348,19 @@ _USED_BY = {
 }
 
 
-def _refuse_unused_detail_params(detail: str, **given: Any) -> None:
-    """A ValueError for an optional parameter given with a detail map that ignores it."""
+def _without_unused_detail_params(detail: str, **given: Any) -> tuple[Any, ...]:
+    """The optional parameters in order, None where the detail map ignores them; each ignored
+    one gives a warning (at the caller), as the threshold and halftone styles do, so a sweep over
+    detail maps with one shared parameter table keeps working."""
+    out = []
     for name, value in given.items():
         users = _USED_BY[name]
         if value is not None and detail not in users:
             want = " or ".join(repr(d) for d in users)
-            refuse_unused(
-                name,
-                value,
-                f"detail={detail!r}",
-                f"remove {name} or use detail={want}",
-            )
+            warn_unused(name, value, f"detail={detail!r}", f"remove {name} or use detail={want}")
+            value = None
+        out.append(value)
+    return tuple(out)
 
 
 def _object_names(value: Any) -> tuple[str, ...]:
