@@ -30,19 +30,28 @@ RESERVED_NAMES = frozenset(BUILTIN_CHANNELS)
 MAX_COORDINATE = 1e15
 
 
-def _check_magnitude(pos: np.ndarray, mesh_name: str, prefix: str) -> None:
-    """Refuse positions beyond :data:`MAX_COORDINATE` (see there for the derivation)."""
+def coordinate_limit_message(subject: str, pos: np.ndarray) -> str | None:
+    """The refusal of positions beyond :data:`MAX_COORDINATE` (see there for the derivation),
+    in the one wording Mesh and the mesh-file checks share; ``None`` when every coordinate is
+    within the limit. ``subject`` names what holds the positions (``"mesh 'ball'"``)."""
     mag = np.abs(pos)
     big = float(mag.max()) if mag.size else 0.0
-    if big > MAX_COORDINATE:
-        row = int(np.argmax(mag.max(axis=1)))
-        raise ValueError(
-            f"{prefix}: mesh {mesh_name!r} has a vertex coordinate of magnitude {big:.3g} "
-            f"(vertex {row}: {pos[row].tolist()}), above the limit {MAX_COORDINATE:.0e} "
-            "beyond which float64 clipping loses geometry; rescale the model (e.g. to metres or "
-            "kilometres) so that every |coordinate| is <= "
-            f"{MAX_COORDINATE:.0e}"
-        )
+    if not big > MAX_COORDINATE:
+        return None
+    row = int(np.argmax(mag.max(axis=1)))
+    return (
+        f"{subject} has a vertex coordinate of magnitude {big:.3g} (vertex {row}: "
+        f"{pos[row].tolist()}), above the limit {MAX_COORDINATE:.0e} beyond which float64 "
+        "clipping loses geometry; rescale the model (e.g. to metres or kilometres) so that every "
+        f"|coordinate| is <= {MAX_COORDINATE:.0e}"
+    )
+
+
+def _check_magnitude(pos: np.ndarray, mesh_name: str, prefix: str) -> None:
+    """Refuse positions beyond :data:`MAX_COORDINATE`."""
+    msg = coordinate_limit_message(f"mesh {mesh_name!r}", pos)
+    if msg is not None:
+        raise ValueError(f"{prefix}: {msg}")
 
 
 def _as_float_array(name: str, value, ncols: int | None, nverts: int | None) -> np.ndarray:

@@ -114,15 +114,18 @@ def load_mesh(path: str | os.PathLike, *, uv_projection: str | None = None) -> M
         raise ValueError(f"{what} is empty (0 bytes of geometry); {FIX}")
     check = CHECKS.get(ext)
     try:
-        if check is not None:
-            check(data)
+        parsed = check(data) if check is not None else None
     except BadMeshFile as exc:
         raise ValueError(f"{what}: {exc}; {FIX}") from None
+    del data
 
     import trimesh  # deferred: trimesh pulls in a lot at import time
 
     try:
-        loaded = trimesh.load(p, file_type=ext, process=False)
+        if parsed is not None:  # OFF: trimesh reads it line by line; the check read it whole
+            loaded = trimesh.Trimesh(**parsed, process=False)
+        else:
+            loaded = trimesh.load(p, file_type=ext, process=False)
     except Exception as exc:  # noqa: BLE001 -- trimesh raises many types for unreadable files
         raise ValueError(
             f"path: trimesh could not read {label} as {ext.upper()}: {type(exc).__name__}: "

@@ -150,6 +150,81 @@ def _export_bytes(tmp: Path, name: str, **kw) -> bytes:
     return _export(tmp, "src_" + name, **kw).read_bytes()
 
 
+# ---- valid files that must load (each once refused by a raw check) ------------------------------
+def _loads(nv: int, nf: int):
+    """Check: one Mesh (or the meshes of a scene, summed) with nv vertices and nf triangles."""
+
+    def check(result, tmp) -> None:
+        from refnpr.raster import Mesh
+
+        meshes = result if isinstance(result, list) else [result]
+        assert all(isinstance(m, Mesh) for m in meshes), f"got {type(result).__name__}"
+        got = (sum(m.n_vertices for m in meshes), sum(m.n_faces for m in meshes))
+        assert got == (nv, nf), f"loaded {got[0]} vertices and {got[1]} faces, not {nv} and {nf}"
+
+    return check
+
+
+def _ply(fmt: str, index_type: str, order: str = "<") -> bytes:
+    """The subdivided icosahedron (42 vertices, 80 faces) as a PLY with the given index type."""
+    tm = _sphere()
+    head = (
+        f"ply\nformat {fmt} 1.0\nelement vertex {len(tm.vertices)}\nproperty double x\n"
+        f"property double y\nproperty double z\nelement face {len(tm.faces)}\n"
+        f"property list uint8 {index_type} vertex_indices\nend_header\n"
+    ).encode()
+    if fmt == "ascii":
+        body = "".join(f"{x} {y} {z}\n" for x, y, z in tm.vertices.tolist())
+        body += "".join(f"3 {a} {b} {c}\n" for a, b, c in tm.faces)
+        return head + body.encode()
+    code = {"int64": "q", "uint32": "I", "int32": "i"}[index_type]
+    body = b"".join(struct.pack(f"{order}3d", *v) for v in tm.vertices)
+    body += b"".join(struct.pack(f"{order}B3{code}", 3, *f) for f in tm.faces)
+    return head + body
+
+
+def _sphere_obj(face) -> str:
+    tm = _sphere()
+    return "".join(f"v {x} {y} {z}\n" for x, y, z in tm.vertices) + "".join(
+        face(i, a + 1, b + 1, c + 1) for i, (a, b, c) in enumerate(tm.faces)
+    )
+
+
+def _off_wrapped() -> str:
+    tm = _sphere()
+    out = f"OFF\n# wrapped records\n{len(tm.vertices)} {len(tm.faces)} 0\n"
+    out += "".join(f"{x} {y}\n  {z}\n" for x, y, z in tm.vertices)
+    return out + "".join(f"3 {a}\n{b} {c}\n" for a, b, c in tm.faces)
+
+
+def _coff() -> str:
+    tm = _sphere()
+    out = f"COFF\n{len(tm.vertices)} {len(tm.faces)} 0\n"
+    out += "".join(f"{x} {y} {z} 255 128 0 255\n" for x, y, z in tm.vertices)
+    return out + "".join(f"3 {a} {b} {c} 0.5 0.5 0.5\n" for a, b, c in tm.faces)
+
+
+def _stl_ascii(tmp: Path, solids: int = 1, upper: bool = False) -> str:
+    text = _export_bytes(tmp, "s.stl", file_type="stl_ascii").decode()
+    text = "\n".join([text.strip()] * solids) + "\n"
+    return text.upper() if upper else text
+
+
+def _gltf(tmp: Path) -> Path:
+    files = _sphere().export(file_type="gltf")
+    for name, blob in files.items():
+        (tmp / name).write_bytes(blob)
+    gltf = next(n for n in files if n.endswith(".gltf"))
+    assert any(n.endswith(".bin") for n in files), sorted(files)
+    return tmp / gltf
+
+
+_QUADS_OBJ = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nf 1 2 3 4\nf 2 5 6 3\n"
+_SLASH_OBJ = (
+    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nvn 0 0 1\n"
+    "f -4/-4/-1 -3/-3/-1 -2/-2/-1\nf 2//1 4//1 3//1\n"
+)
+
 # ---- cases -------------------------------------------------------------------------------------
 CASES = [
     # -- huge coordinates: the float64 guard-band clipper -----------------------------------------
@@ -483,6 +558,88 @@ CASES = [
         "a Python Mesh whose only triangle is degenerate, rasterized",
         lambda tmp: _raster([(0, 0, -1.0), (1, 0, -1.0), (2, 0, -1.0)], [[0, 1, 2]]),
         Correct(_covers_nothing),
+    ),
+    # -- valid files that must load ------------------------------------------------------------
+    Case(
+        "stl-ascii-uppercase",
+        K,
+        "an ASCII STL written in upper case (SOLID / FACET / VERTEX)",
+        lambda tmp: _load(_write(tmp, "up.stl", _stl_ascii(tmp, upper=True))),
+        Correct(_loads(42, 80)),
+        "before: 'the ASCII STL holds no facets' (keywords matched in lower case only)",
+    ),
+    Case(
+        "stl-ascii-two-solids",
+        K,
+        "an ASCII STL holding two solids",
+        lambda tmp: _load(_write(tmp, "two.stl", _stl_ascii(tmp, solids=2))),
+        Correct(_loads(84, 160)),
+    ),
+    Case(
+        "ply-binary-int64-indices",
+        K,
+        "a binary PLY with 'property list uint8 int64 vertex_indices'",
+        lambda tmp: _load(_write(tmp, "i8.ply", _ply("binary_little_endian", "int64"))),
+        Correct(_loads(42, 80)),
+        "before: 'malformed property line' (int64 missing from the type table)",
+    ),
+    Case(
+        "ply-ascii-uint32-indices",
+        K,
+        "an ASCII PLY with 'property list uint8 uint32 vertex_indices'",
+        lambda tmp: _load(_write(tmp, "u4.ply", _ply("ascii", "uint32"))),
+        Correct(_loads(42, 80)),
+    ),
+    Case(
+        "ply-big-endian",
+        K,
+        "a big-endian binary PLY",
+        lambda tmp: _load(_write(tmp, "be.ply", _ply("binary_big_endian", "int32", ">"))),
+        Correct(_loads(42, 80)),
+    ),
+    Case(
+        "obj-backslash-continuation",
+        K,
+        "an OBJ whose face lines are continued with a trailing backslash",
+        lambda tmp: _load(
+            _write(tmp, "cont.obj", _sphere_obj(lambda i, a, b, c: f"f {a} {b} \\\n {c}\n"))
+        ),
+        Correct(_loads(42, 80)),
+    ),
+    Case(
+        "obj-negative-and-slash-indices",
+        K,
+        "an OBJ with negative (relative) indices and 'f v/vt/vn' and 'f v//vn' forms",
+        lambda tmp: _load(_write(tmp, "slash.obj", _SLASH_OBJ)),
+        Correct(_loads(4, 2)),
+    ),
+    Case(
+        "obj-quads",
+        K,
+        "an OBJ of two quads",
+        lambda tmp: _load(_write(tmp, "quads.obj", _QUADS_OBJ)),
+        Correct(_loads(6, 4)),
+    ),
+    Case(
+        "off-wrapped-records",
+        K,
+        "an OFF file whose vertex and face records are wrapped across lines",
+        lambda tmp: _load(_write(tmp, "wrapped.off", _off_wrapped())),
+        Correct(_loads(42, 80)),
+    ),
+    Case(
+        "coff-colours",
+        K,
+        "a COFF file with vertex colours and face colours",
+        lambda tmp: _load(_write(tmp, "colours.off", _coff())),
+        Correct(_loads(42, 80)),
+    ),
+    Case(
+        "gltf-external-bin",
+        K,
+        "a .gltf whose buffer is an external .bin file",
+        lambda tmp: _load(_gltf(tmp)),
+        Correct(_loads(42, 80)),
     ),
 ]
 
