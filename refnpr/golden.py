@@ -37,7 +37,6 @@ Suite format::
 from __future__ import annotations
 
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -48,6 +47,7 @@ from .compare import ImageMetrics, compare_images, difference_image, load_image
 from .image import atomic_file, write_png_atomic
 from .raster import rasterize
 from .render import render
+from .scenes.toml_format import parse_toml_bytes
 
 __all__ = ["GoldenCase", "CaseResult", "load_suite", "update_suite", "check_suite", "render_case"]
 
@@ -167,19 +167,7 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
 
 def _read_toml(path: Path) -> dict[str, Any]:
     """A suite file parsed; a ValueError naming the file (and the line) on any failure."""
-    raw = path.read_bytes()
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = raw.count(b"\n", 0, exc.start) + 1
-        raise ValueError(
-            f"{path}: not a UTF-8 text file (byte 0x{raw[exc.start]:02x} on line {line}); "
-            "suite files are TOML and must be UTF-8 encoded"
-        ) from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: invalid TOML: {exc}") from None
+    return parse_toml_bytes(path.read_bytes(), str(path), what="suite files (TOML)")
 
 
 def _check_case(path: Path, name: str, params: dict[str, Any]) -> None:

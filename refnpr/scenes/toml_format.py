@@ -64,7 +64,14 @@ from ..raster import Camera
 from .registry import mesh_from_spec
 from .scene import Light, Material, Scene, SceneObject, transform_matrix
 
-__all__ = ["SceneFileError", "parse_scene", "load_scene", "list_scenes", "builtin_scene_path"]
+__all__ = [
+    "SceneFileError",
+    "parse_scene",
+    "load_scene",
+    "list_scenes",
+    "builtin_scene_path",
+    "parse_toml_bytes",
+]
 
 _TOP_KEYS = ("name", "description", "ambient", "background", "camera", "style", "light", "object")
 _CAMERA_KEYS = ("eye", "target", "up", "fov_y", "near", "far")
@@ -252,18 +259,26 @@ def _read(path: Path, source: str) -> dict:
         raw = path.read_bytes()
     except OSError as exc:
         raise SceneFileError(f"{source}: cannot read the scene file ({exc.strerror})") from exc
+    return parse_toml_bytes(raw, source, what="TOML scene files", error=SceneFileError)
+
+
+def parse_toml_bytes(
+    raw: bytes, source: str, *, what: str = "TOML files", error: type[ValueError] = ValueError
+) -> dict:
+    """``raw`` parsed as TOML; an ``error`` naming ``source`` (and the line) if it is not UTF-8
+    or not valid TOML. ``what`` names the kind of file in the message (``"suite files"``)."""
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = raw.count(b"\n", 0, exc.start) + 1
-        raise SceneFileError(
+        raise error(
             f"{source}: not a UTF-8 text file (byte 0x{raw[exc.start]:02x} on line {line}); "
-            "TOML scene files must be UTF-8 encoded: re-save the file as UTF-8"
+            f"{what} must be UTF-8 encoded: re-save the file as UTF-8"
         ) from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneFileError(f"{source}: invalid TOML: {exc}") from None
+        raise error(f"{source}: invalid TOML: {exc}") from None
 
 
 def list_scenes() -> dict[str, str]:

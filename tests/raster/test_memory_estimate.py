@@ -117,3 +117,10 @@ def test_available_bytes_respects_rlimit_as_in_a_child():
 def test_format_bytes():
     assert _memory.format_bytes(160e9) == "160.0 GB"
     assert _memory.format_bytes(5e6) == "5.0 MB"
+
+
+def test_interpolated_channels_agree_with_the_rasterizer():
+    # refnpr._memory may not import raster (raster imports it), so it keeps its own copy
+    from refnpr.raster.channels import INTERPOLATED
+
+    assert _memory._INTERPOLATED == INTERPOLATED
