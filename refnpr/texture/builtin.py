@@ -16,7 +16,9 @@ __all__ = ["BUILTIN_TEXTURES", "load_texture"]
 BUILTIN_TEXTURES = ("brick", "grass", "gravel", "camera", "text", "checkerboard", "page", "moon")
 
 
-def load_texture(name_or_path: str | Path, *, gray: bool = True) -> np.ndarray:
+def load_texture(
+    name_or_path: str | Path, *, gray: bool = True, param: str = "texture"
+) -> np.ndarray:
     """A texture as float32 in [0, 1]: a built-in name (``BUILTIN_TEXTURES``) or an image file.
 
     Parameters
@@ -25,6 +27,9 @@ def load_texture(name_or_path: str | Path, *, gray: bool = True) -> np.ndarray:
         A name of ``BUILTIN_TEXTURES``, or the path of a PNG, JPEG, TIFF or BMP image.
     gray : bool
         Convert colour images to gray (luminance, scikit-image ``rgb2gray``).
+    param : str
+        The user's parameter that named the texture (``"screen"``, ``"brush"``, ...), which
+        error messages start with.
 
     Returns
     -------
@@ -44,17 +49,17 @@ def load_texture(name_or_path: str | Path, *, gray: bool = True) -> np.ndarray:
     else:
         if not isinstance(name_or_path, (str, os.PathLike)):
             raise TypeError(
-                f"texture: expected a built-in texture name {list(BUILTIN_TEXTURES)} or an image "
+                f"{param}: expected a built-in texture name {list(BUILTIN_TEXTURES)} or an image "
                 f"path, got {type(name_or_path).__name__} {name_or_path!r}"
             )
         shown = str(name_or_path)
         path = Path(name_or_path)
         if not path.exists():
             raise ValueError(
-                f"texture: {shown!r} is neither a built-in texture {list(BUILTIN_TEXTURES)} "
+                f"{param}: {shown!r} is neither a built-in texture {list(BUILTIN_TEXTURES)} "
                 f"nor an existing image file (no such file; expected {IMAGE_FORMATS} file)"
             )
-        img = read_image_file(name_or_path, what="texture")
+        img = read_image_file(name_or_path, what=param)
         tex = as_texture(img, name=f"texture {shown!r}")
     if gray and tex.ndim == 3:
         from skimage.color import rgb2gray
@@ -63,7 +68,7 @@ def load_texture(name_or_path: str | Path, *, gray: bool = True) -> np.ndarray:
             return np.ascontiguousarray(tex[..., 0])
         if tex.shape[2] not in (3, 4):
             raise ValueError(
-                f"texture {str(name_or_path)!r}: expected 1 to 4 channels, got {tex.shape[2]}"
+                f"{param} {str(name_or_path)!r}: expected 1 to 4 channels, got {tex.shape[2]}"
             )
         tex = rgb2gray(tex[..., :3]).astype(np.float32)
     return tex

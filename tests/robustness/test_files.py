@@ -473,7 +473,7 @@ CASES = [
         _render_in(
             lambda t: _truncated(t / "cut.png"), "--style", "halftone", "--param", "screen=cut.png"
         ),
-        Exits(2, r"error: .*cut\.png.*truncated"),
+        Exits(2, r"error: screen: cannot read .cut\.png.*truncated"),
     ),
     Case(
         "cli-threshold-texture-text",

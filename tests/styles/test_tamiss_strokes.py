@@ -171,7 +171,7 @@ def test_brushes():
     assert brush_texture(None)[0].shape == (1, 1)
     tex, _ = brush_texture("checkerboard")  # any built-in texture: dark = ink
     assert tex.min() == pytest.approx(0.0, abs=0.01) and tex.max() == pytest.approx(1.0, abs=0.01)
-    with pytest.raises(ValueError, match="texture: 'no-such-brush' is neither a built-in"):
+    with pytest.raises(ValueError, match="brush: 'no-such-brush' is neither a built-in"):
         brush_texture("no-such-brush")
     # the brush modulates coverage along t and across
     s = strips_of(rect_strip(0, 40, 2, 6))

@@ -210,7 +210,7 @@ def build_screen(spec: dict[str, Any], material_texture: str | None) -> Screen:
                 )
             name = material_texture
         pyr = clahe_pyramid(
-            load_texture(name),
+            load_texture(name, param="screen"),
             window=spec["window"],
             clip_limit=spec["clip_limit"],
             uniform=spec["rank_equalize"],

@@ -121,7 +121,7 @@ def parse_indication(value: Any, where: str = "indication") -> np.ndarray | None
             )
         from refnpr.texture import load_texture
 
-        return 2.0 * load_texture(path).astype(np.float64) - 1.0
+        return 2.0 * load_texture(path, param="indication").astype(np.float64) - 1.0
     try:
         arr = np.array(value, dtype=np.float64)
     except (TypeError, ValueError):

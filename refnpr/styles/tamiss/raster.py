@@ -50,7 +50,7 @@ def brush_texture(brush: str | None) -> tuple[np.ndarray, bool]:
         return np.clip(streak * along * noise, 0.0, 1.0), False
     from refnpr.texture import load_texture
 
-    gray = np.asarray(load_texture(brush), dtype=np.float64)
+    gray = np.asarray(load_texture(brush, param="brush"), dtype=np.float64)
     return np.ascontiguousarray(1.0 - gray), True
 
 

@@ -89,10 +89,7 @@ def unit_map(name: str, value: Any) -> np.ndarray:
     if isinstance(value, str) or hasattr(value, "__fspath__"):
         from refnpr.texture import load_texture
 
-        try:
-            value = load_texture(value, gray=True)
-        except ValueError as exc:
-            raise ValueError(f"{name}: {exc}") from None
+        value = load_texture(value, gray=True, param=name)
     try:
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:

@@ -78,7 +78,7 @@ def _image(path: Any, *, flip: bool, srgb: bool, name: str) -> np.ndarray:
     p = Path(path)
     if not p.is_file():
         raise ValueError(f"{name}: image file {str(path)!r} does not exist; {_how()}")
-    img = load_texture(p, gray=False).astype(np.float64)
+    img = load_texture(p, gray=False, param=name).astype(np.float64)
     if img.ndim == 3 and img.shape[2] > 4:
         img = img[..., :4]
     if srgb:  # colour channels are sRGB-encoded in image files; alpha is linear
