@@ -13,6 +13,7 @@ from . import _memory
 from .image import Image
 from .raster import Camera, rasterize
 from .raster.rasterize import attribute_widths
+from .scenes._params import check_int
 from .styles import ShadeContext, Style, style_from_spec
 
 __all__ = ["render", "required_channels", "DEFAULT_STYLE"]
@@ -43,19 +44,11 @@ def _style_of(style: Any, scene: Any) -> Style:
     return style_from_spec(style)
 
 
-def _check_int(name: str, value: Any, lo: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}")
-    if value < lo:
-        raise ValueError(f"{name}: expected an integer >= {lo}, got {value}")
-    return int(value)
-
-
 def _check_args(width: Any, height: Any, spp: Any, camera: Any, progress: Any, gbuf: Any):
     """render's own arguments, checked before any scene work (spp's square-ness: rasterize)."""
-    width = _check_int("width", width, 1)
-    height = _check_int("height", height, 1)
-    spp = _check_int("spp", spp, 1)
+    width = check_int("width", width, minimum=1)
+    height = check_int("height", height, minimum=1)
+    spp = check_int("spp", spp, minimum=1)
     if camera is not None and not isinstance(camera, Camera):
         raise TypeError(
             f"camera: expected a refnpr.raster.Camera or None (the scene's camera), "
