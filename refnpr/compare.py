@@ -36,6 +36,11 @@ class ImageMetrics:
     #: Why the status is not "ok": the two sizes, the file and the decoder's reason
     message: str = ""
 
+    @classmethod
+    def failed(cls, name: str, tolerance: float, status: str, message: str) -> ImageMetrics:
+        """The record of an image that could not be compared (worst metrics, ``status``)."""
+        return cls(name, np.inf, np.inf, 1.0, 0.0, tolerance, status=status, message=message)
+
     def passes(self, *, max_frac_over: float, min_ssim: float) -> bool:
         return self.status == "ok" and self.frac_over <= max_frac_over and self.ssim >= min_ssim
 
@@ -116,15 +121,11 @@ def compare_images(
     if not (isinstance(tolerance, (int, float)) and 0.0 <= tolerance <= 1.0):
         raise ValueError(f"tolerance: expected a number in [0, 1], got {tolerance!r}")
     if reference.shape != candidate.shape:
-        return ImageMetrics(
+        return ImageMetrics.failed(
             name,
-            np.inf,
-            np.inf,
-            1.0,
-            0.0,
             tolerance,
-            status="size",
-            message=f"sizes differ: reference {_wxh(reference)}, candidate {_wxh(candidate)}",
+            "size",
+            f"sizes differ: reference {_wxh(reference)}, candidate {_wxh(candidate)}",
         )
     ref, cand = _flatten(reference), _flatten(candidate)
     diff = np.abs(cand - ref)
@@ -191,27 +192,14 @@ def compare_dirs(
         ref_path, cand_path = ref_dir / fname, cand_dir / fname
         if not cand_path.exists():
             results.append(
-                ImageMetrics(
-                    stem,
-                    np.inf,
-                    np.inf,
-                    1.0,
-                    0.0,
-                    tolerance,
-                    status="missing",
-                    message=f"no candidate {str(cand_path)!r}",
-                )
+                ImageMetrics.failed(stem, tolerance, "missing", f"no candidate {str(cand_path)!r}")
             )
             continue
         try:
             ref = load_image(ref_path, what="reference image")
             cand = load_image(cand_path, what="candidate image")
         except ValueError as exc:  # one bad file must not hide the others
-            results.append(
-                ImageMetrics(
-                    stem, np.inf, np.inf, 1.0, 0.0, tolerance, status="unreadable", message=str(exc)
-                )
-            )
+            results.append(ImageMetrics.failed(stem, tolerance, "unreadable", str(exc)))
             continue
         m = compare_images(ref, cand, name=stem, tolerance=tolerance)
         if m.status == "size":
