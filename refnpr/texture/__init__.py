@@ -1,6 +1,10 @@
-"""Textures: mip pyramids, CLAHE pyramids, sampling at an explicit LOD, built-in images."""
+"""Textures: mip pyramids, CLAHE pyramids, sampling at an explicit LOD, built-in images (all
+tileable), periodic plus smooth decomposition for images that do not tile."""
 
-from .builtin import BUILTIN_TEXTURES, load_texture
+from .brickwork import brick_texture
+from .builtin import BUILTIN_TEXTURES, builtin_image, load_texture
+from .clahe import periodic_clahe
+from .periodic import TILINGS, check_tiling, periodic_component, smooth_component
 from .pyramid import MipPyramid, as_texture, build_pyramid, clahe_pyramid, rank_equalize
 from .sample import level_weights, sample_level, sample_trilinear
 from .screens import (
@@ -16,6 +20,7 @@ from .screens import (
 
 __all__ = [
     "BUILTIN_TEXTURES",
+    "TILINGS",
     "MipPyramid",
     "StrokeSet",
     "brick_set",
@@ -26,11 +31,17 @@ __all__ = [
     "stroke_map_pyramid",
     "stroke_set_from_layers",
     "as_texture",
+    "brick_texture",
     "build_pyramid",
+    "builtin_image",
+    "check_tiling",
     "clahe_pyramid",
     "level_weights",
     "load_texture",
+    "periodic_clahe",
+    "periodic_component",
     "rank_equalize",
     "sample_level",
     "sample_trilinear",
+    "smooth_component",
 ]

@@ -1,4 +1,13 @@
-"""Built-in textures: images bundled inside scikit-image's wheel (no download), or files."""
+"""Built-in textures (all tile seamlessly), or image files (as given, or made to tile).
+
+The built-in names are scikit-image's bundled images (no download), each made to repeat without
+a seam under GL_REPEAT: ``brick`` is a procedural running-bond wall
+(:func:`refnpr.texture.brickwork.brick_texture`; the photograph's converging courses cannot be
+made to meet across its borders), ``checkerboard`` is drawn exactly (its squares' edges lie on
+the border, where a periodic decomposition would smear them), every other one is the periodic
+component of scikit-image's image (Moisan 2011,
+:func:`refnpr.texture.periodic.periodic_component`), clipped to [0, 1] and kept 8-bit.
+"""
 
 from __future__ import annotations
 
@@ -8,16 +17,60 @@ from pathlib import Path
 import numpy as np
 
 from ..image import IMAGE_FORMATS, read_image_file
+from .brickwork import brick_texture
+from .periodic import TILINGS, check_tiling, make_tileable, periodic_component
 from .pyramid import as_texture
 
-__all__ = ["BUILTIN_TEXTURES", "load_texture"]
+__all__ = ["BUILTIN_TEXTURES", "TILINGS", "builtin_image", "load_texture"]
 
-#: Gray images that scikit-image ships in its wheel (usable offline).
+#: Gray built-in textures, every one tileable: scikit-image's bundled images (usable offline),
+#: ``brick`` procedural.
 BUILTIN_TEXTURES = ("brick", "grass", "gravel", "camera", "text", "checkerboard", "page", "moon")
 
 
+def _checkerboard(size: int = 200, squares: int = 8) -> np.ndarray:
+    """scikit-image's checkerboard (200 x 200, 8 x 8 squares of 25 texels, white at the top
+    left) drawn exactly, with hard edges: the original lacks the soft edge between its last and
+    first squares, and the periodic component of a pattern whose edges lie on the border smears
+    the squares along it."""
+    cell = (np.arange(size) * squares) // size
+    return np.where((cell[:, None] + cell[None, :]) % 2 == 0, 255, 0).astype(np.uint8)
+
+
+def builtin_image(name: str) -> np.ndarray:
+    """The tileable 8-bit image of a built-in texture name.
+
+    Parameters
+    ----------
+    name : str
+        One of ``BUILTIN_TEXTURES``.
+
+    Returns
+    -------
+    (rows, cols) uint8
+        ``brick``: :func:`refnpr.texture.brickwork.brick_texture` (512 x 512).
+        ``checkerboard``: 8 x 8 squares of 25 texels with hard edges (scikit-image's layout).
+        Others: scikit-image's image of that name, replaced by its periodic component (Moisan
+        2011), clipped to [0, 255] and rounded (pointwise, so it still tiles).
+    """
+    if name not in BUILTIN_TEXTURES:
+        raise ValueError(f"name: expected one of {list(BUILTIN_TEXTURES)}, got {name!r}")
+    if name == "brick":
+        return brick_texture()
+    if name == "checkerboard":
+        return _checkerboard()
+    import skimage.data
+
+    photo = getattr(skimage.data, name)()
+    return np.round(np.clip(periodic_component(photo), 0.0, 255.0)).astype(np.uint8)
+
+
 def load_texture(
-    name_or_path: str | Path, *, gray: bool = True, param: str = "texture"
+    name_or_path: str | Path,
+    *,
+    gray: bool = True,
+    param: str = "texture",
+    tiling: str | None = None,
 ) -> np.ndarray:
     """A texture as float32 in [0, 1]: a built-in name (``BUILTIN_TEXTURES``) or an image file.
 
@@ -30,6 +83,12 @@ def load_texture(
     param : str
         The user's parameter that named the texture (``"screen"``, ``"brush"``, ...), which
         error messages start with.
+    tiling : {None, "none", "periodic"}
+        How an image file is made to repeat (GL_REPEAT). None or "none": as given, seams and
+        all. "periodic": the image's periodic component (Moisan 2011, per channel, after the
+        gray conversion), clipped to [0, 1], which removes the seam of an image whose opposite
+        borders differ while keeping every local difference inside it. Built-in textures tile
+        already and are returned as they are for every value.
 
     Returns
     -------
@@ -39,13 +98,13 @@ def load_texture(
     ------
     ValueError
         Naming the texture as given: neither a built-in name nor a file (listing the built-in
-        names), a directory, or a file that is not a readable image (with the reason).
+        names), a directory, or a file that is not a readable image (with the reason); or
+        ``tiling`` not among ``TILINGS`` (named ``<param>.tiling``).
     """
-    import skimage.data
-
+    tiling = check_tiling(tiling, param=f"{param}.tiling")
     if isinstance(name_or_path, str) and name_or_path in BUILTIN_TEXTURES:
-        img = getattr(skimage.data, name_or_path)()
-        tex = as_texture(img, name=f"texture {name_or_path!r}")
+        tex = as_texture(builtin_image(name_or_path), name=f"texture {name_or_path!r}")
+        tiling = "none"  # built-in textures tile already
     else:
         if not isinstance(name_or_path, (str, os.PathLike)):
             raise TypeError(
@@ -65,10 +124,11 @@ def load_texture(
         from skimage.color import rgb2gray
 
         if tex.shape[2] == 2:  # gray + alpha
-            return np.ascontiguousarray(tex[..., 0])
-        if tex.shape[2] not in (3, 4):
+            tex = np.ascontiguousarray(tex[..., 0])
+        elif tex.shape[2] not in (3, 4):
             raise ValueError(
                 f"{param} {str(name_or_path)!r}: expected 1 to 4 channels, got {tex.shape[2]}"
             )
-        tex = rgb2gray(tex[..., :3]).astype(np.float32)
-    return tex
+        else:
+            tex = rgb2gray(tex[..., :3]).astype(np.float32)
+    return make_tileable(tex, tiling, param=f"{param}.tiling")

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .clahe import periodic_clahe
+
 __all__ = ["MipPyramid", "build_pyramid", "clahe_pyramid", "rank_equalize", "as_texture"]
 
 
@@ -103,16 +105,11 @@ def build_pyramid(image) -> MipPyramid:
 
 
 def _clahe(level: np.ndarray, window: int, clip_limit: float, nbins: int) -> np.ndarray:
-    from skimage.exposure import equalize_adapthist
-
     h, w = level.shape[:2]
     if h < 2 or w < 2:
         return np.full_like(level, 0.5)  # a single texel: the median threshold
-    k = (min(window, h), min(window, w))
-    pad = ((k[0], k[0]), (k[1], k[1])) + (((0, 0),) if level.ndim == 3 else ())
-    tiled = np.pad(level, pad, mode="wrap")  # textures repeat: equalize with periodic context
-    eq = equalize_adapthist(tiled, kernel_size=k, clip_limit=clip_limit, nbins=nbins)
-    return eq[k[0] : k[0] + h, k[1] : k[1] + w].astype(np.float32)
+    # contextual regions on the torus: the equalized level tiles whenever the level does
+    return periodic_clahe(level, window=window, clip_limit=clip_limit, nbins=nbins)
 
 
 def rank_equalize(level: np.ndarray) -> np.ndarray:
@@ -131,10 +128,12 @@ def clahe_pyramid(
 ) -> MipPyramid:
     """Mip pyramid with CLAHE applied to every level (Veryovka 2002 sec. 3.1).
 
-    Each level is equalized with scikit-image's ``equalize_adapthist`` (kernel ``window`` texels,
-    or the level size if smaller; periodic padding so the texture still tiles), which makes
-    threshold values approximately uniform and homogeneous at every scale, so thresholding keeps
-    the mean tone while features stay sharp across mip levels.
+    Each level is equalized with CLAHE (contextual regions of about ``window`` texels, or the
+    level size if smaller), computed on the torus (:func:`refnpr.texture.clahe.periodic_clahe`)
+    so that every level tiles exactly when ``image`` does; CLAHE makes threshold values
+    approximately uniform and homogeneous at every scale, so thresholding keeps the mean tone
+    while features stay sharp across mip levels. A texture that does not tile should be made
+    to first (``load_texture(..., tiling="periodic")``), or every level shows its seam.
 
     Parameters
     ----------
@@ -147,8 +146,9 @@ def clahe_pyramid(
     nbins : int >= 2
     uniform : bool
         Follow CLAHE by :func:`rank_equalize` on each level. CLAHE only *approximates* a uniform
-        distribution (with the default clip limit the brick texture's mean is about 0.39, not
-        0.5), which darkens or lightens thresholded tone; the rank map makes it exact while
+        distribution (with the default clip limit the brick texture's level 0 has a mean of
+        about 0.46, and its emptiest eighth of [0, 1] holds 1% as many texels as the fullest),
+        which darkens or lightens thresholded tone; the rank map makes it exact while
         keeping CLAHE's local contrast and the alignment of minima and maxima across levels.
         ``False`` keeps the paper's CLAHE output as is.
     """

@@ -1,9 +1,9 @@
 """Image threshold textures of the ``threshold`` style (Veryovka sec. 3.1 and sec. 4).
 
-Pyramids are built once per (texture, window, clip limit, nbins, rank equalization, CLAHE levels)
-and cached in a :class:`PyramidCache` owned by the style instance (never rebuilt per frame). The
-LOD is the GL isotropic one from the analytic uv derivatives (per pixel), so one pyramid serves
-objects with different ``uv_scale``.
+Pyramids are built once per (texture, tiling, window, clip limit, nbins, rank equalization,
+CLAHE levels) and cached in a :class:`PyramidCache` owned by the style instance (never rebuilt
+per frame). The LOD is the GL isotropic one from the analytic uv derivatives (per pixel), so one
+pyramid serves objects with different ``uv_scale``.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import numpy as np
 from refnpr.texture import (
     MipPyramid,
     build_pyramid,
+    check_tiling,
     clahe_pyramid,
     level_weights,
     load_texture,
@@ -99,16 +100,20 @@ class PyramidCache:
     def __len__(self) -> int:
         return len(self._pyramids)
 
-    def get(self, texture: str, p: ThresholdParams) -> MipPyramid:
+    def get(self, texture: str, p: ThresholdParams, *, tiling: str | None = None) -> MipPyramid:
         """The threshold pyramid of ``texture`` (built-in name or path) for ``p``'s CLAHE settings.
 
         ``clahe_levels``: "all" applies CLAHE to every mip level (sec. 3.1); "base" equalizes
         level 0 only and box-filters it down (the plain mip-map of Figure 3's right wall); "none"
         uses the raw image (Figure 2, top right).
+
+        ``tiling`` ("none"/None or "periodic", :func:`refnpr.texture.load_texture`): how an
+        image file is made to repeat before CLAHE; built-in textures tile already.
         """
-        key = (texture, p.window, p.clip_limit, p.nbins, p.rank_equalize, p.clahe_levels)
+        tiling = check_tiling(tiling)
+        key = (texture, tiling, p.window, p.clip_limit, p.nbins, p.rank_equalize, p.clahe_levels)
         if key not in self._pyramids:
-            image = load_texture(texture)
+            image = load_texture(texture, tiling=tiling)
             if p.clahe_levels == "none":
                 pyr = build_pyramid(image)
             else:
