@@ -456,10 +456,14 @@ def test_combine_thresholds_naive_loop_and_later_layer_hidden_above_onset():
     rng = np.random.default_rng(12)
     f1, f2 = rng.uniform(0, 1, (2, 500))
     out = combine_thresholds([f1, f2], onsets=[1.0, 0.5])
-    # c = (1, 0.5); G(y) = y * min(2 y, 1)
+    # water-filling with onsets (1, 0.5), worked by hand in darkness -ln x: the first layer
+    # alone down to x = 1/2, then the second alone until as wide (x = 1/4), then both share.
+    # Inverting each layer's white fraction: h_1(F) = F above 1/2, F^2 below; h_2(F) = F / 2
+    # above 1/2, F^2 below; the composite is their max (union of the dark lines).
     for a, b, o in zip(f1, f2, out, strict=True):
-        y = max(a, 0.5 * b)
-        assert o == pytest.approx(y * min(2 * y, 1), abs=1e-12)
+        h1 = a if a > 0.5 else a * a
+        h2 = b / 2 if b > 0.5 else b * b
+        assert o == pytest.approx(max(h1, h2), abs=1e-12)
     other = combine_thresholds([f1, rng.uniform(0, 1, 500)], onsets=[1.0, 0.5])
     for x in (0.55, 0.7, 0.9):  # above the second onset only the first layer draws
         np.testing.assert_array_equal(step(x, out), step(x, other))

@@ -141,9 +141,10 @@ def test_image_tone_drifts_without_equalization_and_interpolation_correction():
     base = dict(
         source="image", texture="brick", uv_scale=1.0, specular=False, filter="pcf", samples=1
     )
-    # CLAHE alone (no rank equalization): the brick texture's thresholds are not uniform
+    # CLAHE alone (no rank equalization): the brick texture's thresholds are not uniform (0.2
+    # for scikit-image's photograph, about 0.1 for the tileable procedural brick)
     raw = tone_errors(ThresholdStyle(**base, rank_equalize=False))
-    assert np.max(np.abs(raw)) > 0.15
+    assert np.max(np.abs(raw)) > 0.05
     # uniform levels, but bilinear interpolation narrows the thresholds towards 0.5
     interp = tone_errors(ThresholdStyle(**base))
     assert interp[0] < -0.03 and interp[-1] > 0.03

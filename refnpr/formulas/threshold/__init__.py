@@ -25,7 +25,9 @@ Contents: eqs. 2-4 (:func:`threshold_illumination`, :func:`step`, :func:`step_n`
 (:func:`dyadic_scale`, :func:`dyadic_scale_from_gradient`, :func:`dyadic_remap`,
 :func:`multiscale_line`, :func:`multiscale_line_cdf`, :func:`line_threshold`); compositions
 (:func:`hatch_coordinate`, :func:`hatch_threshold`, :func:`combine_thresholds`,
-:func:`dot_function`, :func:`dot_dyadic_scale`, :func:`dot_tone_table`, :func:`dot_threshold`);
+:func:`layer_whites`, :func:`layer_schedule`,
+:func:`dot_function`, :func:`dot_dyadic_scale`, :func:`dot_tone_table`, :func:`dot_threshold`; the screen-round
+jittered stipple :func:`stipple_scales`, :func:`stipple_tone_table`, :func:`stipple_threshold`);
 filtering (:func:`pcf_threshold`, :func:`mip_threshold`, :func:`line_coverage`).
 """
 
@@ -36,6 +38,7 @@ import numpy as np
 from .. import lighting
 from .._shading_checks import broadcast, check_range, real
 from .._validate import check_int, result_dtype
+from .compose import combine_thresholds, layer_schedule, layer_whites
 from .filtering import line_coverage, mip_threshold, pcf_threshold
 from .lines import (
     dyadic_remap,
@@ -48,9 +51,14 @@ from .lines import (
     step_kernel,
     step_n,
 )
+from .stipple import (
+    StippleToneTable,
+    stipple_scales,
+    stipple_threshold,
+    stipple_tone_table,
+)
 from .textures import (
     DotToneTable,
-    combine_thresholds,
     dot_dyadic_scale,
     dot_function,
     dot_threshold,
@@ -72,11 +80,17 @@ __all__ = [
     "hatch_coordinate",
     "hatch_threshold",
     "combine_thresholds",
+    "layer_whites",
+    "layer_schedule",
     "dot_function",
     "dot_dyadic_scale",
     "DotToneTable",
     "dot_tone_table",
     "dot_threshold",
+    "stipple_scales",
+    "StippleToneTable",
+    "stipple_tone_table",
+    "stipple_threshold",
     "pcf_threshold",
     "mip_threshold",
     "line_coverage",

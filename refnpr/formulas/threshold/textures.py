@@ -15,18 +15,17 @@ import numpy as np
 from .._shading_checks import (
     broadcast,
     check_positive,
-    check_range,
     frac,
     real,
     scaled_frac,
     trailing,
 )
 from .._validate import check_int, check_scalar, describe, result_dtype
+from .compose import combine_thresholds
 from .lines import dyadic_scale_from_gradient, line_threshold, scale_split
 
 __all__ = [
     "hatch_coordinate",
-    "combine_thresholds",
     "hatch_threshold",
     "dot_function",
     "dot_dyadic_scale",
@@ -68,69 +67,6 @@ def hatch_coordinate(uv, angle: float) -> np.ndarray:
     dt = result_dtype(uv)
     uv = _uv("uv", uv, dt)
     return np.asarray(-uv[..., 0] * math.sin(a) + uv[..., 1] * math.cos(a), dtype=dt)
-
-
-def _scales(onsets: np.ndarray) -> np.ndarray:
-    """Per-layer scales c_i with G(c_i) = onset_i for G(y) = prod_j min(y / c_j, 1)."""
-    order = np.argsort(-onsets, kind="stable")
-    c = np.empty_like(onsets)
-    prod = 1.0
-    for k, i in enumerate(order):
-        c[i] = 1.0 if k == 0 else (onsets[i] * prod) ** (1.0 / k)
-        prod *= c[i]
-    return c
-
-
-def combine_thresholds(layers: Sequence, *, onsets=None) -> np.ndarray:
-    """Compose threshold textures into one (cross-hatching), keeping a uniform distribution.
-
-    ``G(max_i c_i F_i)`` with ``G(y) = prod_i min(y / c_i, 1)``, the CDF of ``max_i c_i F_i``
-    for independent uniform F_i: so the result is uniform (tone preserving) when the layers are
-    (lines at different angles are independent over an area). Black, ``intensity < result``, is
-    the union of each layer's lines; layer i takes part only below the intensity ``onsets[i]``.
-
-    Parameters
-    ----------
-    layers : sequence of (...) arrays in [0, 1]
-        Threshold textures, e.g. :func:`line_threshold` at several angles; they broadcast.
-    onsets : sequence of floats in (0, 1], keyword-only
-        Intensity below which each layer appears; the largest must be 1 (a uniform composite
-        has some black at every intensity below 1). Default: all 1 (every layer at once).
-
-    Returns
-    -------
-    (...) ndarray in [0, 1); float64, or float32 if the layers are float32.
-    """
-    if isinstance(layers, np.ndarray) or not isinstance(layers, Sequence) or len(layers) == 0:
-        raise TypeError(
-            f"layers: expected a non-empty list of threshold arrays, got {describe(layers)}"
-        )
-    dt = result_dtype(*layers)
-    fs = [real(f"layers[{i}]", x, dt) for i, x in enumerate(layers)]
-    for i, f in enumerate(fs):
-        check_range(f"layers[{i}]", f, 0.0, 1.0, "threshold textures take values in [0, 1]")
-    broadcast(**{f"layers[{i}]": f for i, f in enumerate(fs)})
-    if onsets is None:
-        c = np.ones(len(fs))
-    else:
-        o = real("onsets", onsets, np.dtype(np.float64))
-        if o.shape != (len(fs),):
-            raise ValueError(
-                f"onsets: expected {len(fs)} values (one per layer), got shape {o.shape}"
-            )
-        if np.any(o <= 0) or np.any(o > 1) or o.max() != 1:
-            raise ValueError(
-                f"onsets: expected values in (0, 1] with maximum 1, got {o.tolist()}; "
-                "the first layer must appear at intensity 1"
-            )
-        c = _scales(o)
-    y = fs[0] * dt.type(c[0])
-    for f, ci in zip(fs[1:], c[1:], strict=True):
-        y = np.maximum(y, f * dt.type(ci))
-    g = np.ones_like(y)
-    for ci in c:
-        g = g * np.minimum(y / dt.type(ci), 1)
-    return np.asarray(g, dtype=dt)
 
 
 def hatch_threshold(

@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from refnpr.texture import TILINGS
+
 from .._common import check_choice, check_count, check_number, check_uv_scale, warn_unused
 from .._names import check_known, renamed_params, warn_deprecated
 
@@ -85,6 +87,7 @@ class ThresholdParams:
     nbins: int = 256
     rank_equalize: bool = True
     clahe_levels: str = "all"
+    tiling: str = "none"
     tone_correct: bool = False
     mip: str = "per_level"
     lod_bias: float = 0.0
@@ -97,6 +100,10 @@ class ThresholdParams:
     noise: float = 0.0
     noise_scale: float = 4.0
     noise_seed: int = 0
+    jitter: float = 0.2
+    # bump mapping (Fig. 2, top centre)
+    bump: str | None = None
+    bump_height: float = 0.02
 
     def as_dict(self) -> dict[str, Any]:
         """TOML-friendly dict (tuples as lists, None values dropped)."""
@@ -127,6 +134,15 @@ def _directions(value: Any) -> tuple[float, ...]:
     return _numbers("directions", named, lo=-360.0, hi=360.0, what="hatching angles, degrees")
 
 
+def _bump(value: Any) -> str | None:
+    if value is not None and (not isinstance(value, str) or not value):
+        raise TypeError(
+            f"bump: expected a built-in texture name or an image path (str) for the height map, "
+            f"got {value!r}"
+        )
+    return value
+
+
 def _deprecated_forms(kw: dict[str, Any]) -> dict[str, Any]:
     """Old parameter names whose value changed form: ``pcf_levels`` (2 | 1) is ``mip``
     ("per_level" | "trilinear", the halftone style's name); ``scale`` (a multiplier of the
@@ -153,10 +169,20 @@ def _warn_unused(kw: dict[str, Any], source: str, filt: str) -> None:
         warn_unused(
             "texture", kw["texture"], f"source={source!r}", "remove it or use source='image'"
         )
+    if kw.get("tiling", "none") != "none" and source != "image":
+        warn_unused(
+            "tiling", kw["tiling"], f"source={source!r}", "it applies to image textures only"
+        )
     if kw.get("onsets") is not None and source != "lines":
         warn_unused(
             "onsets", kw["onsets"], f"source={source!r}", "onsets order hatching layers only"
         )
+    if "jitter" in kw and source != "stipple" and kw["jitter"] != ThresholdParams.jitter:
+        warn_unused("jitter", kw["jitter"], f"source={source!r}", "jitter places stipple dots")
+    if kw.get("bump") is None and kw.get("bump_height", ThresholdParams.bump_height) != (
+        ThresholdParams.bump_height
+    ):
+        warn_unused("bump_height", kw["bump_height"], "bump=None", "name a height texture in bump")
     if "samples" in kw and filt != "pcf" and kw["samples"] != ThresholdParams.samples:
         warn_unused("samples", kw["samples"], f"filter={filt!r}", "use filter='pcf'")
 
@@ -239,6 +265,7 @@ def parse_params(**kw: Any) -> ThresholdParams:
         nbins=check_count("nbins", p["nbins"], lo=2, hi=65536),
         rank_equalize=_bool("rank_equalize", p["rank_equalize"]),
         clahe_levels=check_choice("clahe_levels", p["clahe_levels"], CLAHE_LEVELS),
+        tiling=check_choice("tiling", p["tiling"], TILINGS),
         tone_correct=_bool("tone_correct", p["tone_correct"]),
         mip=check_choice("mip", p["mip"], MIPS),
         lod_bias=check_number("lod_bias", p["lod_bias"], lo=-16.0, hi=16.0),
@@ -252,4 +279,7 @@ def parse_params(**kw: Any) -> ThresholdParams:
             "noise_scale", p["noise_scale"], lo=0.0, lo_open=True, hi=MAX_NOISE_SCALE
         ),
         noise_seed=int(noise_seed),
+        jitter=check_number("jitter", p["jitter"], lo=0.0, hi=0.4),
+        bump=_bump(p["bump"]),
+        bump_height=check_number("bump_height", p["bump_height"], lo=-1e3, hi=1e3),
     )

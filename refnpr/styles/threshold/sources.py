@@ -33,8 +33,6 @@ __all__ = [
     "constant_thresholds",
     "line_thresholds",
     "stipple_thresholds",
-    "layer_scales",
-    "inverse_composite",
 ]
 
 
@@ -137,40 +135,6 @@ def line_layers(fp: Footprint, p: ThresholdParams, s0: np.ndarray | None = None)
     return layers
 
 
-def layer_scales(onsets: tuple[float, ...] | None, count: int) -> np.ndarray:
-    """The c_i of ``combine_thresholds``: G(c_i) = onset_i for G(y) = prod_j min(y / c_j, 1).
-
-    Re-derived here from the documented definition (the formula module keeps it private): with
-    the onsets sorted in decreasing order, c_(0) = 1 and c_(k) = (onset_(k) prod_{j<k} c_(j))^(1/k).
-    """
-    if onsets is None:
-        return np.ones(count)
-    o = np.asarray(onsets, dtype=np.float64)
-    c = np.empty_like(o)
-    prod = 1.0
-    for k, i in enumerate(np.argsort(-o, kind="stable")):
-        c[i] = 1.0 if k == 0 else (o[i] * prod) ** (1.0 / k)
-        prod *= c[i]
-    return c
-
-
-def inverse_composite(r: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """y = G^{-1}(r) for G(y) = prod_i min(y / c_i, 1), r in [0, 1].
-
-    On [c_(m), c_(m-1)] (c sorted decreasingly, c_(L) = 0) G(y) = y^m / prod_{j<m} c_(j), so
-    y = (r prod_{j<m} c_(j))^(1/m) on the interval that holds it.
-    """
-    cs = np.sort(np.asarray(c, dtype=np.float64))[::-1]
-    r = np.clip(r, 0.0, 1.0)
-    big_l = len(cs)
-    prods = np.cumprod(cs)  # prods[m - 1] = prod_{j<m} c_(j)
-    y = (r * prods[big_l - 1]) ** (1.0 / big_l)  # bottom interval [0, c_(L-1)]
-    for m in range(big_l - 1, 0, -1):  # upwards: keep the highest interval whose G_lo <= r
-        g_lo = cs[m] ** m / prods[m - 1]
-        y = np.where(r >= g_lo, (r * prods[m - 1]) ** (1.0 / m), y)
-    return np.clip(y, 0.0, 1.0)
-
-
 def _noise(fp: Footprint, p: ThresholdParams) -> np.ndarray | None:
     if p.noise == 0.0:
         return None
@@ -182,7 +146,8 @@ def line_thresholds(fp: Footprint, p: ThresholdParams, s0: np.ndarray | None = N
     layers = line_layers(fp, p, s0)
     noise = _noise(fp, p)
     if p.filter == "analytic":
-        return AnalyticLines(layers, fp.n, layer_scales(p.onsets, len(layers)), p.uniform, noise)
+        onsets = p.onsets if p.onsets is not None else (1.0,) * len(layers)
+        return AnalyticLines(layers, fp.n, onsets, p.uniform, noise)
     k = 1 if p.filter == "none" else int(round(p.samples**0.5))
     o = grid_offsets(k) / fp.n
     fs = []
@@ -205,15 +170,15 @@ class AnalyticLines:
     Single layer: exact (``line_coverage``; v linear over the footprint, s constant). Noise is
     held constant over the footprint: Frac(F + z) <= x on {F <= x - z} and
     {1 - z <= F <= x + 1 - z} (z = Frac(noise)), a difference of coverages. Several layers
-    (cross-hatching): white is {F_i <= G^{-1}(x) / c_i for all i}; the coverage is taken as the
-    product of the layers' coverages, exact for a point footprint and for footprints spanning
+    (cross-hatching): white is {F_i <= w_i(x) for all i} (``layer_whites``, the allocation of
+    ``combine_thresholds``); the coverage is taken as the product of the layers' coverages, exact for a point footprint and for footprints spanning
     many lines of different directions (independent layers), approximate in between.
     """
 
-    def __init__(self, layers, n: int, c: np.ndarray, uniform: bool, noise) -> None:
+    def __init__(self, layers, n: int, onsets, uniform: bool, noise) -> None:
         self.layers = layers
         self.n = n
-        self.c = c
+        self.onsets = tuple(onsets)
         self.uniform = uniform
         self.z = None if noise is None else noise - np.floor(noise)
 
@@ -238,10 +203,10 @@ class AnalyticLines:
         xn = x * n
         base = np.floor(xn)
         r = xn - base  # eq. 4: T_n = (floor(x n) + T(Frac(x n), t)) / n
-        y = inverse_composite(r, self.c) if len(self.layers) > 1 else r
+        ws = thr.layer_whites(r, self.onsets) if len(self.layers) > 1 else r[None]
         cover = np.ones_like(x)
-        for layer, ci in zip(self.layers, self.c, strict=True):
-            cover = cover * self._cover(layer, np.minimum(y / ci, 1.0))
+        for layer, w in zip(self.layers, ws, strict=True):
+            cover = cover * self._cover(layer, w)  # white: F_i <= w_i(x) in every layer
         cover = np.where(r >= 1.0, 1.0, np.clip(cover, 0.0, 1.0))
         return np.minimum(base + cover, np.ceil(xn)) / n
 
@@ -250,13 +215,18 @@ class AnalyticLines:
 
 
 def stipple_thresholds(fp: Footprint, p: ThresholdParams, tone_table) -> SampledThresholds:
-    """Thresholder of the multi-scale dot texture (Fig. 4, stippling), point or PCF samples."""
-    s = thr.dot_dyadic_scale(fp.gx, fp.gy, p.period)  # eq. 5, isotropic
+    """Thresholder of the multi-scale dot texture (Fig. 4, stippling), point or PCF samples.
+
+    Dots round in screen space with one dyadic scale per texture axis and, with ``p.jitter``,
+    random row phases (:func:`refnpr.formulas.threshold.stipple_threshold`).
+    """
+    s_u, s_v = thr.stipple_scales(fp.gx, fp.gy, p.period)  # eq. 5 per axis
     if not p.multiscale:
-        s = np.floor(s)
+        s_u, s_v = np.floor(s_u), np.floor(s_v)
+    kw = {"jitter": p.jitter, "seed": p.noise_seed, "tone_table": tone_table}
     if p.filter == "none":
-        return SampledThresholds(thr.dot_threshold(fp.uv, s, tone_table=tone_table)[:, None])
+        return SampledThresholds(thr.stipple_threshold(fp.uv, s_u, s_v, **kw)[:, None])
     k = int(round(p.samples**0.5))
     uvk = fp.offsets_uv(k)
-    t = thr.dot_threshold(uvk, s[:, None], tone_table=tone_table)  # eqs. 6-8 in 2D
+    t = thr.stipple_threshold(uvk, s_u[:, None], s_v[:, None], **kw)  # eqs. 5-8 per axis
     return SampledThresholds(t)

@@ -13,6 +13,7 @@ from refnpr.texture import MipPyramid
 
 from .._common import needs_position, rgba_from, specular_field
 from ..base import ShadeContext, Style, register
+from .bump import BumpMap
 from .images import PyramidCache, image_thresholds
 from .params import DEPRECATED, PARAMETERS, RENAMED, ThresholdParams, parse_params
 from .sources import (
@@ -72,6 +73,10 @@ class ThresholdStyle(Style):
         Image threshold texture (built-in name or path) for every object; None: the materials'.
     window, clip_limit, nbins, rank_equalize : CLAHE settings (``refnpr.texture.clahe_pyramid``)
         ``window`` is the paper's w in texels; ``rank_equalize`` makes each level exactly uniform.
+    tiling : {"none", "periodic"}
+        How an image file is made to repeat before CLAHE (``refnpr.texture.load_texture``):
+        "periodic" uses its periodic component (Moisan 2011) so that a photograph whose borders
+        differ tiles without a seam; built-in textures tile already.
     clahe_levels : {"all", "base", "none"}
         CLAHE on every mip level (sec. 3.1), on level 0 only (plain mip-map, Fig. 3 right wall),
         or not at all (raw image, Fig. 2 top right).
@@ -96,7 +101,18 @@ class ThresholdStyle(Style):
         Use eqs. 7-8's transition between dyadic scales; False floors the scale (eq. 6 alone:
         lines pop where the scale crosses an integer).
     noise, noise_scale, noise_seed : line phase modulation
-        Amplitude in line periods, value-noise cells per texture unit, seed (sec. 3.2).
+        Amplitude in line periods, value-noise cells per texture unit, seed (sec. 3.2);
+        ``noise_seed`` also seeds the stipple's row phases.
+    jitter : float in [0, 0.4]
+        Stipple: dot offsets in tiles (rows of dots at random phases, each dot up to
+        ``jitter`` tiles off its lattice point); 0 puts each level's dots on a rectangular
+        lattice. Dots are round in screen space either way.
+    bump : str or None
+        A height texture (built-in name or path) bump-mapping the normals before shading: the
+        alternative to threshold textures of Fig. 2 (top centre), usually with source
+        "constant".
+    bump_height : float
+        World units per unit of bump texture value (negative: dents).
     pyramid : MipPyramid, optional (Python only)
         A prebuilt threshold pyramid used for every object (overrides ``texture``).
     """
@@ -128,6 +144,7 @@ class ThresholdStyle(Style):
         self.pyramid = pyramid
         self.pyramids = PyramidCache()
         self._tone_table = None
+        self._bump = None if self.p.bump is None else BumpMap(self.p.bump, self.p.bump_height)
         self._params = self.p.as_dict() | ({"pyramid": "prebuilt"} if pyramid else {})
 
     # ------------------------------------------------------------------------- declarations
@@ -142,6 +159,8 @@ class ThresholdStyle(Style):
         req = {"normal", "mesh_id"}
         if needs_position(scene, p.specular or p.facing_fade > 0.0):
             req.add("position")
+        if p.bump is not None:
+            req |= {"uv", "duv_dx", "duv_dy", "dposition_dx", "dposition_dy"}
         if p.source == "constant" or (p.source == "image" and not self._textured(scene)):
             return frozenset(req)  # constant thresholds: no uv
         if self._channel_scale():
@@ -201,7 +220,7 @@ class ThresholdStyle(Style):
             return line_thresholds(fp, p, s0)
         if p.source == "stipple":
             if p.uniform and self._tone_table is None:
-                self._tone_table = threshold.dot_tone_table()
+                self._tone_table = threshold.stipple_tone_table(jitter=p.jitter)
             return stipple_thresholds(fp, p, self._tone_table if p.uniform else None)
         pyramids, keys = [], {}
         group_of_object = []
@@ -216,7 +235,7 @@ class ThresholdStyle(Style):
                 elif self.pyramid is not None:
                     pyramids.append(self.pyramid)
                 else:
-                    pyramids.append(self.pyramids.get(tex, p))
+                    pyramids.append(self.pyramids.get(tex, p, tiling=p.tiling))
             group_of_object.append(keys[tex])
         group = np.asarray(group_of_object, dtype=np.int64)[ctx.gb["mesh_id"][mask]]
         maps = None
@@ -235,6 +254,11 @@ class ThresholdStyle(Style):
         gb = ctx.gb
         mask = ctx.mask
         n = gb["normal"][mask].astype(np.float64)
+        if self._bump is not None:
+            fp = self.footprint(ctx, mask)
+            dpdx = gb["dposition_dx"][mask].astype(np.float64)
+            dpdy = gb["dposition_dy"][mask].astype(np.float64)
+            n = self._bump.normals(n, fp.uv, fp.gx, fp.gy, dpdx, dpdy)  # Fig. 2 top centre
         view = ctx.view_dir(mask) if (p.specular or p.facing_fade > 0.0) else None
         m_a = ctx.material_field("ambient", mask)
         m_d = ctx.material_field("diffuse", mask)

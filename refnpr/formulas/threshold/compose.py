@@ -1,0 +1,184 @@
+"""Composition of threshold textures (Veryovka sec. 3.2, Fig. 4: cross-hatching).
+
+The paper composes line textures "to approximate various styles of line drawings" without a
+formula. refnpr composes them as the *union of their dark lines*: with eq. 3 a sample is black
+where ``x < t``, so black where any layer is black is ``t = max_i h_i(F_i)``, with h_i a
+non-decreasing re-mapping of layer i. The re-mappings are chosen so that
+
+- the composite is uniform when the layers are independent uniform textures (tone preserving:
+  the white fraction at intensity x is ``prod_i w_i(x) = x``, w_i = layer i's white fraction);
+- layer i appears below the intensity ``onsets[i]`` (staged cross-hatching);
+- the dark lines of every layer present stay as thin as possible: a new layer takes all the
+  darkening until its lines are as wide as those of the layers already drawn, then all darken
+  together. The earlier rule (one common level scaled per layer) let the first layer keep
+  darkening after the second appeared, so wherever two directions showed the first one was
+  mostly black and the second only chopped its white gaps into dashes.
+
+In darkness ``lambda = -ln x`` the allocation is water-filling: ``lambda = sum_i lambda_i``
+(tone), ``lambda_i = 0`` while ``lambda < Lambda_i = -ln onsets[i]``, and each increment goes to
+the active layers of least darkness. Every ``lambda_i(lambda)`` is piecewise linear.
+
+Public names are re-exported by :mod:`refnpr.formulas.threshold`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .._shading_checks import broadcast, check_range, real
+from .._validate import describe, result_dtype
+
+__all__ = ["layer_schedule", "layer_whites", "combine_thresholds", "check_onsets"]
+
+_EPS = 1e-12
+
+
+def check_onsets(onsets, count: int) -> np.ndarray:
+    """Validated onsets as ``(count,)`` float64 (all 1 when None)."""
+    if onsets is None:
+        return np.ones(count)
+    o = real("onsets", onsets, np.dtype(np.float64))
+    if o.shape != (count,):
+        raise ValueError(f"onsets: expected {count} values (one per layer), got shape {o.shape}")
+    if np.any(o <= 0) or np.any(o > 1) or o.max() != 1:
+        raise ValueError(
+            f"onsets: expected values in (0, 1] with maximum 1, got {o.tolist()}; "
+            "the first layer must appear at intensity 1"
+        )
+    return o
+
+
+def layer_schedule(onsets) -> tuple[np.ndarray, np.ndarray]:
+    """Breakpoints of the water-filling allocation of darkness between hatching layers.
+
+    Parameters
+    ----------
+    onsets : (L,) sequence of floats in (0, 1], largest 1
+        Intensity below which each layer appears.
+
+    Returns
+    -------
+    lam : (B,) float64, strictly increasing from 0
+        Total darkness ``-ln x`` at the breakpoints.
+    levels : (B, L) float64
+        Each layer's darkness ``-ln w_i`` there; beyond the last breakpoint every layer gains
+        ``1 / L`` per unit of total darkness. ``levels.sum(axis=1) == lam``.
+    """
+    o = check_onsets(onsets, len(onsets))
+    act = -np.log(o)  # Lambda_i: the total darkness at which layer i appears
+    n = len(o)
+    lam = 0.0
+    lev = np.zeros(n)
+    lams, levs = [0.0], [lev.copy()]
+    while True:
+        active = act <= lam + _EPS
+        if active.all() and np.ptp(lev) <= _EPS:
+            break
+        low = lev[active].min()
+        rising = active & (lev <= low + _EPS)
+        above = lev[active & ~rising]
+        catch = (above.min() - low) * rising.sum() if above.size else np.inf
+        pending = act[~active]
+        start = pending.min() - lam if pending.size else np.inf
+        step = min(catch, start)
+        lev = lev + np.where(rising, step / rising.sum(), 0.0)
+        lam += step
+        if step > _EPS:
+            lams.append(lam)
+            levs.append(lev.copy())
+        else:
+            levs[-1] = lev.copy()
+    return np.asarray(lams), np.asarray(levs)
+
+
+def layer_whites(x, onsets) -> np.ndarray:
+    """White fraction w_i(x) of each hatching layer at intensity x (tone-preserving allocation).
+
+    ``prod_i w_i(x) = x``; ``w_i = 1`` for ``x >= onsets[i]``; a newly appearing layer darkens
+    alone until its lines are as wide as the others' (see the module docstring). With the
+    sawtooth layers of :func:`line_threshold` the black line fraction of layer i is 1 - w_i.
+
+    Parameters
+    ----------
+    x : (...) array in [0, 1]
+        Intensity.
+    onsets : (L,) sequence of floats in (0, 1], largest 1
+
+    Returns
+    -------
+    (L, ...) ndarray in [0, 1]; float64, or float32 if ``x`` is float32.
+    """
+    dt = result_dtype(x)
+    x = real("x", x, dt)
+    lam_bp, lev_bp = layer_schedule(onsets)
+    n = lev_bp.shape[1]
+    with np.errstate(divide="ignore"):
+        lam = -np.log(np.clip(x.astype(np.float64), 0.0, 1.0))
+    out = np.empty((n, *x.shape), dtype=dt)
+    for i in range(n):
+        li = np.interp(lam, lam_bp, lev_bp[:, i])
+        li = np.where(lam > lam_bp[-1], lev_bp[-1, i] + (lam - lam_bp[-1]) / n, li)
+        out[i] = np.exp(-li)
+    return out
+
+
+def _darkness_of_layer(f: np.ndarray, lam_bp: np.ndarray, lev_i: np.ndarray, n: int) -> np.ndarray:
+    """lambda*_i(F): the largest total darkness at which a sample with layer value F is white.
+
+    White iff ``F <= w_i(x)`` iff ``q = -ln F >= lambda_i(lambda)`` (lambda_i non-decreasing);
+    the layer's threshold is ``h_i(F) = exp(-lambda*)``.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = -np.log(np.clip(f, 0.0, 1.0))
+        k = np.searchsorted(lev_i, q, side="right")  # first breakpoint whose level exceeds q
+        last = len(lev_i) - 1
+        hi = np.clip(k, 1, max(last, 1)) if last >= 1 else np.zeros_like(k)
+        lo = np.maximum(hi - 1, 0)
+        dlev = lev_i[hi] - lev_i[lo]
+        safe = np.where(dlev > 0, dlev, 1.0)
+        inner = lam_bp[lo] + (q - lev_i[lo]) * (lam_bp[hi] - lam_bp[lo]) / safe
+        tail = lam_bp[-1] + (q - lev_i[-1]) * n  # beyond the last breakpoint (slope 1 / L)
+    return np.where(k > last, tail, inner)
+
+
+def combine_thresholds(layers: Sequence, *, onsets=None) -> np.ndarray:
+    """Compose threshold textures into one (cross-hatching): the union of their dark lines.
+
+    ``t = max_i h_i(F_i)`` (eq. 3: black where ``x < t``, so black where any layer is black),
+    with h_i the inverse of layer i's white fraction :func:`layer_whites`: uniform (tone
+    preserving) when the layers are independent uniform textures (lines at different angles
+    over an area); layer i takes part only below the intensity ``onsets[i]``, and a new layer's
+    lines grow until they are as wide as those already drawn before all darken together.
+
+    Parameters
+    ----------
+    layers : sequence of (...) arrays in [0, 1]
+        Threshold textures, e.g. :func:`line_threshold` at several angles; they broadcast.
+    onsets : sequence of floats in (0, 1], keyword-only
+        Intensity below which each layer appears; the largest must be 1 (a uniform composite
+        has some black at every intensity below 1). Default: all 1 (every layer at once, each
+        with white fraction ``x ** (1 / L)``).
+
+    Returns
+    -------
+    (...) ndarray in [0, 1); float64, or float32 if the layers are float32.
+    """
+    if isinstance(layers, np.ndarray) or not isinstance(layers, Sequence) or len(layers) == 0:
+        raise TypeError(
+            f"layers: expected a non-empty list of threshold arrays, got {describe(layers)}"
+        )
+    dt = result_dtype(*layers)
+    fs = [real(f"layers[{i}]", x, dt) for i, x in enumerate(layers)]
+    for i, f in enumerate(fs):
+        check_range(f"layers[{i}]", f, 0.0, 1.0, "threshold textures take values in [0, 1]")
+    broadcast(**{f"layers[{i}]": f for i, f in enumerate(fs)})
+    o = check_onsets(onsets, len(fs))
+    lam_bp, lev_bp = layer_schedule(o)
+    lam_star = None
+    for i, f in enumerate(fs):
+        li = _darkness_of_layer(f.astype(np.float64), lam_bp, lev_bp[:, i], len(fs))
+        lam_star = li if lam_star is None else np.minimum(lam_star, li)  # white in every layer
+    t = np.exp(-lam_star)  # union of the dark lines: t = max_i h_i(F_i)
+    return np.asarray(np.clip(t, 0.0, np.nextafter(dt.type(1), dt.type(0))), dtype=dt)
