@@ -230,7 +230,9 @@ def _brick_bands(uv: np.ndarray):
     uc = (u + np.where(row % 2 == 1, 0.25, 0.0)) * 2
     x = (uc - np.floor(uc)) * 0.5  # tile units from the brick's left border
     y = v - row / 4
-    lo, hi = 0.0125 + 0.002, 0.0125 + 0.02 - 0.002  # inside the band, off its fringes
+    # inside the band at every level used (each level rounds the mortar gap and the outline to
+    # whole texels: at 128 texels the band is [2, 5] / 128, at 64 [1, 2] / 64), off its fringes
+    lo, hi = 0.0125 + 0.006, 0.0125 + 0.02 - 0.002
     far = 0.06  # away from the corners
 
     def within(d):

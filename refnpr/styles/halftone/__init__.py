@@ -5,7 +5,9 @@ sec. 5 effects applied) is thresholded against a halftone screen sampled triline
 sample's uv and LOD (sec. 3): binary (sec. 3.1) or smooth (sec. 3.2). Screens (sec. 4): a 1D
 engraving ramp, dither screens (CLAHE pyramids), stroke maps encoded from ordered layers.
 Effects (sec. 5): indication maps offset I; stroke sets with a normal map light each stroke
-(DOT3), so lit strokes thin out.
+(DOT3), so lit strokes thin out. Extensions: anisotropic filtering of the screen
+(``anisotropy``, keeps a stroke map's strokes thin on surfaces seen at grazing angles) and raw
+views of the screen, normal map and intensity (``show``, Figs. 3 and 8).
 """
 
 from __future__ import annotations

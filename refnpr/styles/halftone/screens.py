@@ -11,10 +11,12 @@ A screen spec is a string or a table (scene files, ``--param``):
   ``{kind = "strokes", layers = ["dark.png", "light.png"], levels = [0.0, 0.5],
   normal_map = "n.png"}`` reads hand-drawn layers (darkest first).
 * ``"material"``, a built-in texture name (``"brick"``, ``"grass"``, ...) or an image path, or
-  ``{kind = "dither", texture = "brick", window = 16, clip_limit = 0.01, rank_equalize = true}``: a
-  dither screen, the texture through :func:`refnpr.texture.clahe_pyramid` (shared with Veryovka's
-  threshold textures); ``texture = "material"`` (the default) uses each object's own
-  ``material.texture``.
+  ``{kind = "dither", texture = "brick", window = 16, clip_limit = 0.01, rank_equalize = true,
+  tiling = "none"}``: a dither screen, the texture through :func:`refnpr.texture.clahe_pyramid`
+  (shared with Veryovka's threshold textures); ``texture = "material"`` (the default) uses each
+  object's own ``material.texture``; ``tiling = "periodic"`` makes an image file that does not
+  tile repeat without a seam (its periodic component, :func:`refnpr.texture.load_texture`;
+  built-in textures tile already).
 
 Every kind accepts ``lighting = true|false``: use the set's normal map for individual stroke
 lighting (sec. 5.2) when it has one.
@@ -30,6 +32,7 @@ import numpy as np
 
 from refnpr.texture import (
     BUILTIN_TEXTURES,
+    TILINGS,
     MipPyramid,
     clahe_pyramid,
     level_weights,
@@ -49,6 +52,8 @@ __all__ = [
     "build_screen",
     "screen_coords",
     "screen_lod",
+    "Footprint",
+    "screen_footprint",
     "sample_screen",
     "sample_screen_levels",
     "tone_luts",
@@ -60,7 +65,13 @@ STROKE_SETS = {"hatching": S.hatching_set, "bricks": S.brick_set}
 #: Built-in stroke sets that come with a normal map (individual stroke lighting, sec. 5.2).
 SETS_WITH_NORMALS = ("bricks",)
 _ENGRAVING_KEYS = {"profile": "triangle", "angle": 90.0, "size": 256}
-_DITHER_KEYS = {"texture": "material", "window": 16, "clip_limit": 0.01, "rank_equalize": True}
+_DITHER_KEYS = {
+    "texture": "material",
+    "window": 16,
+    "clip_limit": 0.01,
+    "rank_equalize": True,
+    "tiling": "none",
+}
 #: Deprecated dither keys -> the threshold style's names for the same CLAHE settings.
 _DITHER_RENAMED = {"uniform": "rank_equalize"}
 _STROKE_FILE_KEYS = ("layers", "levels", "normal_map")
@@ -139,8 +150,14 @@ def normalize_spec(spec: Any) -> dict[str, Any]:
                 f"screen.texture: expected 'material', a built-in texture name or an image path, "
                 f"got {out['texture']!r}"
             )
+        if out["tiling"] not in TILINGS:
+            raise ValueError(
+                f"screen.tiling: expected one of {list(TILINGS)} ('periodic' makes an image "
+                f"that does not tile repeat without a seam), got {out['tiling']!r}"
+            )
     else:
-        if "layers" in spec:
+        # hand-drawn layers; with a set, ``layers`` is the generator's layer count
+        if "layers" in spec and "set" not in spec:
             unknown = sorted(set(spec) - set(_STROKE_FILE_KEYS))
             if unknown:
                 raise ValueError(
@@ -177,7 +194,7 @@ def has_normal_map(spec: dict[str, Any]) -> bool:
     """Whether a normalized spec lights its strokes from a normal map (needs a tangent frame)."""
     if spec["kind"] != "strokes" or not spec["lighting"]:
         return False
-    if "layers" in spec:
+    if "set" not in spec:
         return spec["normal_map"] is not None
     return spec["set"] in SETS_WITH_NORMALS
 
@@ -210,13 +227,13 @@ def build_screen(spec: dict[str, Any], material_texture: str | None) -> Screen:
                 )
             name = material_texture
         pyr = clahe_pyramid(
-            load_texture(name, param="screen"),
+            load_texture(name, param="screen", tiling=spec["tiling"]),
             window=spec["window"],
             clip_limit=spec["clip_limit"],
             uniform=spec["rank_equalize"],
         )
         return Screen("dither", pyr)
-    if "layers" in spec:
+    if "set" not in spec:
         strokes = S.load_stroke_layers(
             spec["layers"], levels=spec["levels"], normal_map=spec["normal_map"]
         )
@@ -254,20 +271,88 @@ def screen_lod(pyramid: MipPyramid, dx: np.ndarray, dy: np.ndarray) -> np.ndarra
     return np.log2(np.maximum(rho, 1e-30))
 
 
-def sample_screen(pyramid: MipPyramid, coords: np.ndarray, lod: np.ndarray) -> np.ndarray:
-    """Trilinear samples (N,) or (N, C) float64 of ``pyramid`` at ``coords`` (N, 2) and ``lod``."""
-    return sample_trilinear(pyramid, coords, lod, dtype=np.float64)
+@dataclass(frozen=True, eq=False)
+class Footprint:
+    """Anisotropic footprint of N samples (EXT_texture_filter_anisotropic, as GL 4.6 sec. 8.14
+    describes it): ``probes`` (N,) int of at least 1 and ``axis`` (N, 2) float64, the major
+    axis of the footprint in texture coordinates. A sample averages ``probes`` trilinear probes
+    at ``coords + axis ((j + 1/2) / probes - 1/2)``, j = 0..probes-1, at the LOD of
+    :func:`screen_footprint`."""
+
+    probes: np.ndarray
+    axis: np.ndarray
+
+    def offsets(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per probe index j: (the samples that take probe j, their offsets (n_j, 2))."""
+        out = []
+        for j in range(int(self.probes.max(initial=1))):
+            sel = np.flatnonzero(self.probes > j)
+            t = (j + 0.5) / self.probes[sel] - 0.5
+            out.append((sel, self.axis[sel] * t[:, None]))
+        return out
+
+
+def screen_footprint(
+    pyramid: MipPyramid, dx: np.ndarray, dy: np.ndarray, anisotropy: int
+) -> tuple[np.ndarray, Footprint | None]:
+    """LOD and anisotropic footprint of N samples, (N,) float64 and a :class:`Footprint` (None
+    when ``anisotropy == 1``: the isotropic :func:`screen_lod`).
+
+    With ``P_max, P_min`` the longer and shorter of the derivative vectors in level-0 texels,
+    ``probes = min(ceil(P_max / P_min), anisotropy)`` and ``lod = log2(P_max / probes)``: the
+    level is chosen for the footprint's *minor* axis (up to the anisotropy limit) and the
+    probes cover the major axis. The isotropic LOD uses ``P_max`` alone and so selects a level
+    as coarse as the most compressed direction needs: on a surface seen at a grazing angle the
+    strokes across the other direction are then magnified (a stroke map's coarse levels carry
+    wider strokes in uv), which is what made thorns of the hatching on the torus knot.
+    """
+    if anisotropy == 1:
+        return screen_lod(pyramid, dx, dy), None
+    cols, rows = pyramid.size
+    scale = np.array([cols, rows], dtype=np.float64)
+    px = np.linalg.norm(dx * scale, axis=-1)
+    py = np.linalg.norm(dy * scale, axis=-1)
+    p_max, p_min = np.maximum(px, py), np.minimum(px, py)
+    ratio = p_max / np.maximum(p_min, 1e-30)
+    probes = np.clip(np.ceil(ratio - 1e-9), 1, anisotropy).astype(np.int64)
+    lod = np.log2(np.maximum(p_max / probes, 1e-30))
+    axis = np.where((px >= py)[:, None], dx, dy)
+    return lod, Footprint(probes, axis)
+
+
+def sample_screen(
+    pyramid: MipPyramid, coords: np.ndarray, lod: np.ndarray, fp: Footprint | None = None
+) -> np.ndarray:
+    """Trilinear samples (N,) or (N, C) float64 of ``pyramid`` at ``coords`` (N, 2) and ``lod``;
+    with a footprint, the mean of its probes (anisotropic filtering)."""
+    if fp is None:
+        return sample_trilinear(pyramid, coords, lod, dtype=np.float64)
+    out = None
+    for sel, off in fp.offsets():
+        v = sample_trilinear(pyramid, coords[sel] + off, lod[sel], dtype=np.float64)
+        if out is None:
+            out = np.zeros((coords.shape[0],) + v.shape[1:])
+        out[sel] += v
+    n = fp.probes.reshape((-1,) + (1,) * (out.ndim - 1))
+    return out / n
 
 
 def sample_screen_levels(
-    pyramid: MipPyramid, coords: np.ndarray, lod: np.ndarray
+    pyramid: MipPyramid, coords: np.ndarray, lod: np.ndarray, fp: Footprint | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The two bilinear samples that trilinear filtering would blend, their levels and the blend
-    weight: (s0, s1, k0, k1, w1), each (N,)."""
+    weight: (s0, s1, k0, k1, w1), each (N,) (with a footprint, each sample the mean of its
+    probes at that level)."""
     k0, k1, w1 = level_weights(pyramid, lod)
-    s0 = sample_level(pyramid, coords, k0, dtype=np.float64)
-    s1 = sample_level(pyramid, coords, k1, dtype=np.float64)
-    return s0, s1, k0, k1, w1
+    if fp is None:
+        s0 = sample_level(pyramid, coords, k0, dtype=np.float64)
+        s1 = sample_level(pyramid, coords, k1, dtype=np.float64)
+        return s0, s1, k0, k1, w1
+    s0, s1 = np.zeros(coords.shape[0]), np.zeros(coords.shape[0])
+    for sel, off in fp.offsets():
+        s0[sel] += sample_level(pyramid, coords[sel] + off, k0[sel], dtype=np.float64)
+        s1[sel] += sample_level(pyramid, coords[sel] + off, k1[sel], dtype=np.float64)
+    return s0 / fp.probes, s1 / fp.probes, k0, k1, w1
 
 
 #: Bins of the tone look-up tables and sub-texel samples per axis used to build them.

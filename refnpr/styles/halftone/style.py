@@ -11,9 +11,11 @@ from typing import Any
 import numpy as np
 
 from refnpr.formulas import halftone
+from refnpr.image import srgb_to_linear
 
 from .._common import (
     check_choice,
+    check_count,
     check_number,
     check_uv_scale,
     needs_position,
@@ -85,6 +87,23 @@ class HalftoneStyle(Style):
         screen. "per_level": threshold the two bilinear level samples separately and blend the
         results with the trilinear weight (Veryovka's filtered thresholding); each level keeps
         its own tone, which blending screens does not.
+    anisotropy : int in [1, 16]
+        Largest anisotropic filtering ratio (GL_TEXTURE_MAX_ANISOTROPY). 1 (default): the
+        isotropic LOD of the paper's trilinear lookup, ``log2 max(|duv/dx|, |duv/dy|)`` in texels.
+        N > 1: the level is chosen for the footprint's minor axis (``log2(P_max / n)`` with
+        ``n = min(ceil(P_max / P_min), N)``) and n trilinear probes along the major axis are
+        averaged (:func:`~refnpr.styles.halftone.screens.screen_footprint`). On surfaces seen
+        at a grazing angle the isotropic LOD picks levels whose strokes are wide in uv and
+        magnifies them across the uncompressed direction (thorn-like strokes near silhouettes);
+        anisotropic filtering keeps a stroke map's strokes at their screen width.
+    show : {"color", "screen", "normals", "intensity"}
+        What to output: "color" (default) the halftoned image; "screen" the filtered screen
+        value at each sample's uv and LOD (the raw stroke map or dither screen, Fig. 3 (d),
+        Fig. 8); "normals" the RGB-encoded stroke normal map (Fig. 8; flat (0.5, 0.5, 1)
+        without one); "intensity" the target intensity I after the indication map (Fig. 4 (b);
+        Fig. 8's indication maps). Ink and paper colours apply to "color" only. A raw value x
+        is output as the linear colour whose sRGB encoding is x, so an 8-bit image file stores
+        x itself (as the texture file of the map would).
     tone_correct : bool
         Map each bilinear level sample through the CDF of that level's interpolated values
         (:func:`~refnpr.styles.halftone.screens.tone_luts`), so that thresholding keeps the tone
@@ -113,6 +132,8 @@ class HalftoneStyle(Style):
         sample_lod: bool = False,
         mip: str = "trilinear",
         tone_correct: bool = False,
+        anisotropy: int = 1,
+        show: str = "color",
     ) -> None:
         self.threshold = check_choice("threshold", threshold, ("smooth", "binary"))
         if isinstance(c, str) and c != "auto":
@@ -147,6 +168,8 @@ class HalftoneStyle(Style):
         self.ink, self.paper = _colour("ink", ink), _colour("paper", paper)
         self.lod_bias = check_number("lod_bias", lod_bias, lo=-16.0, hi=16.0)
         self.mip = check_choice("mip", mip, ("trilinear", "per_level"))
+        self.anisotropy = check_count("anisotropy", anisotropy, lo=1, hi=16)
+        self.show = check_choice("show", show, ("color", "screen", "normals", "intensity"))
         self.objects = self._parse_objects(objects)
         self._screens: dict[str, HS.Screen] = {}
         self._tone_luts: dict[int, np.ndarray] = {}
@@ -170,6 +193,8 @@ class HalftoneStyle(Style):
             "sample_lod": self.sample_lod,
             "mip": self.mip,
             "tone_correct": self.tone_correct,
+            "anisotropy": self.anisotropy,
+            "show": self.show,
         }
 
     @staticmethod
@@ -249,14 +274,14 @@ class HalftoneStyle(Style):
             return np.clip(0.5 - c_auto * (1.0 - screen - intensity), 0.0, 1.0)
         return halftone.smooth_threshold(screen, intensity, self.c, centred=self.centred)  # 3.2
 
-    def _auto_c(self, screen: HS.Screen, coords, cdx, cdy, lod, n_axis: int) -> np.ndarray:
+    def _auto_c(self, screen: HS.Screen, coords, cdx, cdy, lod, n_axis: int, fp) -> np.ndarray:
         """``1 / fwidth(screen)`` per sample: central differences of the trilinear screen over
         one sample step (1/n pixel with n x n samples) along x and along y."""
         step = 1.0 / n_axis
         fw = np.zeros(coords.shape[0])
         for d in (cdx * step, cdy * step):
-            plus = HS.sample_screen(screen.pyramid, coords + d, lod)
-            minus = HS.sample_screen(screen.pyramid, coords - d, lod)
+            plus = HS.sample_screen(screen.pyramid, coords + d, lod, fp)
+            minus = HS.sample_screen(screen.pyramid, coords - d, lod, fp)
             fw += np.abs(plus - minus) / 2
         return 1.0 / np.maximum(fw, 1e-6)
 
@@ -266,6 +291,7 @@ class HalftoneStyle(Style):
         specs = self._object_specs(scene)
         shape = gb["mesh_id"].shape
         out = np.ones(mesh_id.shape[0])
+        out_rgb = np.ones((mesh_id.shape[0], 3)) if self.show == "normals" else None
         n_axis = gb.n
         lod_offset = self.lod_bias - (math.log2(n_axis) if self.sample_lod else 0.0)
         normal = gb["normal"].reshape(-1, 3)
@@ -283,11 +309,13 @@ class HalftoneStyle(Style):
             coords, cdx, cdy = HS.screen_coords(
                 screen, uv * scale, dx_all[sel] * scale, dy_all[sel] * scale
             )
-            lod = HS.screen_lod(screen.pyramid, cdx, cdy) + lod_offset
+            aniso = self.anisotropy if screen.direction is None else 1  # engraving: a 1D ramp
+            lod, fp = HS.screen_footprint(screen.pyramid, cdx, cdy, aniso)
+            lod = lod + lod_offset
             n = normal[sel].astype(np.float64)
             bump = None
             if screen.normals is not None:
-                nmap = HS.sample_screen(screen.normals, coords, lod)
+                nmap = HS.sample_screen(screen.normals, coords, lod, fp)
                 t, b, valid = tangent_frame(
                     n,
                     gb["dposition_dx"].reshape(-1, 3)[sel].astype(np.float64),
@@ -305,18 +333,31 @@ class HalftoneStyle(Style):
             equalize = self.tone_correct and screen.kind != "strokes"
             c_auto = None
             if self.c == "auto" and self.threshold == "smooth":
-                c_auto = self._auto_c(screen, coords, cdx, cdy, lod, n_axis)
-            if self.mip == "trilinear" and not equalize:
-                value = HS.sample_screen(screen.pyramid, coords, lod)  # sec. 3: tex at (uv, LOD)
+                c_auto = self._auto_c(screen, coords, cdx, cdy, lod, n_axis, fp)
+            if self.show == "intensity":
+                out[sel] = intensity
+            elif self.show == "normals":
+                if screen.normals is None:
+                    out_rgb[sel] = (0.5, 0.5, 1.0)
+                else:
+                    out_rgb[sel] = HS.sample_screen(screen.normals, coords, lod, fp)
+            elif self.show == "screen":
+                out[sel] = HS.sample_screen(screen.pyramid, coords, lod, fp)
+            elif self.mip == "trilinear" and not equalize:
+                value = HS.sample_screen(screen.pyramid, coords, lod, fp)  # sec. 3: (uv, LOD)
                 out[sel] = self._threshold(value, intensity, c_auto)
             else:
-                s0, s1, k0, k1, w1 = HS.sample_screen_levels(screen.pyramid, coords, lod)
+                s0, s1, k0, k1, w1 = HS.sample_screen_levels(screen.pyramid, coords, lod, fp)
                 if equalize:
                     luts = self._luts(screen)
                     s0, s1 = HS.apply_luts(luts, s0, k0), HS.apply_luts(luts, s1, k1)
                 t0 = self._threshold(s0, intensity, c_auto)
                 t1 = self._threshold(s1, intensity, c_auto)
                 out[sel] = (1 - w1) * t0 + w1 * t1
+        if self.show == "normals":  # an 8-bit file of the image stores the map's values
+            return rgba_from(srgb_to_linear(out_rgb.reshape(shape + (3,))), ctx.mask)
         out = out.reshape(shape)[..., None]
+        if self.show != "color":  # the raw value as gray, stored as such in an 8-bit file
+            return rgba_from(srgb_to_linear(np.repeat(out, 3, axis=-1)), ctx.mask)
         rgb = out * np.asarray(self.paper) + (1.0 - out) * np.asarray(self.ink)
         return rgba_from(rgb, ctx.mask)

@@ -6,7 +6,8 @@
   ink greys and optionally a DOT3 normal map per level (sec. 5.2). :func:`stroke_map_pyramid`
   encodes each level with :func:`refnpr.formulas.halftone.encode_stroke_map` (sec. 4.2, Fig. 3).
 * Built-in sets drawn procedurally at every mip level: :func:`hatching_set` (parallel hatching at
-  several angles, calibrated so that the binary threshold reproduces tone) and :func:`brick_set`
+  several angles, a tonal art map: strokes of one texel width at every level, the tone from
+  their density, calibrated so that the binary threshold reproduces tone) and :func:`brick_set`
   (brick outlines with a bevel normal map, plus hatching inside the bricks; Fig. 7, Fig. 8).
 * :func:`load_stroke_layers` reads layers drawn in a paint program (black ink on a transparent
   or white background, one PNG per layer).

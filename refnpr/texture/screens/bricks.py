@@ -4,8 +4,11 @@ the bricks (Figure 7, Figure 8)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
+
+from refnpr.formulas import halftone
 
 from ._checks import _int, _pow2, _real
 from .lines import _box_overlap, hatching_layer
@@ -38,7 +41,10 @@ def _brick_fields(s: int, rows: int, per_row: int, seed: int):
     brick = row * per_row + col
     rng = np.random.default_rng(seed)
     rand = rng.random(rows * per_row)
-    return dist, du, dv, rand[brick]
+    # distance to the brick's own left or lower border and its outward direction (-u or -v)
+    low = np.minimum(dl, dlo)
+    low_u = dl < dlo
+    return dist, du, dv, rand[brick], (low, np.where(low_u, -1.0, 0.0), np.where(low_u, 0.0, -1.0))
 
 
 def brick_set(
@@ -51,15 +57,29 @@ def brick_set(
     tilt_deg: float = 50.0,
     hatch_lines: int = 32,
     seed: int = 2002,
+    levels: Sequence[float] = BRICK_LEVELS,
 ) -> StrokeSet:
     """Built-in brick stroke set (after Winkenbach and Salesin's bricks, Freudenberg Fig. 7/8).
 
-    Layers (ink greys :data:`BRICK_LEVELS`): 0 the brick outlines, 1 horizontal hatching in a
-    random third of the bricks, 2 horizontal hatching in the other bricks, 3 diagonal hatching
-    over everything. The normal map tilts each outline stroke outwards from its brick by
-    ``tilt_deg`` (a bevelled, raised brick), flat elsewhere: with individual stroke lighting
-    (sec. 5.2) a light from the upper right thins the upper and right outlines away and keeps
-    the lower and left ones. Running bond: odd rows are shifted by half a brick.
+    Layers (ink greys ``levels``, default :data:`BRICK_LEVELS`): 0 the brick outlines, 1
+    horizontal hatching in a random third of the bricks, 2 horizontal hatching in the other
+    bricks, 3 diagonal hatching over everything. With the default grey 0.3 the outlines show
+    where the target intensity is at most 0.7, so indication maps (sec. 5.1) and stroke lighting
+    (sec. 5.2) can fade them; ``levels = [0.0, ...]`` makes layer 0 the paper's unscaled first
+    layer, drawn at every intensity (every brick outline).
+
+    Every level draws its outlines on whole texels (as the hatching's strokes pass through
+    texel centres): the mortar gap and the outline width are rounded to texels, the outline at
+    least one texel wide, so an outline is solid ink at every mip level and the binary threshold
+    keeps it whole instead of breaking the grey, partly covered texels of a thin band into dots.
+    On levels where the mortar gap is under a texel, each brick draws only its lower and left
+    outline, one texel wide (the joint between two bricks is then one solid line, not two
+    adjacent ones that would fill small bricks with ink).
+
+    The normal map tilts each outline stroke outwards from its brick by ``tilt_deg`` (a
+    bevelled, raised brick), flat elsewhere: with individual stroke lighting (sec. 5.2) a light
+    from the upper right thins the upper and right outlines away and keeps the lower and left
+    ones. Running bond: odd rows are shifted by half a brick.
 
     Parameters
     ----------
@@ -75,6 +95,8 @@ def brick_set(
         Hatching lines per tile at level 0 (power of two).
     seed : int
         Which bricks get the first hatching layer.
+    levels : 4 increasing values in [0, 1)
+        Ink grey of each layer (outlines first).
 
     Returns
     -------
@@ -92,15 +114,29 @@ def brick_set(
     tilt = math.radians(_real("tilt_deg", tilt_deg, 0.0, 85.0))
     hatch_lines = _pow2("hatch_lines", hatch_lines, 2, size // 2)
     seed = _int("seed", seed, 0)
+    try:
+        g = np.asarray(levels, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"levels: expected 4 ink greys (outlines first), got {levels!r}") from None
+    if g.shape != (4,):
+        raise ValueError(
+            f"levels: expected 4 ink greys (outlines, two hatching layers, diagonals), "
+            f"got {levels!r}"
+        )
+    halftone.layer_onsets(g)  # strictly increasing in [0, 1)
     layers_k, normals_k = [], []
     for s in level_sizes(size):
         if s < 4:
             layers_k.append(_box_half(layers_k[-1]))
             normals_k.append(_box_half(normals_k[-1][None])[0])
             continue
-        dist, du, dv, rand = _brick_fields(s, rows, per_row, seed)
-        half_mortar = max(mortar * s / 2, 0.0)
-        w = max(outline * s, 1.0)
+        dist, du, dv, rand, (low, low_du, low_dv) = _brick_fields(s, rows, per_row, seed)
+        if mortar * s >= 1.0:  # the gap holds a texel: both bricks' outlines, on whole texels
+            half_mortar = math.floor(mortar * s / 2 + 0.5)
+            w = max(math.floor(outline * s + 0.5), 1)
+        else:  # one solid one-texel line per joint: each brick's lower and left outline
+            half_mortar, w = 0, 1
+            dist, du, dv = low, low_du, low_dv
         # outline band: distance to the cell border in [half_mortar, half_mortar + w]
         band = _box_overlap(dist - (half_mortar + w / 2), w, 1.0)
         # the bevel (tilted normals) spans the outline band and its antialiased fringe, so a lit
@@ -131,6 +167,4 @@ def brick_set(
             axis=-1,
         )
         normals_k.append(((n + 1.0) / 2.0).astype(np.float32))
-    return StrokeSet(
-        tuple(layers_k), np.asarray(BRICK_LEVELS, dtype=np.float64), tuple(normals_k), "bricks"
-    )
+    return StrokeSet(tuple(layers_k), g, tuple(normals_k), "bricks")

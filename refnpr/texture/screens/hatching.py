@@ -3,6 +3,8 @@ so that the binary threshold reproduces tone (sec. 4.2)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from refnpr.formulas import halftone
@@ -21,23 +23,31 @@ def _binary_tone(screen: np.ndarray, intensity: float) -> float:
     return float(np.mean(screen + intensity > 1.0))  # sec. 3.1, white iff screen + I > 1
 
 
-def _hatch_lines(size: int, m: int, i: int, lines: int, min_width: float) -> tuple[int, float]:
-    """Lines per tile of layer i at a level of ``size`` texels (halved while the strokes would be
-    thinner than ``min_width``), and the first guess of its width (texels) from the union
-    coverage ``(i + 1/2) / m`` the layers 0..i should reach."""
-    target_cov = 1.0 - (1.0 - (i + 0.5) / m) / (1.0 - (i - 0.5) / m if i else 1.0)
-    n = lines
-    while n > 1 and target_cov * size / n < min_width:
-        n //= 2
-    return n, max(target_cov * size / n, 1e-3)
+def _layer_coverage(m: int, i: int) -> float:
+    """Coverage layer i must add to what layers 0..i-1 left white so that the union covers
+    ``(i + 1/2) / m``: ``1 - (1 - (i + 1/2)/m) / (1 - (i - 1/2)/m)`` (``1/(2m)`` for layer 0)."""
+    return 1.0 - (1.0 - (i + 0.5) / m) / (1.0 - (i - 0.5) / m if i else 1.0)
 
 
-def _calibrated_layers(size: int, m: int, lines: int, min_width: float) -> np.ndarray:
+def _hatch_lines(size: int, m: int, i: int, width: float) -> tuple[int, float]:
+    """Lines per tile of layer i at a level of ``size`` texels and the first guess of its stroke
+    width (texels): the power of two of lines that puts strokes of about ``width`` texels at the
+    coverage :func:`_layer_coverage` (so the stroke width, not the line count, is what every
+    level and layer share: strokes keep their texel width, hence their screen width, at every
+    mip level, and tone comes from their density), at least one line and at most ``size / 2``."""
+    cov = _layer_coverage(m, i)
+    ideal = cov * size / width  # lines of the exact width
+    n = 1 << max(0, round(math.log2(max(ideal, 1.0))))
+    n = min(n, max(1, size // 2))
+    return n, max(cov * size / n, 1e-3)
+
+
+def _calibrated_layers(size: int, m: int, width: float) -> np.ndarray:
     """m hatching layers of one level whose binary-threshold tone halfway between consecutive
     layer onsets equals the intensity there: two Gauss-Seidel sweeps over the layers, each
     solving for one layer's width (Illinois false position) with the others fixed."""
     levels = halftone.stroke_levels(m)
-    plan = [_hatch_lines(size, m, i, lines, min_width) for i in range(m)]
+    plan = [_hatch_lines(size, m, i, width) for i in range(m)]
     widths = [w for _, w in plan]
 
     geometry = []
@@ -94,16 +104,23 @@ def _calibrated_layers(size: int, m: int, lines: int, min_width: float) -> np.nd
 def hatching_set(
     size: int = 256, *, layers: int = 6, lines: int = 16, min_width: float = 1.0
 ) -> StrokeSet:
-    """Built-in hatching stroke set: ``layers`` hatching directions, drawn at every mip level.
+    """Built-in hatching stroke set: ``layers`` hatching directions, drawn at every mip level
+    as a tonal art map (Praun et al. 2001, the mip-mapping Freudenberg sec. 4.2 refers to).
 
     Layer i runs at ``HATCH_ANGLES[i % 8]`` (0, 90, 45, 135 degrees, then the same directions
-    between the earlier lines). Its ink grey is ``i / layers`` (:func:`stroke_levels`) and its
-    line width is calibrated per level so that the binary threshold reproduces the tone halfway
-    between consecutive layer onsets: for an intensity I in layer i's interval
+    between the earlier lines). Its ink grey is ``i / layers`` (:func:`stroke_levels`). Every
+    stroke of every layer and level has about the same width in texels, ``w = max(size / (2 m
+    lines), min_width)`` (the width that gives layer 0, ``lines`` lines per tile at level 0, its
+    coverage ``1/(2m)``): a layer that must cover more of the paper has more lines (a power of
+    two per tile, so the width stays within a factor sqrt(2) of w), and a coarser level has half
+    as many lines of the same texel width (its lines are a subset of the finer level's). Sampled
+    at its LOD a level's texel is about a pixel, so strokes keep their screen width at any
+    distance and the tone comes from their density ("adding strokes of constant line width",
+    sec. 4). Each width is then calibrated per level so that the binary threshold reproduces the
+    tone halfway between consecutive layer onsets: for an intensity I in layer i's interval
     ``(1 - (i+1)/m, 1 - i/m]`` the white fraction is ``1 - (i + 1/2)/m``, within ``1/(2m)`` of I
-    (the staircase a stroke map gives). Lines are never thinner than ``min_width`` texels: at
-    coarse levels every other line is dropped instead (the coarse lines are a subset of the
-    fine ones), which keeps the tone.
+    (the staircase a stroke map gives). Where a level is too small for a layer's strokes of
+    width w (one line per tile), the calibrated stroke is narrower.
 
     Parameters
     ----------
@@ -112,9 +129,10 @@ def hatching_set(
     layers : int
         Number of layers m (1..8).
     lines : int
-        Lines per tile of each layer at level 0 (a power of two >= 2).
+        Lines per tile of layer 0 (the sparsest) at level 0 (a power of two >= 2); it sets the
+        stroke width w above.
     min_width : float
-        Narrowest stroke in texels (0.5..8).
+        Narrowest target stroke width w in texels (0.5..8).
 
     Returns
     -------
@@ -124,10 +142,11 @@ def hatching_set(
     m = _int("layers", layers, 1, 8)
     lines = _pow2("lines", lines, 2, size // 2)
     min_width = _real("min_width", min_width, 0.5, 8.0)
+    width = max(_layer_coverage(m, 0) * size / lines, min_width)
     per_level: list[np.ndarray] = []
     for s in level_sizes(size):
         if s < 4:  # a 2x2 or 1x1 level cannot hold strokes: the mean of the level above
             per_level.append(_box_half(per_level[-1]))
         else:
-            per_level.append(_calibrated_layers(s, m, min(lines, s // 2), min_width))
+            per_level.append(_calibrated_layers(s, m, width))
     return StrokeSet(tuple(per_level), halftone.stroke_levels(m), None, name="hatching")
