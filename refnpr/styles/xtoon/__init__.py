@@ -19,11 +19,15 @@ map        a user-supplied per-pixel map in [0, 1]
 none       1 (the texture's full-detail row)
 ========== ======================================= =========================================
 
-All D are clamped to [0, 1]. ``detail_mode="pixel"`` (default) evaluates the map per sample from
-interpolated quantities (the exact reference); ``"vertex"`` evaluates it per vertex and
-interpolates D (for ``flow``: the displacement vector), as the paper's vertex shader does for
-depth. The texture's **row index grows with D** (row 0: D = 0, most abstract; last row: D = 1) and
-its column index with tone; its alpha is the output alpha, composited over the background.
+``distance`` swaps the depth of the depth and focus maps (Fig. 2: view axis or eye). All D are
+clamped to [0, 1]. ``show="detail"`` (or ``"inverse_detail"``, ``"tone"``) draws D (1 - D, the
+tone) as a grey image instead of the texture: the attribute-map pictures of Figs. 3 and 4.
+
+``detail_mode="pixel"`` (default) evaluates the map per sample from interpolated quantities
+(the exact reference); ``"vertex"`` evaluates it per vertex and interpolates D (for ``flow``: the
+displacement vector), as the paper's vertex shader does for depth. The texture's **row index
+grows with D** (row 0: D = 0, most abstract; last row: D = 1) and its column index with tone;
+its alpha is the output alpha, composited over the background.
 
 Shape abstraction (sec. 4): ``shape`` gives per-vertex abstracted normals (smoothed, ellipsoid,
 cylinder, sphere; or a precomputed :class:`AbstractedNormals`, or a callable), blended with the

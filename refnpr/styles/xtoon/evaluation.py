@@ -27,7 +27,7 @@ from .shape import AbstractedNormals, abstract_normals, unit_rows
 
 __all__ = ["Config", "Plan", "plan", "vertex_values", "evaluate", "Evaluated"]
 
-_POSITION_MAPS = ("focus", "orientation", "highlight", "flow")
+_POSITION_MAPS = ("orientation", "highlight", "flow")
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,10 +59,12 @@ class Plan:
     carried: frozenset[str]  # vertex quantities the meshes carry as attributes
 
 
-def _map_channels(kind: str) -> set[str]:
-    if kind == "depth":
-        return {"depth"}
-    return {"position"} if kind in _POSITION_MAPS else set()
+def _map_channels(p: DetailParams) -> set[str]:
+    """G-buffer channels the attribute map reads per sample: the view-axis ``depth`` for the
+    focal-axis distance (Fig. 2b), ``position`` for the eye distance and the other maps."""
+    if p.kind in ("depth", "focus"):
+        return {"depth"} if p.distance == "axis" else {"position"}
+    return {"position"} if p.kind in _POSITION_MAPS else set()
 
 
 def _light_of(cfg: Config, scene: Any):
@@ -93,12 +95,12 @@ def plan(cfg: Config, scene: Any) -> Plan:
     if _light_of(cfg, scene).kind == "point":
         channels.add("position")
     if cfg.detail_mode == "pixel":
-        channels |= _map_channels(kind)
+        channels |= _map_channels(cfg.detail)
     elif kind not in ("map", "none"):
         names.append("xtoon_flow" if kind == "flow" else "xtoon_d")
     bary = shaped and not vertex_blend  # the abstracted normal, interpolated per pixel
     if bary and cfg.weight.kind == "detail":
-        channels |= _map_channels(kind)
+        channels |= _map_channels(cfg.detail)
     if bary and cfg.weight.kind == "texture":
         channels.add("uv")
     meshes = scene.world_meshes()
@@ -265,7 +267,7 @@ def evaluate(cfg: Config, ctx: Any) -> Evaluated:
     def d_at_pixels(normals: np.ndarray) -> np.ndarray:
         kind = cfg.detail.kind
         flow = _flow(pos, cfg, camera, gb.width, gb.height) if kind == "flow" else None
-        depth = at("depth") if kind == "depth" else None
+        depth = at("depth") if "depth" in _map_channels(cfg.detail) else None
         return detail_values(
             cfg.detail,
             frame,

@@ -12,14 +12,19 @@ import numpy as np
 
 from .._common import check_choice, rgba_from, warn_unused
 from ..base import ShadeContext, Style, register
-from .detail import DetailParams
+from .detail import DEFAULT_DISTANCE, DISTANCES, DetailParams
 from .evaluation import Config, evaluate, plan, vertex_values
 from .geometry import VertexGeometry
 from .params import DETAILS, camera_spec, number, unit_map, vec3, weight_spec
 from .shape import SHAPES, AbstractedNormals
-from .texture import resolve_texture
+from .texture import resolve_texture, srgb_to_linear
 
 __all__ = ["XToonStyle"]
+
+#: What ``shade`` draws: the toon texture, or an attribute as a grey image whose displayed
+#: (sRGB) value is D ("detail", Fig. 4's convention: dark = low detail), 1 - D ("inverse_detail",
+#: Fig. 3's: near or in focus = dark) or the tone.
+SHOWS = ("color", "detail", "inverse_detail", "tone")
 
 _R_HINT = "r is the ratio z_max / z_min of X-Toon sec. 3.1 (coarsest detail at z_max = r z_min)"
 
@@ -42,6 +47,12 @@ class XToonStyle(Style):
         ``(rows, cols[, C])`` with rows growing with D.
     detail : {"depth", "focus", "orientation", "highlight", "flow", "map", "none"}
     detail_mode : {"pixel", "vertex"}
+    distance : {"axis", "eye"}, optional
+        The depth of depth and focus maps (Fig. 2): along the view axis or to the eye (default:
+        the paper's, "axis" for depth and "eye" for focus).
+    show : {"color", "detail", "inverse_detail", "tone"}
+        "color" (default) draws the toon texture; the others draw D, 1 - D or the tone as opaque
+        grey (displayed sRGB value = the quantity), the attribute-map images of Figs. 3 and 4.
     tone : {"clamped", "half_lambert"}
     light : int
         Index of the scene light giving l.
@@ -86,6 +97,8 @@ class XToonStyle(Style):
         texture: Any = "loa_blur",
         detail: str = "depth",
         detail_mode: str = "pixel",
+        distance: str | None = None,
+        show: str = "color",
         tone: str = "clamped",
         light: int = 0,
         z_min: float | None = None,
@@ -107,18 +120,24 @@ class XToonStyle(Style):
     ) -> None:
         check_choice("detail", detail, DETAILS)
         check_choice("detail_mode", detail_mode, ("pixel", "vertex"))
+        check_choice("show", show, SHOWS)
         check_choice("tone", tone, ("clamped", "half_lambert"))
         if isinstance(light, bool) or not isinstance(light, (int, np.integer)) or light < 0:
             raise ValueError(f"light: expected a light index >= 0, got {light!r}")
         tex = resolve_texture(texture)
-        z_min, r, focus_point, prev_camera, detail_map = _without_unused_detail_params(
+        distance, z_min, r, focus_point, prev_camera, detail_map = _without_unused_detail_params(
             detail,
+            distance=distance,
             z_min=z_min,
             r=r,
             focus_point=focus_point,
             prev_camera=prev_camera,
             detail_map=detail_map,
         )
+        if distance is not None:
+            check_choice("distance", distance, DISTANCES)
+        elif detail in DEFAULT_DISTANCE:
+            distance = DEFAULT_DISTANCE[detail]
         if z_min is not None:
             z_min = number(
                 "z_min",
@@ -218,7 +237,17 @@ class XToonStyle(Style):
         self._cfg = Config(
             texture=tex,
             detail=DetailParams(
-                detail, z_min, r, focus_point, s, one_sided, prev, flow_min, flow_max, user
+                detail,
+                z_min,
+                r,
+                focus_point,
+                s,
+                one_sided,
+                prev,
+                flow_min,
+                flow_max,
+                user,
+                distance,
             ),
             detail_mode=detail_mode,
             tone=tone,
@@ -232,6 +261,7 @@ class XToonStyle(Style):
             modulate=modulate,
             weight_pyramid=pyramid,
         )
+        self._show = show
         self._params = self._summary(
             texture=(
                 texture
@@ -242,6 +272,8 @@ class XToonStyle(Style):
             ),
             detail=detail,
             detail_mode=detail_mode,
+            distance=distance,
+            show=show,
             tone=tone,
             light=int(light),
             z_min=z_min,
@@ -328,6 +360,11 @@ class XToonStyle(Style):
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
         ev = evaluate(self._cfg, ctx)
+        if self._show != "color":
+            value = {"detail": ev.detail, "inverse_detail": 1.0 - ev.detail, "tone": ev.tone}
+            grey = np.zeros(ev.mask.shape)
+            grey[ev.mask] = srgb_to_linear(np.clip(value[self._show], 0.0, 1.0))  # shown = value
+            return rgba_from(grey[..., None], ev.mask)
         rgb = np.zeros(ev.mask.shape + (3,))
         alpha = np.zeros(ev.mask.shape)
         col = ev.rgba[:, :3]
@@ -340,6 +377,7 @@ class XToonStyle(Style):
 
 #: Detail maps that read each optional parameter (the others ignore it).
 _USED_BY = {
+    "distance": ("depth", "focus"),
     "z_min": ("depth", "focus"),
     "r": ("depth", "focus", "orientation"),
     "focus_point": ("focus",),

@@ -20,7 +20,7 @@ from refnpr.formulas import xtoon
 
 from .presets import COLS, PRESETS, ROWS, as_rgba, band_ramp
 
-__all__ = ["RECIPES", "resolve_texture"]
+__all__ = ["RECIPES", "resolve_texture", "srgb_to_linear"]
 
 #: Recipe name of a ``{"recipe": ...}`` table -> formula-layer builder.
 RECIPES = {
@@ -44,7 +44,8 @@ def _how() -> str:
     return _HOW.format(presets=", ".join(sorted(PRESETS)))
 
 
-def _srgb_to_linear(x: np.ndarray) -> np.ndarray:
+def srgb_to_linear(x: np.ndarray) -> np.ndarray:
+    """sRGB-encoded values in [0, 1] -> linear (IEC 61966-2-1), same shape, float64."""
     return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)  # IEC 61966-2-1
 
 
@@ -84,9 +85,9 @@ def _image(path: Any, *, flip: bool, srgb: bool, name: str) -> np.ndarray:
     if srgb:  # colour channels are sRGB-encoded in image files; alpha is linear
         colour = 1 if img.ndim == 2 else (1 if img.shape[2] in (1, 2) else 3)
         if img.ndim == 2:
-            img = _srgb_to_linear(img)
+            img = srgb_to_linear(img)
         else:
-            img[..., :colour] = _srgb_to_linear(img[..., :colour])
+            img[..., :colour] = srgb_to_linear(img[..., :colour])
     return img[::-1] if flip else img
 
 
