@@ -70,7 +70,19 @@ from refnpr.styles.tamiss import (  # noqa: E402
 )
 from refnpr.styles.tamiss.strokes import take_fit  # noqa: E402
 
-CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal"]
+#: what the tamiss style reads (``derivatives="smooth"`` needs bary, position and its derivatives)
+CHANNELS = [
+    "uv",
+    "duv_dx",
+    "duv_dy",
+    "tri_id",
+    "mesh_id",
+    "normal",
+    "bary",
+    "position",
+    "dposition_dx",
+    "dposition_dy",
+]
 PHASES = ("gather", "aggregate", "fit", "extrude", "raster")
 
 

@@ -97,7 +97,7 @@ def oracle(inp: FieldInputs, i: int, field: StrokeField, hw: float, tam_width=No
                         else:
                             opacity = min(max((rho * gain - tau) / fade, 0.0), 1.0)
                             wf = 1 + field.width_jitter * (2 * hash01(sid, SALT_WIDTH)[0] - 1)
-                            beyond = max(-t, t - 1, 0.0) * length * d_p
+                            beyond = max(-t, t - 1) * length * d_p  # signed, < 0 inside
                             cov = min(max(tam_width * wf / 2 - dist + 0.5, 0.0), 1.0)
                             cov *= min(max(0.5 - beyond, 0.0), 1.0)
                             if cov * opacity > 0:
@@ -136,6 +136,13 @@ def test_tam_ink_matches_brute_force():
         expected.append(a)
     np.testing.assert_allclose(ink, expected, atol=1e-12)
     assert np.count_nonzero(ink) > 20
+    # a stroke covers fully from half a pixel inside its ends (it was capped at one half)
+    full = [
+        c
+        for i in range(inp.sample.size)
+        for _, _, c in oracle(inp, i, field, 1.7 * 1.3 / 2 + 0.5, tam_width=1.7, fade=0.2)
+    ]
+    assert max(full) == 1.0
     clip = tam_ink(inp, field, width=1.7, density_mode="clip")[0]
     assert set(np.unique(clip > 0)) <= {False, True} and np.all(clip <= 1.0)
 
@@ -191,14 +198,14 @@ def test_uv_range_error():
     )
     gb = rasterize(sc, None, 16, 16, ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal"])
     with pytest.raises(ValueError, match="uv: scaled texture coordinates reach .* tiles"):
-        field_inputs(gb, sc)
+        field_inputs(gb, sc, derivatives="flat")
 
 
 def test_level_scale_is_the_dyadic_scale_of_q():
     sc = load_scene("sphere")  # uv_scale 1: for strokes along u, q = v
     chans = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal", "dyadic_scale"]
     gb = rasterize(sc, None, 64, 48, chans, line_period=7 * 3.0, dtype=np.float64)
-    inp = field_inputs(gb, sc)
+    inp = field_inputs(gb, sc, derivatives="flat")  # the rasterizer's per-triangle values
     field = StrokeField.from_params(directions=["u", "v"], period=3.0)
     s = layer_scale(inp, field)
     ref = gb["dyadic_scale"][gb["tri_id"] >= 0]

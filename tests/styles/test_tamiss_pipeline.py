@@ -25,7 +25,8 @@ from refnpr.styles.tamiss import (
 )
 from refnpr.styles.tamiss.strokes import take_fit
 
-CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal"]
+CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal", "bary", "position",
+            "dposition_dx", "dposition_dy"]  # fmt: skip
 
 
 def quad(x0, x1, y0, y1, z, uv0, uv1) -> Mesh:
@@ -124,7 +125,9 @@ def test_stroke_occluded_in_the_middle_has_two_visible_segments():
     bar = quad(-0.25, 0.25, -1.2, 1.2, 0.5, (0, 0), (0.1, 1))  # in front, its own chart
     sc = scene(back, bar)
     gb = gbuffer(sc)
-    params = TamissParams.from_params(constant_tone=1.0, period=5.0, length=2.0, length_jitter=0.0)
+    params = TamissParams.from_params(
+        constant_tone=1.0, period=5.0, length=2.0, length_jitter=0.0, directions=["u"]
+    )
     r = run_pipeline(gb, sc, params)
     g = stroke_geometry(r.stroke_ids, params.field)
     # the bar hides u in [0.375, 0.625] of the back plane (x = 2 u - 1)
@@ -152,7 +155,7 @@ def test_stroke_cut_by_the_silhouette_is_extended_with_overdraw():
     sc = scene(quad(-1, 0.3, -1, 1, 0, (0, 0), (0.65, 1)))
     gb = gbuffer(sc)
     proj = projector(gb, 0.0, 0.65, 0.0, 1.0, -1.0, 0.3)
-    base = {"constant_tone": 1.0, "period": 5.0, "length": 1.5, "taper": 0.0}
+    base = {"constant_tone": 1.0, "period": 5.0, "length": 1.5, "taper": 0.0, "directions": ["u"]}
     runs = {
         e: run_pipeline(gb, sc, TamissParams.from_params(extent=e, **base))
         for e in ("range", "overdraw", "stroke")

@@ -11,7 +11,9 @@ anti-aliased over a background or any other style (``contours`` add outlines).
 
 Public API: the style :class:`TamissStyle` (registered as ``"tamiss"``), and for inspecting the
 phases :func:`run_pipeline` -> :class:`PipelineResult`, :class:`TamissParams`,
-:class:`StrokeField`, :func:`stroke_geometry`, :class:`AggregateHistory`. See ``docs/tamiss.md``.
+:class:`StrokeField`, :func:`stroke_geometry`, :class:`AggregateHistory`, the chart layout
+(:func:`chart_layout`: orientation, atlas and smooth derivatives of patch-wise uv maps) and the
+``show`` views of the stages (:func:`show_layers`). See ``docs/tamiss.md``.
 """
 
 from __future__ import annotations
@@ -24,10 +26,12 @@ from .aggregate import (
     aggregate_hashed,
     recentre,
 )
+from .charts import ChartLayout, chart_layout, vertex_frames
 from .field import StrokeField, StrokeGeometry, key32, pack_id, seed_set, stroke_geometry, unpack_id
 from .gather import FieldInputs, Fragments, field_inputs, gather_fragments, layer_scale, tam_ink
 from .pipeline import PipelineResult, TamissParams, run_pipeline
 from .raster import BRUSHES, brush_texture, rasterize_strips
+from .show import show_layers
 from .strokes import EXTENTS, Strips, centreline, drawn_segments, extrude, keep_mask
 from .style import TamissStyle
 from .tam import TamStyle
@@ -66,4 +70,8 @@ __all__ = [
     "BRUSHES",
     "brush_texture",
     "rasterize_strips",
+    "ChartLayout",
+    "chart_layout",
+    "vertex_frames",
+    "show_layers",
 ]

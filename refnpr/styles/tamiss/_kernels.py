@@ -121,8 +121,8 @@ def _enumerate(
 ):
     """Strokes within ``hw_px`` of (p, q) across and ``end_px`` beyond their ends.
 
-    Fills the candidate arrays (id, t, distance across in px, distance past the nearest end in
-    px, density gain, birth level) and returns their number (at most the arrays' length). The
+    Fills the candidate arrays (id, t, distance across in px, signed distance past the nearest
+    end in px (negative inside the stroke), density gain, birth level) and returns their number (at most the arrays' length). The
     gain multiplies rho in the density test: 1 for levels <= L, 2^f - 1 for level L + 1, and
     2^s below level 0 (s < 0: rows denser than the period are thinned to keep the ink).
     """
@@ -171,7 +171,7 @@ def _enumerate(
                 length = lam * (1.0 + len_jit * (2.0 * h - 1.0)) / scale
                 p_start = (gx + kx / 7.0) / scale - 0.5 * length
                 t = (p - p_start) / length
-                beyond = max(-t, t - 1.0, 0.0) * length * d_p
+                beyond = max(-t, t - 1.0) * length * d_p  # signed: < 0 inside the stroke
                 if beyond > end_px:
                     continue
                 if n < cap:
@@ -336,7 +336,20 @@ def _popcount(x):
 
 @pnjit
 def raster_strips(
-    left, right, tv, opacity, bbox, nh, nw, aa, brush, t_wrap, out_alpha, out_strokes
+    left,
+    right,
+    tv,
+    opacity,
+    bbox,
+    nh,
+    nw,
+    aa,
+    brush,
+    t_wrap,
+    out_alpha,
+    out_strokes,
+    colors,
+    out_rgb,
 ):
     """Rasterize strips into ``out_alpha`` (nh, nw) with "over" in piece order.
 
@@ -345,9 +358,11 @@ def raster_strips(
     per axis (<= 8); brush : (Hb, Wb) alpha multiplier sampled at (u = t, v = across), wrapping
     in u when ``t_wrap``; out_strokes : (nh, nw) int32, number of pieces touching each sample.
     Each piece's coverage is the fraction of aa x aa sub-samples inside any of its 2 (K - 1)
-    triangles (L_i, R_i, L_i+1) and (R_i, R_i+1, L_i+1).
+    triangles (L_i, R_i, L_i+1) and (R_i, R_i+1, L_i+1). With ``colors`` (P, 3) (else (0, 3)),
+    ``out_rgb`` (nh, nw, 3) accumulates premultiplied colour with the same "over".
     """
     n_pieces = left.shape[0]
+    colored = colors.shape[0] == n_pieces and n_pieces > 0
     k = left.shape[1]
     band = 16
     n_bands = (nh + band - 1) // band
@@ -448,4 +463,74 @@ def raster_strips(
                             val += wu * wv * brush[rr, cc]
                     a = cov * opacity[pc] * val
                     out_alpha[y, x] = out_alpha[y, x] + a * (1.0 - out_alpha[y, x])
+                    if colored:
+                        for ch in range(3):
+                            out_rgb[y, x, ch] = colors[pc, ch] * a + out_rgb[y, x, ch] * (1.0 - a)
                     out_strokes[y, x] += 1
+
+
+@pnjit
+def smooth_duv(tri, bary, faces, frames, normal, position, dpos_dx, dpos_dy, eye, duv_dx, duv_dy):
+    """Replace ``duv_dx``, ``duv_dy`` (N, 2) in place by the smooth reconstruction.
+
+    tri : (N,) global triangle; bary : (N, 3); faces : (T, 3) into ``frames`` (V, 3, 2), the
+    per-vertex [dP/du, dP/dv]; normal, position, dpos_dx, dpos_dy : (N, 3); eye : (3,). The
+    pixel footprint dP is moved along the view ray onto the plane of the shading normal,
+    dP_n = dP - (n . dP) / (n . D) D with D = position - eye, and uv follows from the
+    interpolated frame F by least squares, duv = (F^T F)^-1 F^T dP_n. Where the frame is
+    degenerate or the view grazes (|n . D| < 0.05 |D|) the flat values are kept.
+    """
+    n = tri.shape[0]
+    for i in prange(n):
+        f = tri[i]
+        gu0 = 0.0
+        gu1 = 0.0
+        gu2 = 0.0
+        gv0 = 0.0
+        gv1 = 0.0
+        gv2 = 0.0
+        for c in range(3):
+            v = faces[f, c]
+            b = bary[i, c]
+            gu0 += b * frames[v, 0, 0]
+            gu1 += b * frames[v, 1, 0]
+            gu2 += b * frames[v, 2, 0]
+            gv0 += b * frames[v, 0, 1]
+            gv1 += b * frames[v, 1, 1]
+            gv2 += b * frames[v, 2, 1]
+        a00 = gu0 * gu0 + gu1 * gu1 + gu2 * gu2
+        a01 = gu0 * gv0 + gu1 * gv1 + gu2 * gv2
+        a11 = gv0 * gv0 + gv1 * gv1 + gv2 * gv2
+        det = a00 * a11 - a01 * a01
+        if not (det > 1e-12 * (a00 * a11) and det > 0.0):
+            continue
+        d0 = position[i, 0] - eye[0]
+        d1 = position[i, 1] - eye[1]
+        d2 = position[i, 2] - eye[2]
+        n0 = normal[i, 0]
+        n1 = normal[i, 1]
+        n2 = normal[i, 2]
+        nd = n0 * d0 + n1 * d1 + n2 * d2
+        dlen = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        nlen = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+        if not (abs(nd) >= 0.05 * dlen * nlen and dlen > 0.0):
+            continue
+        for axis in range(2):
+            if axis == 0:
+                p0, p1, p2 = dpos_dx[i, 0], dpos_dx[i, 1], dpos_dx[i, 2]
+            else:
+                p0, p1, p2 = dpos_dy[i, 0], dpos_dy[i, 1], dpos_dy[i, 2]
+            lam = (n0 * p0 + n1 * p1 + n2 * p2) / nd
+            p0 -= lam * d0
+            p1 -= lam * d1
+            p2 -= lam * d2
+            r0 = gu0 * p0 + gu1 * p1 + gu2 * p2
+            r1 = gv0 * p0 + gv1 * p1 + gv2 * p2
+            du = (a11 * r0 - a01 * r1) / det
+            dv = (a00 * r1 - a01 * r0) / det
+            if axis == 0:
+                duv_dx[i, 0] = du
+                duv_dx[i, 1] = dv
+            else:
+                duv_dy[i, 0] = du
+                duv_dy[i, 1] = dv

@@ -33,13 +33,18 @@ def check_color(
     return tuple(float(x) for x in c)
 
 
-def field_channels(scene: Any, constant_tone: float | None) -> set[str]:
-    """G-buffer channels the stroke field reads (tone needs normals, point lights positions)."""
+def field_channels(
+    scene: Any, constant_tone: float | None, derivatives: str = "smooth"
+) -> set[str]:
+    """G-buffer channels the stroke field reads (tone needs normals, point lights positions;
+    smooth derivatives the barycentrics, normals, positions and their screen derivatives)."""
     req = {"uv", "duv_dx", "duv_dy", "tri_id", "mesh_id"}
     if constant_tone is None:
         req.add("normal")
         if any(light.kind == "point" for light in scene.lights):
             req.add("position")
+    if derivatives == "smooth":
+        req |= {"bary", "normal", "position", "dposition_dx", "dposition_dy"}
     return req
 
 
@@ -51,14 +56,15 @@ def base_style(base: Any) -> Style | None:
 def composite_ink(
     ctx: ShadeContext,
     ink: np.ndarray,
-    ink_color: tuple[float, float, float],
+    ink_color: tuple[float, float, float] | np.ndarray,
     *,
     base: Style | None,
     paper: tuple[float, float, float] | None,
 ) -> np.ndarray:
     """(nH, nW, 4) float32 straight-alpha RGBA: ink (coverage ``ink``) over the base style, or over
     the ``paper`` colour on covered samples, or over nothing (alpha = ink: the scene background
-    shows through, also where strokes run past the silhouette)."""
+    shows through, also where strokes run past the silhouette). ``ink_color`` is one linear RGB
+    or an (nH, nW, 3) colour per sample (the ``show`` views)."""
     shape = ink.shape
     if base is not None:
         under = np.asarray(base.shade(ctx), dtype=np.float64)
@@ -70,7 +76,7 @@ def composite_ink(
     a_b = under[..., 3]
     alpha = a + a_b * (1.0 - a)
     premult = (
-        np.asarray(ink_color)[None, None, :] * a[..., None]
+        np.broadcast_to(np.asarray(ink_color, dtype=np.float64), shape + (3,)) * a[..., None]
         + under[..., :3] * (a_b * (1.0 - a))[..., None]
     )
     rgb = np.divide(

@@ -15,6 +15,7 @@ darkness to reproduce and the chart (object and uv chart) of the triangle.
 
 from __future__ import annotations
 
+import warnings
 import weakref
 from dataclasses import dataclass
 
@@ -24,6 +25,7 @@ from refnpr.formulas import lighting
 
 from ..base import ShadeContext
 from . import _kernels as K
+from .charts import SYMMETRIES, chart_layout, vertex_frames
 from .field import (
     MAX_CHARTS,
     SALT_LENGTH,
@@ -39,6 +41,7 @@ __all__ = [
     "Fragments",
     "field_inputs",
     "scene_charts",
+    "DERIVATIVES",
     "darkness",
     "gather_fragments",
     "tam_ink",
@@ -46,6 +49,11 @@ __all__ = [
 ]
 
 _CHART_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+#: How the field takes d(uv)/d(x, y): "smooth" (continuous across triangle edges, from vertex
+#: tangent frames; ``charts``) or "flat" (the rasterizer's per-triangle analytic derivatives).
+DERIVATIVES = ("smooth", "flat")
+_SMOOTH_CHANNELS = frozenset({"bary", "normal", "position", "dposition_dx", "dposition_dy"})
 
 
 def _mesh_charts(mesh) -> np.ndarray:
@@ -136,9 +144,43 @@ class FieldInputs:
         return (sx + 0.5) / self.n, (sy + 0.5) / self.n
 
 
-def field_inputs(gb, scene, *, constant_tone: float | None = None) -> FieldInputs:
-    """Collect :class:`FieldInputs` from a G-buffer with uv, duv_dx, duv_dy, tri_id, mesh_id and
-    (unless ``constant_tone``) normal (and position for point lights)."""
+def _scene_frames(scene) -> tuple[np.ndarray, ...]:
+    """Faces (T, 3) into the scene's concatenated vertices, their frames (V, 3, 2), and per
+    triangle its chart's symmetry (T,) (index into ``SYMMETRIES``), offset (T, 2) and id group
+    (T,) (numbered over the scene like :func:`scene_charts`)."""
+    faces, frames, sym, offset, group = [], [], [], [], []
+    v_off = 0
+    c_off = 0
+    for mesh in scene.world_meshes():
+        labels = _mesh_charts(mesh)
+        layout = chart_layout(mesh, labels)
+        faces.append(np.asarray(mesh.faces, dtype=np.int64) + v_off)
+        frames.append(vertex_frames(mesh))
+        sym.append(layout.symmetry[labels])
+        offset.append(layout.offset[labels])
+        group.append(layout.group[labels] + c_off)
+        v_off += mesh.positions.shape[0]
+        c_off += int(labels.max()) + 1 if labels.size else 0
+    return tuple(np.concatenate(a) for a in (faces, frames, sym, offset, group))
+
+
+def field_inputs(
+    gb,
+    scene,
+    *,
+    constant_tone: float | None = None,
+    derivatives: str = "smooth",
+    orient_charts: bool = True,
+) -> FieldInputs:
+    """Collect :class:`FieldInputs` from a G-buffer (channels: :func:`field_channels`).
+
+    ``derivatives="smooth"`` reconstructs d(uv)/d(x, y) from interpolated vertex tangent frames
+    on the plane of the shading normal (continuous across triangle edges, so levels and density
+    boundaries do not follow the tessellation); ``"flat"`` takes the rasterizer's per-triangle
+    ``duv_dx``, ``duv_dy``. ``orient_charts`` maps each chart's uv by the signed permutation
+    and offset of :func:`~refnpr.styles.tamiss.charts.chart_layout` and gives the charts of one
+    layout group one chart number, so that hatching directions agree across chart borders (the
+    teapot's patches) and strokes run on across them where the uv continues."""
     ctx = ShadeContext(gb, scene)
     tri = gb["tri_id"]
     sel = tri >= 0
@@ -147,6 +189,37 @@ def field_inputs(gb, scene, *, constant_tone: float | None = None) -> FieldInput
     mesh_id = np.maximum(gb["mesh_id"][sel], 0)
     uv = np.ascontiguousarray(gb["uv"][sel], dtype=np.float64)
     uv_scale = np.ascontiguousarray(scale[mesh_id])
+    chart = charts[tri[sel]]
+    duv_dx = np.ascontiguousarray(gb["duv_dx"][sel], dtype=np.float64)
+    duv_dy = np.ascontiguousarray(gb["duv_dy"][sel], dtype=np.float64)
+    tri_sel = tri[sel].astype(np.int64)
+    if derivatives == "smooth":
+        missing = sorted(_SMOOTH_CHANNELS - set(gb.channels))
+        if missing:
+            warnings.warn(
+                f"derivatives='smooth' needs the G-buffer channels {missing}, which were not "
+                "rasterized; using the flat per-triangle derivatives. Rasterize "
+                "field_channels(scene, ...) or pass derivatives='flat'",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            derivatives = "flat"
+    if (derivatives == "smooth" or orient_charts) and tri_sel.size:
+        faces, frames, sym, offset, group = _scene_frames(scene)
+        if derivatives == "smooth":
+            f64 = lambda name: np.ascontiguousarray(gb[name][sel], dtype=np.float64)  # noqa: E731
+            eye = np.asarray(scene.camera.eye, dtype=np.float64)
+            K.smooth_duv(
+                tri_sel, f64("bary"), faces, frames, f64("normal"), f64("position"),
+                f64("dposition_dx"), f64("dposition_dy"), eye, duv_dx, duv_dy,
+            )  # fmt: skip
+        if orient_charts:
+            m = SYMMETRIES[sym[tri_sel]]  # (N, 2, 2): u' = M u + offset
+            uv = np.ascontiguousarray(np.einsum("nij,nj->ni", m, uv) + offset[tri_sel])
+            chart = group[tri_sel]
+            duv_dx = np.ascontiguousarray(np.einsum("nij,nj->ni", m, duv_dx))
+            duv_dy = np.ascontiguousarray(np.einsum("nij,nj->ni", m, duv_dy))
+            uv_scale = np.ascontiguousarray(np.einsum("nij,nj->ni", np.abs(m), uv_scale))
     if uv.size:
         extent = float(np.max(np.abs(uv * uv_scale))) * np.sqrt(2.0)
         if not extent < TILE_LIMIT:
@@ -157,11 +230,11 @@ def field_inputs(gb, scene, *, constant_tone: float | None = None) -> FieldInput
     return FieldInputs(
         sample=np.flatnonzero(sel.ravel()),
         uv=uv,
-        duv_dx=np.ascontiguousarray(gb["duv_dx"][sel], dtype=np.float64),
-        duv_dy=np.ascontiguousarray(gb["duv_dy"][sel], dtype=np.float64),
+        duv_dx=duv_dx,
+        duv_dy=duv_dy,
         uv_scale=uv_scale,
         darkness=np.ascontiguousarray(darkness(ctx, sel, constant_tone)),
-        chart=np.ascontiguousarray(charts[tri[sel]]),
+        chart=np.ascontiguousarray(chart),
         shape=tuple(tri.shape),
         n=gb.n,
     )
@@ -306,7 +379,8 @@ def tam_ink(
     """(nH, nW) float64 ink coverage of the texture-space TAM/RPTAM rendering of the field.
 
     Each stroke covers a sample with a = clip(w f / 2 - d + 0.5, 0, 1) * clip(0.5 - e, 0, 1) *
-    o, where d is the distance across in pixels, e the distance past its nearer end in pixels,
+    o, where d is the distance across in pixels, e the signed distance past its nearer end in
+    pixels (negative inside: full coverage from half a pixel inside the end),
     f its width factor and o its density opacity: 1 if tau < rho * gain else 0 ("clip"), or
     clip((rho * gain - tau) / fade, 0, 1) ("fade"); strokes combine as 1 - prod(1 - a).
     """

@@ -22,8 +22,8 @@ from .aggregate import (
     aggregate_exact,
     aggregate_hashed,
 )
-from .field import StrokeField
-from .gather import FieldInputs, Fragments, field_inputs, gather_fragments
+from .field import DEFAULT_DENSITY, StrokeField
+from .gather import DERIVATIVES, FieldInputs, Fragments, field_inputs, gather_fragments
 from .raster import BRUSHES, rasterize_strips
 from .strokes import (
     EXTENTS,
@@ -35,7 +35,13 @@ from .strokes import (
     take_fit,
 )
 
-__all__ = ["TamissParams", "PipelineResult", "run_pipeline"]
+__all__ = ["SHOW", "TamissParams", "PipelineResult", "run_pipeline"]
+
+#: What the ``tamiss`` style shows (``show``): the ink, or a stage of the pipeline (fig. 5)
+#: false-coloured by stroke id: the gathered ids per sample (fig. 6), the fitted cubics over
+#: [t_min, t_max] as thin lines, the extruded strokes; or the strokes coloured by their birth
+#: level (the nesting of fig. 2).
+SHOW = ("color", "ids", "fits", "strokes", "levels")
 
 #: Largest ``prior_weight`` (zero-visibility points per fragment): the prior's moment sums are
 #: float32 in the default precision, and a larger weight drowns every fragment anyway.
@@ -67,7 +73,8 @@ class TamissParams:
     visibility_threshold: float | None = None
     min_fragments: int = 6
     min_t_span: float = 0.05
-    extent: str = "visible"
+    max_stretch: float | None = 3.0
+    extent: str = "overdraw"
     overdraw: float = 6.0
     width: float = 1.5
     taper: float = 0.2
@@ -79,18 +86,21 @@ class TamissParams:
     brush: str | None = None
     opacity: float = 1.0
     constant_tone: float | None = None
+    derivatives: str = "smooth"
+    orient_charts: bool = True
+    show: str = "color"
 
     @classmethod
     def from_params(
         cls,
         *,
-        directions=("u",),
+        directions=("u", "v"),
         layer_tones=None,
         period: float = 4.0,
         length: float = 1.0,
         length_jitter: float = 0.3,
         width_jitter: float = 0.2,
-        density: float = 1.0,
+        density: float = DEFAULT_DENSITY,
         max_level: int = 10,
         gather_width: float = 1.0,
         aggregation: str = "exact",
@@ -103,7 +113,8 @@ class TamissParams:
         visibility_threshold: float | None = None,
         min_fragments: int = 6,
         min_t_span: float = 0.05,
-        extent: str = "visible",
+        max_stretch: float | None = 3.0,
+        extent: str = "overdraw",
         overdraw: float = 6.0,
         width: float = 1.5,
         taper: float = 0.2,
@@ -115,6 +126,9 @@ class TamissParams:
         brush: str | None = None,
         opacity: float = 1.0,
         constant_tone: float | None = None,
+        derivatives: str = "smooth",
+        orient_charts: bool = True,
+        show: str = "color",
     ) -> TamissParams:
         fld = StrokeField.from_params(
             directions=directions,
@@ -153,6 +167,9 @@ class TamissParams:
             visibility_threshold=visibility_threshold,
             min_fragments=check_count("min_fragments", min_fragments, lo=4),
             min_t_span=check_number("min_t_span", min_t_span, lo=0.0, hi=1.0),
+            max_stretch=None
+            if max_stretch is None
+            else check_number("max_stretch", max_stretch, lo=1.0),
             extent=check_choice("extent", extent, EXTENTS),
             overdraw=check_number("overdraw", overdraw, lo=0.0),
             width=check_number("width", width, lo=0.0, lo_open=True, hi=64.0),
@@ -165,6 +182,9 @@ class TamissParams:
             brush=brush,
             opacity=check_number("opacity", opacity, lo=0.0, hi=1.0),
             constant_tone=constant_tone,
+            derivatives=check_choice("derivatives", derivatives, DERIVATIVES),
+            orient_charts=_check_bool("orient_charts", orient_charts),
+            show=check_choice("show", show, SHOW),
         )
 
     def as_dict(self) -> dict:
@@ -252,7 +272,13 @@ def run_pipeline(
     dtype = np.dtype(p.dtype)
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    inp = field_inputs(gb, scene, constant_tone=p.constant_tone)
+    inp = field_inputs(
+        gb,
+        scene,
+        constant_tone=p.constant_tone,
+        derivatives=p.derivatives,
+        orient_charts=p.orient_charts,
+    )
     frags = gather_fragments(inp, p.field, gather_width=p.gather_width)
     t1 = time.perf_counter()
     timings["gather"] = t1 - t0
@@ -270,7 +296,14 @@ def run_pipeline(
     t2 = time.perf_counter()
     timings["aggregate"] = t2 - t1
     fit = fit_aggregates(agg, iterations=p.iterations, prior_weight=p.prior_weight)
-    keep = keep_mask(agg, fit, min_fragments=p.min_fragments, min_t_span=p.min_t_span)
+    keep = keep_mask(
+        agg,
+        fit,
+        min_fragments=p.min_fragments,
+        min_t_span=p.min_t_span,
+        max_stretch=p.max_stretch,
+        px_per_fragment=1.0 / (p.gather_width * inp.n * inp.n),
+    )
     t3 = time.perf_counter()
     timings["fit"] = t3 - t2
     S = len(agg)

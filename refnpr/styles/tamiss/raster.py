@@ -62,7 +62,8 @@ def rasterize_strips(
     aa: int = 4,
     brush: str | None = None,
     opacity: float = 1.0,
-) -> tuple[np.ndarray, np.ndarray]:
+    colors: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray] | tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Ink coverage of the strips on the sample grid.
 
     Parameters
@@ -76,12 +77,21 @@ def rasterize_strips(
     -------
     alpha : (nH, nW) float64 ink coverage in [0, 1]
     pieces : (nH, nW) int32, number of pieces touching each sample
+    rgb : (nH, nW, 3) float64 premultiplied colour, only when ``colors`` (P, 3) is given (a
+        colour per piece, composited with the same "over")
     """
     nh, nw = int(shape[0]), int(shape[1])
     alpha = np.zeros((nh, nw))
     touched = np.zeros((nh, nw), dtype=np.int32)
+    rgb = np.zeros((nh, nw, 3))
+    if colors is not None:
+        colors = np.ascontiguousarray(colors, dtype=np.float64)
+        if colors.shape != (len(strips), 3):
+            raise ValueError(
+                f"colors: expected shape ({len(strips)}, 3) (one RGB per piece), got {colors.shape}"
+            )
     if len(strips) == 0:
-        return alpha, touched
+        return (alpha, touched) if colors is None else (alpha, touched, rgb)
     left = np.ascontiguousarray(strips.strip.left, dtype=np.float64) * n
     right = np.ascontiguousarray(strips.strip.right, dtype=np.float64) * n
     allx = np.concatenate([left[..., 0], right[..., 0]], axis=1)
@@ -112,5 +122,7 @@ def rasterize_strips(
         bool(wrap),
         alpha,
         touched,
+        colors if colors is not None else np.zeros((0, 3)),
+        rgb,
     )
-    return alpha, touched
+    return (alpha, touched) if colors is None else (alpha, touched, rgb)

@@ -75,12 +75,33 @@ def fit_aggregates(agg: Aggregates, *, iterations: int = 4, prior_weight: float 
 
 
 def keep_mask(
-    agg: Aggregates, fit: StrokeFit, *, min_fragments: int = 6, min_t_span: float = 0.05
+    agg: Aggregates,
+    fit: StrokeFit,
+    *,
+    min_fragments: int = 6,
+    min_t_span: float = 0.05,
+    max_stretch: float | None = None,
+    px_per_fragment: float = 1.0,
 ) -> np.ndarray:
-    """(S,) bool: count >= max(min_fragments, 4), t_max - t_min >= min_t_span, finite fit."""
+    """(S,) bool: count >= max(min_fragments, 4), t_max - t_min >= min_t_span, finite fit, and
+    (with ``max_stretch``) a fitted curve no longer over [t_min, t_max] than ``max_stretch``
+    times the length its fragments cover, count * ``px_per_fragment`` pixels, plus 4 px.
+
+    The last test drops the fits that the fragments do not determine: a few fragments bunched
+    at two values of t (a stroke seen only at the lip of the teapot's spout) let the cubic swing
+    far past them, a line tens of pixels long where the stroke covers a few. A band
+    ``gather_width`` pixels across on n x n samples per pixel emits about gather_width n^2
+    fragments per pixel of stroke, so ``px_per_fragment = 1 / (gather_width n^2)``.
+    """
     span = agg.t_max.astype(np.float64) - agg.t_min.astype(np.float64)
     finite = np.all(np.isfinite(fit.c_x), -1) & np.all(np.isfinite(fit.c_y), -1)
-    return (agg.count >= max(int(min_fragments), 4)) & (span >= min_t_span) & finite
+    keep = (agg.count >= max(int(min_fragments), 4)) & (span >= min_t_span) & finite
+    if max_stretch is not None and keep.any():
+        with np.errstate(invalid="ignore", over="ignore"):
+            arc = mean_speed(fit) * span
+        covered = agg.count * float(px_per_fragment)
+        keep &= arc <= float(max_stretch) * covered + 4.0
+    return keep
 
 
 def mean_speed(fit: StrokeFit) -> np.ndarray:

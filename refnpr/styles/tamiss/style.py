@@ -12,6 +12,7 @@ import numpy as np
 from ..base import ShadeContext, Style, register
 from .compose import base_style, check_color, composite_ink, field_channels
 from .pipeline import PipelineResult, TamissParams, run_pipeline
+from .show import show_layers
 
 __all__ = ["TamissStyle"]
 
@@ -33,12 +34,19 @@ class TamissStyle(Style):
     aggregation : 'exact' | 'hashed'; table_size (65536), max_probes (32), warmup_frames (2)
     dtype : 'float32' | 'float64', precision of sums and CG; iterations (4); prior_weight (1)
     visibility_threshold : float or None (formula default 1 / (2 (1 + prior_weight)))
-    min_fragments (6), min_t_span (0.05) : the drop rule
-    extent : 'visible' | 'range' | 'stroke' | 'overdraw'; overdraw : run-on in px (6)
+    min_fragments (6), min_t_span (0.05), max_stretch (3; None: off) : the drop rule (a fit may
+    be at most max_stretch times as long as the pixels its fragments cover, plus 4 px)
+    extent : 'overdraw' (default: visible segments run on over outlines, Fig. 4) | 'visible' |
+    'range' | 'stroke'; overdraw : run-on in px (6)
     width (1.5 px), taper (0.2), wobble (0 px), wobble_frequency (1.5 per stroke),
     end_jitter (0), samples (16 per interval), aa (4 sub-samples per axis), brush (None),
     opacity (1)
     constant_tone : float or None, darkness to use instead of lighting
+    derivatives : 'smooth' | 'flat', d(uv)/d(x, y) for the field's levels: continuous across
+    triangle edges (default) or the rasterizer's per-triangle values
+    orient_charts : bool, orient each uv chart so that directions agree across borders (True)
+    show : 'color' | 'ids' | 'fits' | 'strokes' | 'levels', the drawing (default) or a pipeline stage (fig. 5, 6)
+    false-coloured by stroke id
     ink : colour of the strokes (black); paper : colour of the paper under them on the object
     (None: the background shows); base : a style drawn under the strokes (overrides paper)
     """
@@ -72,7 +80,8 @@ class TamissStyle(Style):
         }
 
     def requires(self, scene: Any) -> frozenset[str]:
-        req = field_channels(scene, self.pipeline_params.constant_tone)
+        p = self.pipeline_params
+        req = field_channels(scene, p.constant_tone, p.derivatives)
         if self.base is not None:
             req |= set(self.base.requires(scene))
         return frozenset(req)
@@ -88,4 +97,7 @@ class TamissStyle(Style):
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
         result = self.run(ctx)
-        return composite_ink(ctx, result.ink, self.ink, base=self.base, paper=self.paper)
+        if self.pipeline_params.show == "color":
+            return composite_ink(ctx, result.ink, self.ink, base=self.base, paper=self.paper)
+        cover, rgb = show_layers(result)
+        return composite_ink(ctx, cover, rgb, base=self.base, paper=self.paper)

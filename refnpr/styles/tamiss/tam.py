@@ -18,8 +18,8 @@ import numpy as np
 from .._common import check_choice, check_number
 from ..base import ShadeContext, Style, register
 from .compose import base_style, check_color, composite_ink, field_channels
-from .field import StrokeField
-from .gather import field_inputs, tam_ink
+from .field import DEFAULT_DENSITY, StrokeField
+from .gather import DERIVATIVES, field_inputs, tam_ink
 
 __all__ = ["TamStyle"]
 
@@ -36,6 +36,7 @@ class TamStyle(Style):
     density_mode : 'clip' | 'fade' (per-sample binary or smooth density decision)
     fade : float, threshold range of the smooth decision (0.15)
     constant_tone : float or None, darkness to use instead of lighting
+    derivatives, orient_charts : as for the ``tamiss`` style
     ink, paper, base : as for the ``tamiss`` style
     """
 
@@ -46,18 +47,20 @@ class TamStyle(Style):
     def __init__(
         self,
         *,
-        directions: Any = ("u",),
+        directions: Any = ("u", "v"),
         layer_tones: Any = None,
         period: float = 4.0,
         length: float = 1.0,
         length_jitter: float = 0.3,
         width_jitter: float = 0.2,
-        density: float = 1.0,
+        density: float = DEFAULT_DENSITY,
         max_level: int = 10,
         width: float = 1.5,
         density_mode: str = "fade",
         fade: float = 0.15,
         constant_tone: float | None = None,
+        derivatives: str = "smooth",
+        orient_charts: bool = True,
         ink: Any = (0.0, 0.0, 0.0),
         paper: Any = None,
         base: Any = None,
@@ -80,6 +83,10 @@ class TamStyle(Style):
             if constant_tone is None
             else check_number("constant_tone", constant_tone, lo=0.0, hi=1.0)
         )
+        self.derivatives = check_choice("derivatives", derivatives, DERIVATIVES)
+        if not isinstance(orient_charts, (bool, np.bool_)):
+            raise TypeError(f"orient_charts: expected a bool, got {orient_charts!r}")
+        self.orient_charts = bool(orient_charts)
         self.ink = check_color("ink", ink, optional=False)
         self.paper = check_color("paper", paper)
         self.base = base_style(base)
@@ -88,13 +95,15 @@ class TamStyle(Style):
             "density_mode": self.density_mode,
             "fade": self.fade,
             "constant_tone": self.constant_tone,
+            "derivatives": self.derivatives,
+            "orient_charts": self.orient_charts,
             "ink": list(self.ink),
             "paper": None if self.paper is None else list(self.paper),
             "base": None if self.base is None else self.base.params() | {"name": self.base.name},
         }
 
     def requires(self, scene: Any) -> frozenset[str]:
-        req = field_channels(scene, self.constant_tone)
+        req = field_channels(scene, self.constant_tone, self.derivatives)
         if self.base is not None:
             req |= set(self.base.requires(scene))
         return frozenset(req)
@@ -106,7 +115,13 @@ class TamStyle(Style):
 
     def ink_coverage(self, ctx: ShadeContext) -> np.ndarray:
         """(nH, nW) float64 ink coverage of the texture-space strokes."""
-        inp = field_inputs(ctx.gb, ctx.scene, constant_tone=self.constant_tone)
+        inp = field_inputs(
+            ctx.gb,
+            ctx.scene,
+            constant_tone=self.constant_tone,
+            derivatives=self.derivatives,
+            orient_charts=self.orient_charts,
+        )
         return tam_ink(
             inp, self.field, width=self.width, density_mode=self.density_mode, fade=self.fade
         )
