@@ -1,4 +1,4 @@
-"""The ``refnpr`` command: render, scenes, styles, info, golden, compare."""
+"""The ``refnpr`` command: render, scenes, styles, info, golden, compare, gallery."""
 
 from __future__ import annotations
 
@@ -14,6 +14,8 @@ from pathlib import Path
 __all__ = ["main"]
 
 DEFAULT_SUITE = Path("golden") / "suite.toml"
+DEFAULT_SIZE = (768, 432)  # `refnpr render`: a 16:9 frame, the default scene's framing
+DEFAULT_SPP = 4  # 2x2 samples per pixel: anti-aliased edges and contours
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -218,6 +220,12 @@ def _fraction(name: str):
     return parse
 
 
+def _cmd_gallery(args: argparse.Namespace) -> int:
+    from .gallery import run
+
+    return run(args)
+
+
 def _cmd_compare(args: argparse.Namespace) -> int:
     from .compare import compare_dirs, format_table
     from .image import atomic_file
@@ -264,9 +272,22 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="refnpr", description="CPU reference renderer for NPR shading")
     sub = p.add_subparsers(dest="command", required=True)
 
-    r = sub.add_parser("render", help="render a scene to a PNG")
-    r.add_argument("--scene", default="default", help="built-in scene name or .toml file")
-    r.add_argument("--style", default=None, help="style name (default: the scene's style)")
+    r = sub.add_parser(
+        "render",
+        help="render a scene to a PNG",
+        description=(
+            "Render a scene to a PNG. With no options: the default scene (Newell's teapot in "
+            "Freudenberg et al.'s halftone engraving, with contours) at 768x432, spp 4."
+        ),
+    )
+    r.add_argument(
+        "--scene", default="default", help="built-in scene name or .toml file (default: default)"
+    )
+    r.add_argument(
+        "--style",
+        default=None,
+        help="style name (default: the scene's own style, toon if it names none)",
+    )
     r.add_argument(
         "--param",
         action="append",
@@ -274,8 +295,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="KEY=VALUE",
         help="style parameter (TOML value), repeatable",
     )
-    r.add_argument("--size", type=_size, default=(512, 512), help="WxH (default 512x512)")
-    r.add_argument("--spp", type=int, default=1, help="samples per pixel, a square (1, 4, 9, 16)")
+    r.add_argument("--size", type=_size, default=DEFAULT_SIZE, help="WxH (default 768x432, 16:9)")
+    r.add_argument(
+        "--spp",
+        type=int,
+        default=DEFAULT_SPP,
+        help="samples per pixel, a square (1, 4, 9, 16; default 4, anti-aliased)",
+    )
     r.add_argument("-o", "--output", default="out.png", help="output PNG (default out.png)")
     r.add_argument("-q", "--quiet", action="store_true")
     r.set_defaults(func=_cmd_render)
@@ -303,6 +329,19 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--max-frac-over", type=_fraction("--max-frac-over"), default=0.001)
     c.add_argument("--min-ssim", type=_fraction("--min-ssim"), default=0.99)
     c.set_defaults(func=_cmd_compare)
+
+    gal = sub.add_parser(
+        "gallery", help="render one small image per paper into DIR (the README gallery)"
+    )
+    gal.add_argument("out_dir", help="directory for the PNGs (e.g. docs/images/gallery)")
+    gal.add_argument("--size", type=_size, default=(320, 240), help="WxH of each image (320x240)")
+    gal.add_argument("--suite", default=None, help="golden suite file (golden/suite.toml)")
+    gal.add_argument("--spp", type=int, default=None, help="samples per pixel (the cases')")
+    gal.add_argument(
+        "--only", nargs="+", default=None, metavar="FILE", help="only these entries (by file name)"
+    )
+    gal.add_argument("--markdown", action="store_true", help="print the README table")
+    gal.set_defaults(func=_cmd_gallery)
     return p
 
 

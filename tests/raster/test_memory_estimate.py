@@ -59,7 +59,7 @@ def test_rasterize_estimate_is_within_a_factor_of_the_peak(channels):
 
 
 @pytest.mark.parametrize(
-    "scene,style", [("sphere", "toon"), ("default", "smooth"), ("teapot", None)]
+    "scene,style", [("sphere", "toon"), ("teapot", "smooth"), ("teapot", None)]
 )
 def test_render_estimate_is_within_a_factor_of_the_peak(scene, style):
     sc = load_scene(scene)

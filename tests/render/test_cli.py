@@ -132,3 +132,90 @@ def test_compare_json_is_valid_json_with_missing_images(tmp_path):
     assert main(["compare", str(ref), str(cand), "--json", str(tmp_path / "r.json")]) == 1
     rows = json.loads((tmp_path / "r.json").read_text())  # strict JSON: no Infinity
     assert rows[0]["status"] == "missing" and rows[0]["max_abs"] is None
+
+
+# --- the default render: what `refnpr render -o out.png` shows a newcomer ------------------
+
+
+@pytest.fixture(scope="module")
+def default_render(tmp_path_factory):
+    """``refnpr render -o out.png`` with no other option: the PNG's luminance (sRGB, 0..1),
+    its printed report, and the default scene's coverage at the same size (an independent
+    G-buffer, spp 1)."""
+    import numpy as np
+
+    from refnpr.raster import rasterize
+    from refnpr.scenes import load_scene
+
+    out = tmp_path_factory.mktemp("default") / "out.png"
+    assert main(["render", "-o", str(out), "-q"]) == 0
+    png = iio.imread(out)
+    lum = png[..., :3].astype(np.float64) @ np.array([0.2126, 0.7152, 0.0722]) / 255.0
+    scene = load_scene("default")
+    h, w = lum.shape
+    gb = rasterize(scene, scene.camera, w, h, channels=("tri_id", "mesh_id", "position"))
+    return png, lum, gb
+
+
+def _rings(covered):
+    """Covered pixels with an uncovered 4-neighbour (inner) and uncovered pixels with a covered
+    4-neighbour (outer)."""
+    import numpy as np
+
+    p = np.pad(covered, 1)
+    nbrs = [p[:-2, 1:-1], p[2:, 1:-1], p[1:-1, :-2], p[1:-1, 2:]]
+    any_un = ~nbrs[0] | ~nbrs[1] | ~nbrs[2] | ~nbrs[3]
+    any_co = nbrs[0] | nbrs[1] | nbrs[2] | nbrs[3]
+    return covered & any_un, ~covered & any_co
+
+
+def test_default_render_is_a_wide_frame(default_render):
+    png, _, _ = default_render
+    h, w = png.shape[:2]
+    assert (w, h) == (768, 432) and w / h >= 16 / 9 - 1e-9
+
+
+def test_default_render_draws_contours_along_the_silhouette(default_render):
+    """Every silhouette pixel (against the background) has dark ink within one pixel. The
+    engraving alone leaves the lit side's silhouette white on white (measured: 60% of the
+    silhouette inked without the contours; 58% for the old flat toon default)."""
+    import numpy as np
+
+    _, lum, gb = default_render
+    inner, _ = _rings(gb["tri_id"] >= 0)
+    h, w = lum.shape
+    p = np.pad(lum, 1, constant_values=1.0)
+    darkest = np.min(
+        [p[1 + dy : h + 1 + dy, 1 + dx : w + 1 + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1)],
+        axis=0,
+    )
+    assert inner.sum() > 1000
+    assert (darkest[inner] < 0.65).mean() >= 0.98  # measured 1.0
+
+
+def test_default_render_is_anti_aliased(default_render):
+    """Background pixels touching the teapot take intermediate values (partial coverage of
+    samples and of the anti-aliased contour), not only the background's white: an spp-1 toon
+    render has none (measured 0.0), the default 0.95."""
+    _, lum, gb = default_render
+    _, outer = _rings(gb["tri_id"] >= 0)
+    edge = lum[outer]
+    assert ((edge > 0.02) & (edge < 0.98)).mean() > 0.5
+
+
+def test_default_render_lid_rim_is_a_line_not_dots(default_render):
+    """Where the front of the rim meets the lid, the rim's bead turns away from the camera in a
+    band thinner than a pixel; at spp 1 a toon render samples it as a dotted line (ink >= 0.5
+    in 21% of the columns, measured). The default render draws it as a continuous contour:
+    every column along the front rim has at least half a pixel of ink there."""
+    import numpy as np
+
+    _, lum, gb = default_render
+    pos, on = gb["position"], gb["mesh_id"] == 0
+    r = np.hypot(pos[..., 0], pos[..., 2])
+    lid = on & (r < 1.31) & (pos[..., 1] > 2.39)  # the lid's skirt ends at r = 1.3
+    rim = on & (r > 1.33) & (r < 1.52) & (pos[..., 1] > 2.39)  # the rim bead, r in [1.4, 1.5]
+    ys, xs = np.nonzero(lid[:-1] & rim[1:] & (pos[1:, :, 2] > 0.3))  # lid above the front rim
+    assert np.unique(xs).size > 150  # the front rim spans ~220 columns at 768x432
+    ink = np.array([(1.0 - lum[y - 2 : y + 4, x]).sum() for y, x in zip(ys, xs, strict=True)])
+    assert (ink >= 0.5).mean() >= 0.98  # measured 1.0 (no contours: 0.06)

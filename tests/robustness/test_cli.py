@@ -137,9 +137,9 @@ CASES = [
     Case(
         "param-without-any-style",
         "messages",
-        "refnpr render --param n=3 (the default scene names no style)",
-        _render("--size", "8x8", "--param", "n=3"),
-        Exits(2, r"error: --param needs --style: the scene 'default' names no style"),
+        "refnpr render --scene teapot --param n=3 (the teapot scene names no style)",
+        _render("--size", "8x8", "--scene", "teapot", "--param", "n=3"),
+        Exits(2, r"error: --param needs --style: the scene 'teapot' names no style"),
     ),
     # --- sizes and samples -------------------------------------------------------------------
     Case(

@@ -113,15 +113,15 @@ CASES = [
     # ---- the CLI ------------------------------------------------------------------------
     _c(
         "cli-size-100000",
-        "refnpr render --size 100000x100000",
+        "refnpr render --size 100000x100000 (default spp 4)",
         _render_cli("--size", "100000x100000"),
-        Exits(2, _size_msg(100000, 100000, 1) + ".*2\\*\\*31"),
+        Exits(2, _size_msg(100000, 100000, 4) + ".*2\\*\\*31"),
     ),
     _c(
         "cli-size-30000",
-        "refnpr render --size 30000x30000 (under a 3 GB address-space limit)",
+        "refnpr render --size 30000x30000 (default spp 4, under a 3 GB address-space limit)",
         _render_cli("--size", "30000x30000"),
-        Exits(2, _size_msg(30000, 30000, 1) + r".*Render smaller \(e\.g\. \d+x\d+"),
+        Exits(2, _size_msg(30000, 30000, 4) + r".*Render smaller \(e\.g\. \d+x\d+"),
     ),
     _c(
         "cli-spp-1000000",

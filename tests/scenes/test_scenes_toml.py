@@ -46,18 +46,24 @@ def test_builtin_scene_loads_and_frames(name):
         assert mesh.uv is not None and mesh.normals is not None
         if obj.name in BACKDROPS:
             continue
-        for width, height in ((512, 512), (640, 480)):
+        # the default scene is framed for the command's 16:9 default size (and still fits 4:3)
+        sizes = ((768, 432), (640, 480)) if name == "default" else ((512, 512), (640, 480))
+        for width, height in sizes:
             ndc, w = _ndc(scene, mesh, width, height)
             assert np.all(w > scene.camera.near), (name, obj.name)  # in front of the camera
             assert np.abs(ndc[:, :2]).max() < 0.98, (name, obj.name, width, height)  # in frame
             assert np.abs(ndc[:, :2]).max() > 0.3, (name, obj.name)  # and not tiny
 
 
-def test_default_is_the_teapot_scene_lit_from_upper_right():
+def test_default_is_the_teapot_in_a_paper_style_lit_from_upper_right():
     a, b = load_scene("default"), load_scene("teapot")
-    assert np.array_equal(a.camera.eye, b.camera.eye) and a.lights == b.lights
-    assert [o.name for o in a.objects] == [o.name for o in b.objects] == ["teapot", "floor"]
+    assert a.lights == b.lights and [o.name for o in b.objects] == ["teapot", "floor"]
+    assert [o.name for o in a.objects] == ["teapot"]
     assert np.array_equal(a.objects[0].mesh.positions, teapot(10).positions)
+    # a paper's style with contours, so that `refnpr render` shows what refnpr is for
+    assert a.style["name"] in {"threshold", "halftone", "xtoon", "tamiss", "tam"}
+    assert a.style["contours"]["width"] > 0
+    assert b.style is None or not b.style  # the teapot scene leaves the style to the caller
     view = a.camera.view_matrix()[:3, :3]
     light_eye = view @ np.array(a.lights[0].direction)
     assert light_eye[0] > 0.3 and light_eye[1] > 0.3  # right and up in the image
