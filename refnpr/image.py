@@ -417,3 +417,19 @@ class Image:
     def save(self, path: str | os.PathLike) -> Path:
         """Save as 8-bit sRGB PNG with alpha (atomic write)."""
         return write_png_atomic(path, self.to_srgb8())
+
+    def to_png_bytes(self) -> bytes:
+        """The image as an 8-bit sRGB PNG with alpha, in memory: the bytes :meth:`save` writes.
+
+        Returns
+        -------
+        bytes
+            A PNG whose decoded pixels equal :meth:`to_srgb8` ``(H, W, 4)`` uint8.
+        """
+        import imageio.v3 as iio
+
+        return bytes(iio.imwrite("<bytes>", self.to_srgb8(), extension=".png"))
+
+    def _repr_png_(self) -> bytes:
+        """Jupyter's rich display: the image shows itself as its sRGB PNG."""
+        return self.to_png_bytes()

@@ -124,3 +124,22 @@ class GBuffer(Mapping):
 
     def nbytes(self) -> int:
         return int(sum(a.nbytes for a in self.channels.values()))
+
+    def display_grid(self, *, max_tile: int = 256, columns: int = 4) -> np.ndarray:
+        """Every channel as a labelled tile, in a grid: ``(H', W', 3)`` uint8.
+
+        Depth normalised (near bright), normals as colour, uv as (R, G), derivatives, ``lod``
+        and ``dyadic_scale`` in a symmetric colour map (blue < 0 < red), ``tri_id`` and
+        ``mesh_id`` false-coloured by a hash, empty samples as a grey checkerboard; each tile
+        at most ``max_tile`` pixels on its long side, under its channel name. See
+        :mod:`refnpr.raster._display`.
+        """
+        from ._display import gbuffer_grid
+
+        return gbuffer_grid(self, max_tile=max_tile, columns=columns)
+
+    def _repr_png_(self) -> bytes:
+        """Jupyter's rich display: :meth:`display_grid` as PNG bytes."""
+        from ._display import gbuffer_png
+
+        return gbuffer_png(self)

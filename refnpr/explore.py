@@ -1,0 +1,520 @@
+"""``explore(scene, style)``: sliders for a style's parameters and the camera, in Jupyter.
+
+Every numeric parameter of the style gets a slider, every flag a checkbox and every parameter
+whose value is one of a listed set a dropdown; the camera gets orbit sliders (azimuth and
+elevation about the target, distance) and the vertical field of view. Each change re-renders
+into an ``ipywidgets.Image``. The widgets come from the optional extra ``notebook``
+(``pip install 'refnpr[notebook]'``): ``import refnpr`` never imports ipywidgets.
+
+Where the parameters and their ranges come from
+-----------------------------------------------
+* The names: the style class's ``parameters()``; the starting values: the style instance's
+  ``params()`` (its current values, defaults filled in). Parameters whose value is not a
+  number, a flag or a string (colours, lists, tables, None) get no control.
+* Ranges are probed against the style's own validation: a candidate range per type (``[0, 1]``
+  for a float in [0, 1), ``[0, 4 v]`` above, ``[-4, 4]`` for 0, ``[0, max(4 v, v + 8)]`` for
+  an integer), each end moved towards the default by bisection until the style accepts it.
+* Choices: the style's message for an unknown string (``expected one of [...]``, or the names
+  it quotes or lists), each listed name kept only if the style accepts it. A string parameter
+  without listed choices gets a text box.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+import sys
+import types
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .image import Image
+from .raster import Camera
+from .render import render
+from .styles import Style, get_style, style_from_spec
+
+__all__ = ["Explorer", "Orbit", "explore", "orbit_camera", "orbit_of", "parameter_controls"]
+
+_EXTRA_HINT = (
+    "refnpr.explore needs ipywidgets, from the optional extra `notebook`: "
+    "pip install 'refnpr[notebook]' (or pip install ipywidgets)"
+)
+
+
+def _widgets():
+    try:
+        import ipywidgets
+    except ImportError as exc:
+        raise ImportError(_EXTRA_HINT) from exc
+    return ipywidgets
+
+
+# ---------------------------------------------------------------------------- the camera
+@dataclass(frozen=True)
+class Orbit:
+    """A camera as an orbit about its target: angles in degrees, ``distance`` in world units.
+
+    ``azimuth`` turns about ``up`` from ``reference`` (the starting camera's horizontal
+    direction, so the starting camera has azimuth 0); ``elevation`` is the angle above the
+    plane perpendicular to ``up``.
+    """
+
+    target: np.ndarray
+    up: np.ndarray
+    reference: np.ndarray
+    azimuth: float
+    elevation: float
+    distance: float
+
+
+def orbit_of(camera: Camera) -> Orbit:
+    """The orbit that reproduces ``camera`` (its eye as seen from its target)."""
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera: expected a refnpr.raster.Camera, got {type(camera).__name__}")
+    target = np.asarray(camera.target, dtype=np.float64)
+    up = np.asarray(camera.up, dtype=np.float64)
+    up = up / np.linalg.norm(up)
+    offset = np.asarray(camera.eye, dtype=np.float64) - target
+    distance = float(np.linalg.norm(offset))
+    horizontal = offset - np.dot(offset, up) * up
+    if np.linalg.norm(horizontal) < 1e-9 * distance:  # looking along up: any perpendicular
+        axis = np.eye(3)[int(np.argmin(np.abs(up)))]
+        horizontal = np.cross(up, axis)
+    reference = horizontal / np.linalg.norm(horizontal)
+    elevation = math.degrees(math.asin(float(np.clip(np.dot(offset, up) / distance, -1, 1))))
+    return Orbit(target, up, reference, 0.0, elevation, distance)
+
+
+def orbit_camera(base: Camera, orbit: Orbit, fov_y: float | None = None) -> Camera:
+    """``base`` moved to ``orbit`` (same target, up, near; far grown with the distance)."""
+    az, el = math.radians(orbit.azimuth), math.radians(orbit.elevation)
+    side = np.cross(orbit.up, orbit.reference)
+    horizontal = math.cos(az) * orbit.reference + math.sin(az) * side
+    eye = orbit.target + orbit.distance * (math.cos(el) * horizontal + math.sin(el) * orbit.up)
+    d0 = float(np.linalg.norm(np.asarray(base.eye) - np.asarray(base.target)))
+    far = max(base.far, base.far * orbit.distance / d0) if d0 > 0 else base.far
+    return Camera.look_at(
+        eye, orbit.target, orbit.up, base.fov_y if fov_y is None else fov_y, base.near, far
+    )
+
+
+# ---------------------------------------------------------------------------- parameters
+def _accepts(spec: tuple[tuple[str, Any], ...], name: str, value: Any) -> bool:
+    params = dict(spec)
+    style_name = params.pop("name")
+    params.pop("contours", None)
+    params[name] = value
+    with warnings.catch_warnings():  # a probe is not the user's choice: no advice for it
+        warnings.simplefilter("ignore")
+        try:
+            get_style(style_name, **params)
+        except (TypeError, ValueError):
+            return False
+    return True
+
+
+def _frozen(spec: Mapping[str, Any]) -> tuple[tuple[str, Any], ...]:
+    return tuple(sorted((k, repr(v)) for k, v in spec.items()))
+
+
+@functools.lru_cache(maxsize=512)
+def _probe_range(
+    style_name: str, base: tuple[tuple[str, Any], ...], name: str, value: float, is_int: bool
+) -> tuple[float, float]:
+    """(lo, hi) around ``value`` that the style accepts (see the module docstring)."""
+    spec = tuple((k, _literal(v)) for k, v in base) + (("name", style_name),)
+    if is_int:
+        lo, hi = 0.0, float(max(4 * value, value + 8))
+    elif value == 0:
+        lo, hi = -4.0, 4.0
+    elif 0 < value < 1:
+        lo, hi = 0.0, 1.0
+    elif value > 0:
+        lo, hi = 0.0, 4.0 * value
+    else:
+        lo, hi = 4.0 * value, -4.0 * value
+
+    def ok(x: float) -> bool:
+        return _accepts(spec, name, int(round(x)) if is_int else float(x))
+
+    def settle(end: float) -> float:
+        if ok(end):
+            return end
+        good, bad = float(value), end  # the default is accepted; bisect towards it
+        for _ in range(8 if is_int else 7):
+            mid = (good + bad) / 2
+            if is_int and abs(round(mid) - good) < 1:
+                mid = good + math.copysign(1, bad - good)
+                if round(mid) == round(bad):
+                    break
+            if ok(mid):
+                good = mid
+            else:
+                bad = mid
+        return float(round(good)) if is_int else good
+
+    return settle(lo), settle(hi)
+
+
+def _literal(text: str) -> Any:
+    """Inverse of ``repr`` for the literal values a style's parameters hold."""
+    import ast
+
+    return ast.literal_eval(text)
+
+
+_LISTED = re.compile(r"expected one of (\[[^\]]*\])")
+
+
+@functools.lru_cache(maxsize=256)
+def _probe_choices(
+    style_name: str, base: tuple[tuple[str, Any], ...], name: str
+) -> tuple[str, ...]:
+    """The strings the style lists for ``name`` in its message for an unknown value, each
+    checked by building the style with it; empty when it lists none."""
+    spec = tuple((k, _literal(v)) for k, v in base) + (("name", style_name),)
+    params = dict(spec)
+    params.pop("name")
+    params.pop("contours", None)
+    params[name] = "\x00?"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            get_style(style_name, **params)
+        except (TypeError, ValueError) as exc:
+            message = str(exc)
+        else:
+            return ()
+    listed = _LISTED.search(message)
+    if listed:
+        return tuple(str(c) for c in _literal(listed.group(1)))
+    words = re.findall(r"[A-Za-z][A-Za-z0-9_\-]*", message.replace(name + ":", "", 1))
+    seen: list[str] = []
+    for w in words:
+        if w not in seen and _accepts(spec, name, w):
+            seen.append(w)
+    return tuple(seen)
+
+
+def _step(lo: float, hi: float) -> float:
+    """A 1-2-5 step giving about 100 positions over [lo, hi]."""
+    raw = (hi - lo) / 100.0 if hi > lo else 0.01
+    mag = 10.0 ** math.floor(math.log10(raw))
+    return next(m * mag for m in (1, 2, 5, 10) if m * mag >= raw)
+
+
+def parameter_controls(style: Style, spec: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """One ipywidgets control per adjustable parameter of ``style``.
+
+    Parameters
+    ----------
+    style : Style
+        The instance whose current values (``params()``) the controls start from.
+    spec : mapping, optional
+        The parameters the style was built with (the probes hold them fixed); default
+        ``style.params()``.
+
+    Returns
+    -------
+    dict of str to ipywidgets widget
+        ``Checkbox`` for flags, ``IntSlider``/``FloatSlider`` for numbers, ``Dropdown`` for
+        listed choices, ``Text`` for other strings, in ``parameters()`` order.
+    """
+    w = _widgets()
+    values = style.params()
+    base = dict(values if spec is None else spec)
+    base.pop("name", None)
+    base.pop("contours", None)
+    try:
+        frozen = _frozen(base)
+        tuple((k, _literal(v)) for k, v in frozen)
+    except (ValueError, SyntaxError):  # values without a literal repr: probe with none fixed
+        frozen = ()
+    controls: dict[str, Any] = {}
+    for name in type(style).parameters():
+        if name not in values:
+            continue
+        v = values[name]
+        common = {"description": name, "continuous_update": False, "style": _LABEL_STYLE}
+        if isinstance(v, (bool, np.bool_)):
+            controls[name] = w.Checkbox(value=bool(v), description=name, indent=False)
+        elif isinstance(v, (int, np.integer)):
+            lo, hi = _probe_range(style.name, frozen, name, float(v), True)
+            controls[name] = w.IntSlider(value=int(v), min=int(lo), max=int(hi), **common)
+        elif isinstance(v, (float, np.floating)) and math.isfinite(v):
+            lo, hi = _probe_range(style.name, frozen, name, float(v), False)
+            step = _step(lo, hi)
+            lo, hi = math.ceil(lo / step - 1e-9) * step, math.floor(hi / step + 1e-9) * step
+            controls[name] = w.FloatSlider(
+                value=float(v), min=min(lo, v), max=max(hi, v), step=step, **common
+            )
+        elif isinstance(v, str):
+            choices = _probe_choices(style.name, frozen, name)
+            if choices:
+                options = list(choices) + ([v] if v not in choices else [])
+                controls[name] = w.Dropdown(
+                    options=options, value=v, description=name, style=_LABEL_STYLE
+                )
+            else:
+                common.pop("continuous_update")
+                controls[name] = w.Text(value=v, continuous_update=False, **common)
+    return controls
+
+
+_LABEL_STYLE = {"description_width": "initial"}
+
+
+# ---------------------------------------------------------------------------- the explorer
+class Explorer:
+    """The widgets of :func:`explore` and the state they drive.
+
+    Attributes
+    ----------
+    scene : refnpr.scenes.Scene
+    style : Style
+        The style of the last render (rebuilt from the controls at each change).
+    camera : Camera
+        The camera of the last render.
+    controls : dict of str to widget
+        The style's parameter controls (see :func:`parameter_controls`).
+    camera_controls : dict of str to widget
+        ``azimuth``, ``elevation`` (degrees), ``distance`` (world units), ``fov_y`` (degrees).
+    image : ipywidgets.Image
+        The last render, PNG bytes in ``image.value``.
+    status : ipywidgets.HTML
+        Render time, or the message of the last error (the previous picture stays).
+    widget : ipywidgets.Box
+        Everything, laid out; what a notebook displays.
+    last : refnpr.image.Image or None
+    """
+
+    def __init__(
+        self,
+        scene: Any,
+        style: Any = None,
+        *,
+        width: int = 384,
+        height: int = 288,
+        spp: int = 1,
+        camera: Camera | None = None,
+    ) -> None:
+        w = _widgets()
+        self.scene = _scene_of(scene)
+        self.spec = _spec_of(style, self.scene)
+        self.style = style_from_spec(self.spec)
+        self.width, self.height, self.spp = width, height, spp
+        self.base_camera = camera if camera is not None else self.scene.camera
+        if not isinstance(self.base_camera, Camera):
+            raise TypeError(
+                f"camera: expected a refnpr.raster.Camera or None, got {type(camera).__name__}"
+            )
+        self.orbit = orbit_of(self.base_camera)
+        self.camera = self.base_camera
+        inner = _inner_style(self.style)
+        self.controls = parameter_controls(inner, _params_of_spec(self.spec))
+        self._start = {k: c.value for k, c in self.controls.items()}
+        d = self.orbit.distance
+        common = {"continuous_update": False, "style": _LABEL_STYLE}
+        self.camera_controls = {
+            "azimuth": w.FloatSlider(
+                value=0.0, min=-180.0, max=180.0, step=1.0, description="azimuth", **common
+            ),
+            "elevation": w.FloatSlider(
+                value=round(self.orbit.elevation, 3),
+                min=-89.0,
+                max=89.0,
+                step=1.0,
+                description="elevation",
+                **common,
+            ),
+            "distance": w.FloatSlider(
+                value=d,
+                min=0.2 * d,
+                max=4.0 * d,
+                step=_step(0.2 * d, 4.0 * d),
+                description="distance",
+                **common,
+            ),
+            "fov_y": w.FloatSlider(
+                value=float(self.base_camera.fov_y),
+                min=5.0,
+                max=120.0,
+                step=1.0,
+                description="fov_y",
+                **common,
+            ),
+        }
+        self.image = w.Image(format="png", width=width, height=height)
+        self.status = w.HTML()
+        self.last: Image | None = None
+        for c in (*self.controls.values(), *self.camera_controls.values()):
+            c.observe(self._on_change, names="value")
+        panel = w.VBox(
+            [w.HTML("<b>camera</b>"), *self.camera_controls.values()]
+            + [w.HTML(f"<b>{self.style.name}</b>"), *self.controls.values(), self.status],
+            layout=w.Layout(overflow="auto", max_height=f"{max(height, 320)}px"),
+        )
+        self.widget = w.HBox([self.image, panel])
+        self.render()
+
+    def current_spec(self) -> dict[str, Any]:
+        """The style table the controls stand for: the starting table plus every change."""
+        changed = {k: c.value for k, c in self.controls.items() if c.value != self._start[k]}
+        spec = dict(self.spec)
+        if spec.get("name") == "contoured":
+            base = spec.get("base", "toon")
+            base = {"name": base} if isinstance(base, str) else dict(base)
+            spec["base"] = {**base, **changed}
+        else:
+            spec.update(changed)
+        return spec
+
+    def current_camera(self) -> Camera:
+        """The camera the camera sliders stand for."""
+        cc = self.camera_controls
+        orbit = Orbit(
+            self.orbit.target,
+            self.orbit.up,
+            self.orbit.reference,
+            float(cc["azimuth"].value),
+            float(cc["elevation"].value),
+            float(cc["distance"].value),
+        )
+        return orbit_camera(self.base_camera, orbit, float(cc["fov_y"].value))
+
+    def render(self) -> Image | None:
+        """Rebuild style and camera from the controls and render into ``image``; on an error
+        keep the previous picture and show the message in ``status``."""
+        try:
+            style = style_from_spec(self.current_spec())
+            camera = self.current_camera()
+            img = render(self.scene, style, self.width, self.height, self.spp, camera=camera)
+        except (TypeError, ValueError) as exc:
+            self.status.value = f"<span style='color:#b00'>{_html(str(exc))}</span>"
+            return None
+        self.style, self.camera, self.last = style, camera, img
+        self.image.value = img.to_png_bytes()
+        self.status.value = f"{img.timings.get('total', 0.0) * 1e3:.0f} ms"
+        return img
+
+    def _on_change(self, change: Any) -> None:
+        self.render()
+
+    def _repr_mimebundle_(self, **kwargs: Any) -> Any:
+        return self.widget._repr_mimebundle_(**kwargs)
+
+    def _ipython_display_(self) -> None:
+        from IPython.display import display
+
+        display(self.widget)
+
+
+def explore(
+    scene: Any,
+    style: Any = None,
+    *,
+    width: int = 384,
+    height: int = 288,
+    spp: int = 1,
+    camera: Camera | None = None,
+) -> Explorer:
+    """Sliders for ``style``'s parameters and for the camera, re-rendering ``scene`` on change.
+
+    Parameters
+    ----------
+    scene : Scene, str or path
+        A scene, a built-in scene name or a scene TOML file.
+    style : Style, str, dict or None
+        As for :func:`refnpr.render.render` (None: the scene's style, else the default style).
+    width, height : int
+        Render size in pixels.
+    spp : int
+        Samples per pixel (a square number).
+    camera : Camera, optional
+        The starting camera (default: the scene's); the sliders orbit about its target.
+
+    Returns
+    -------
+    Explorer
+        Displays itself in a notebook; ``.widget`` is the ipywidgets box, ``.controls`` and
+        ``.camera_controls`` the sliders, ``.image`` the picture.
+
+    Raises
+    ------
+    ImportError
+        Naming the optional extra ``notebook`` when ipywidgets is not installed.
+    """
+    return Explorer(scene, style, width=width, height=height, spp=spp, camera=camera)
+
+
+# ---------------------------------------------------------------------------- helpers
+def _scene_of(scene: Any) -> Any:
+    if isinstance(scene, str) or hasattr(scene, "__fspath__"):
+        from .scenes import load_scene
+
+        return load_scene(scene)
+    if not hasattr(scene, "world_meshes") or not hasattr(scene, "camera"):
+        raise TypeError(
+            f"scene: expected a refnpr.scenes.Scene, a built-in scene name or a .toml path, "
+            f"got {type(scene).__name__}"
+        )
+    return scene
+
+
+def _spec_of(style: Any, scene: Any) -> dict[str, Any]:
+    """The style as a table ``{"name": ..., **params}`` that rebuilds it."""
+    if style is None:
+        from .render import DEFAULT_STYLE
+
+        style = getattr(scene, "style", None) or DEFAULT_STYLE
+    if isinstance(style, str):
+        return {"name": style}
+    if isinstance(style, Mapping):
+        if "name" not in style:
+            raise ValueError(f"style: a style table needs a 'name' key, got keys {sorted(style)}")
+        return dict(style)
+    if isinstance(style, Style):
+        spec = {"name": style.name, **style.params()}
+        try:
+            style_from_spec(spec)
+        except (TypeError, ValueError):
+            spec = {"name": style.name}  # parameters that are not plain values: defaults
+        return spec
+    raise TypeError(f"style: expected a Style, a style name or a table, got {type(style).__name__}")
+
+
+def _inner_style(style: Style) -> Style:
+    """The style whose parameters get controls (a contoured style's base)."""
+    base = getattr(style, "base", None)
+    return base if style.name == "contoured" and isinstance(base, Style) else style
+
+
+def _params_of_spec(spec: Mapping[str, Any]) -> dict[str, Any]:
+    params = dict(spec)
+    if params.get("name") == "contoured":
+        base = params.get("base", "toon")
+        params = {} if isinstance(base, str) else dict(base)
+    params.pop("name", None)
+    params.pop("contours", None)
+    return params
+
+
+def _html(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+class _CallableModule(types.ModuleType):
+    """This module, callable as :func:`explore`: the submodule ``refnpr.explore`` and the
+    function ``refnpr.explore`` share a name, and whichever of the two an import binds on the
+    package, ``refnpr.explore(scene, style)`` works."""
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Explorer:
+        return explore(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule
