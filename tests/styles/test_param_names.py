@@ -20,6 +20,7 @@ from refnpr.styles.halftone import HalftoneStyle, screens
 from refnpr.styles.tam import TamStyle
 from refnpr.styles.tamiss import TamissStyle
 from refnpr.styles.threshold import ThresholdStyle
+from refnpr.styles.xtoon import XToonStyle
 
 from .test_threshold_tone import flat_scene
 
@@ -39,7 +40,13 @@ CONCEPTS = {
     "hatching directions": ("directions", [ThresholdStyle, TamStyle, TamissStyle]),
     "per-level vs trilinear thresholding": ("mip", [ThresholdStyle, HalftoneStyle]),
     "per-level CDF tone correction": ("tone_correct", [ThresholdStyle, HalftoneStyle]),
+    "draw an intermediate stage or map instead of the picture": (
+        "show",
+        [HalftoneStyle, XToonStyle, TamissStyle],
+    ),
 }
+#: concept -> (its one name, the one value meaning "the style's picture", the classes)
+SAME_DEFAULT = {"show": ("color", [HalftoneStyle, XToonStyle, TamissStyle])}
 OLD_NAMES = {"scale", "angles", "pcf_levels", "equalize", "fill", "color"}
 
 
@@ -50,6 +57,13 @@ def test_one_name_per_concept(concept):
         params = accepted(cls)
         assert name in params, f"{cls.__name__} calls '{concept}' something else"
         assert not params & OLD_NAMES, (cls.__name__, params & OLD_NAMES)
+
+
+@pytest.mark.parametrize("name", sorted(SAME_DEFAULT))
+def test_one_default_value_per_concept(name):
+    value, classes = SAME_DEFAULT[name]
+    for cls in classes:
+        assert cls().params()[name] == value, cls.__name__
 
 
 # (style, old params, the same with current names)
