@@ -35,7 +35,7 @@ import numpy as np
 
 from .image import Image
 from .raster import Camera
-from .render import render
+from .render import as_scene, render
 from .styles import Style, get_style, style_from_spec
 
 __all__ = ["Explorer", "Orbit", "explore", "orbit_camera", "orbit_of", "parameter_controls"]
@@ -304,7 +304,7 @@ class Explorer:
         camera: Camera | None = None,
     ) -> None:
         w = _widgets()
-        self.scene = _scene_of(scene)
+        self.scene = as_scene(scene)
         self.spec = _spec_of(style, self.scene)
         self.style = style_from_spec(self.spec)
         self.width, self.height, self.spp = width, height, spp
@@ -453,19 +453,6 @@ def explore(
 
 
 # ---------------------------------------------------------------------------- helpers
-def _scene_of(scene: Any) -> Any:
-    if isinstance(scene, str) or hasattr(scene, "__fspath__"):
-        from .scenes import load_scene
-
-        return load_scene(scene)
-    if not hasattr(scene, "world_meshes") or not hasattr(scene, "camera"):
-        raise TypeError(
-            f"scene: expected a refnpr.scenes.Scene, a built-in scene name or a .toml path, "
-            f"got {type(scene).__name__}"
-        )
-    return scene
-
-
 def _spec_of(style: Any, scene: Any) -> dict[str, Any]:
     """The style as a table ``{"name": ..., **params}`` that rebuilds it."""
     if style is None:

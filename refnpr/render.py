@@ -16,7 +16,7 @@ from .raster.rasterize import attribute_widths
 from .scenes._params import check_int
 from .styles import ShadeContext, Style, style_from_spec
 
-__all__ = ["render", "required_channels", "DEFAULT_STYLE"]
+__all__ = ["render", "required_channels", "as_scene", "DEFAULT_STYLE"]
 
 #: Style used when neither the call nor the scene names one.
 DEFAULT_STYLE = "toon"
@@ -24,7 +24,8 @@ DEFAULT_STYLE = "toon"
 Progress = Callable[[str, float], None]
 
 
-def _scene_of(scene: Any):
+def as_scene(scene: Any):
+    """A Scene from a Scene, a built-in scene name or a .toml path (TypeError otherwise)."""
     if isinstance(scene, str) or hasattr(scene, "__fspath__"):
         from .scenes import load_scene
 
@@ -76,7 +77,7 @@ def _check_memory(scene: Any, style: Style, channels, width: int, height: int, s
 
 def required_channels(scene: Any, style: Any = None) -> frozenset[str]:
     """The G-buffer channels ``render`` will ask the rasterizer for (the style's ``requires``)."""
-    scene = _scene_of(scene)
+    scene = as_scene(scene)
     return frozenset(_style_of(style, scene).requires(scene))
 
 
@@ -118,7 +119,7 @@ def render(
     """
     t0 = time.perf_counter()
     width, height, spp = _check_args(width, height, spp, camera, progress, return_gbuffer)
-    scene = _scene_of(scene)
+    scene = as_scene(scene)
     style = _style_of(style, scene)
     cam = camera if camera is not None else scene.camera
     channels = sorted(style.requires(scene))
