@@ -1,4 +1,4 @@
-"""The ``refnpr`` command: render, scenes, styles, info, golden, compare, gallery."""
+"""The ``refnpr`` command: render, scenes, styles, info, golden, compare, gallery, kit."""
 
 from __future__ import annotations
 
@@ -268,6 +268,28 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     return 1 if bad else 0
 
 
+def _cmd_kit_export(args: argparse.Namespace) -> int:
+    from .kit.export import export_kit
+
+    suite = Path(args.suite)
+    if args.suite == str(DEFAULT_SUITE) and not suite.exists():
+        raise ValueError(
+            f"--suite: no suite file at {str(suite.absolute())!r} (the default is "
+            f"{str(DEFAULT_SUITE)!r}, relative to the current directory); run refnpr kit export "
+            "in a refnpr checkout, or pass --suite FILE"
+        )
+    log = (lambda line: None) if args.quiet else print
+    written = export_kit(args.dir, suite=suite, only=args.only, log=log)
+    print(f"exported {len(written)} case(s) to {args.dir}")
+    return 0
+
+
+def _cmd_kit_check(args: argparse.Namespace) -> int:
+    from .kit.check import run
+
+    return run(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="refnpr", description="CPU reference renderer for NPR shading")
     sub = p.add_subparsers(dest="command", required=True)
@@ -342,6 +364,32 @@ def build_parser() -> argparse.ArgumentParser:
     )
     gal.add_argument("--markdown", action="store_true", help="print the README table")
     gal.set_defaults(func=_cmd_gallery)
+
+    kit = sub.add_parser(
+        "kit",
+        help="conformance kit: export every input of the golden cases; check a backend's renders",
+        description=(
+            "Test a GPU implementation against refnpr: `refnpr kit export KIT` writes every "
+            "input of the golden cases in standard formats (glTF, OpenEXR, PNG, JSON; see "
+            "docs/kit.md), your backend renders KIT into RENDERS, `refnpr kit check KIT "
+            "RENDERS` compares them with each case's own tolerance."
+        ),
+    )
+    ksub = kit.add_subparsers(dest="kit_command", required=True)
+    ke = ksub.add_parser("export", help="write the conformance kit of the golden suite to DIR")
+    ke.add_argument("dir", help="kit directory (created; existing cases are replaced)")
+    ke.add_argument(
+        "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
+    )
+    ke.add_argument("--only", nargs="+", default=None, metavar="NAME", help="only these cases")
+    ke.add_argument("-q", "--quiet", action="store_true", help="no line per case")
+    ke.set_defaults(func=_cmd_kit_export)
+    kc = ksub.add_parser("check", help="compare a backend's renders with a kit")
+    kc.add_argument("kit_dir", help="an exported kit (refnpr kit export)")
+    kc.add_argument("renders_dir", help="the backend's renders: <case>.png, <case>/<channel>.npy")
+    kc.add_argument("--report", default=None, metavar="DIR", help="write index.html and masks")
+    kc.add_argument("--json", default=None, metavar="FILE", help="write the metrics as JSON")
+    kc.set_defaults(func=_cmd_kit_check)
     return p
 
 
@@ -351,7 +399,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except (ValueError, TypeError, OSError) as exc:
-        print(f"refnpr {args.command}: error: {exc}", file=sys.stderr)
+        command = args.command
+        if getattr(args, "kit_command", None):
+            command += f" {args.kit_command}"
+        print(f"refnpr {command}: error: {exc}", file=sys.stderr)
         return 2
 
 

@@ -19,6 +19,9 @@ Suite format::
     tolerance = 0.0079      # per-channel difference that counts a pixel as differing (2/255)
     max_frac_over = 0.0005  # fraction of differing pixels allowed
     min_ssim = 0.995
+    position_deviation = 1  # kit check: a pixel also passes when a reference pixel within N
+                            # pixels (Chebyshev distance) matches it within `tolerance`
+    discrete_max_pixels = 0 # gbuffer cases: samples of tri_id / mesh_id allowed to differ
 
     [[case]]
     name = "teapot-toon"    # file stem: [a-z0-9_-]+
@@ -32,6 +35,20 @@ Suite format::
     scene = "default"
     channels = ["depth", "tri_id", "uv", "duv_dx", "duv_dy", "normal"]
     rtol = 1e-5             # gbuffer cases: relative tolerance of float channels
+
+Tolerance keys a conformance kit carries per case (``refnpr kit export``; see docs/kit.md):
+
+* ``tolerance``, ``max_frac_over``, ``min_ssim``: as above, on 8-bit sRGB values.
+* ``position_deviation`` (int >= 0, default 1): the Vulkan CTS "fuzzy" position tolerance used
+  by ``refnpr kit check``: a pixel of another backend's render also passes when some reference
+  pixel within this Chebyshev distance matches it within ``tolerance``. One pixel is the
+  default because the differences a correct GPU implementation shows are edge placements: a
+  float32 evaluation flips a sample whose value sits on a toon step, a threshold or a coverage
+  edge, which moves that edge by at most one pixel, while a wrong formula changes whole
+  regions. ``refnpr golden --check`` (refnpr against itself) does not use it.
+* ``discrete_max_pixels`` (int >= 0, default 0): gbuffer cases: how many samples of each
+  discrete channel (``tri_id``, ``mesh_id``) may differ; discrete buffers are otherwise exact.
+* ``rtol``, ``atol``: gbuffer cases: float channels pass where |a - b| <= atol + rtol |b|.
 """
 
 from __future__ import annotations
@@ -59,6 +76,8 @@ _DEFAULTS: dict[str, Any] = {
     "tolerance": 2.0 / 255,
     "max_frac_over": 0.0005,
     "min_ssim": 0.995,
+    "position_deviation": 1,
+    "discrete_max_pixels": 0,
     "rtol": 1e-5,
     "atol": 1e-6,
     "style": None,
@@ -180,6 +199,10 @@ def _check_case(path: Path, name: str, params: dict[str, Any]) -> None:
         v = params[key]
         if isinstance(v, bool) or not isinstance(v, int) or v < 1:
             fail(key, "a positive integer")
+    for key, hi in (("position_deviation", 16), ("discrete_max_pixels", 2**31 - 1)):
+        v = params[key]
+        if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= hi:
+            fail(key, f"an integer in [0, {hi}]")
     for key, (lo, hi) in {
         "tolerance": (0.0, 1.0),
         "max_frac_over": (0.0, 1.0),

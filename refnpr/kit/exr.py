@@ -1,0 +1,102 @@
+"""OpenEXR files of float32 arrays (textures, expected linear images), written atomically.
+
+Channel naming (what a backend reads): 1 component ``Y``; 2 components ``R``, ``G``; 3
+components ``R``, ``G``, ``B``; 4 components ``R``, ``G``, ``B``, ``A``. Pixel type FLOAT
+(32-bit), ZIP compression (lossless), scanline image, row 0 = the array's row 0 (top).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..image import atomic_file
+
+__all__ = ["EXR_CHANNELS", "write_exr", "read_exr"]
+
+#: Channel names by component count.
+EXR_CHANNELS: dict[int, tuple[str, ...]] = {
+    1: ("Y",),
+    2: ("R", "G"),
+    3: ("R", "G", "B"),
+    4: ("R", "G", "B", "A"),
+}
+
+
+def write_exr(path: str | os.PathLike, array: np.ndarray) -> Path:
+    """Write a float array as a 32-bit float OpenEXR file (atomic rename).
+
+    Parameters
+    ----------
+    path : str or path
+        Target file (``.exr``); its directory is created.
+    array : (H, W) or (H, W, C) float, C in 1-4
+        Converted to float32 (exact for float32 input).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        If ``array`` is not (H, W) / (H, W, 1-4), is empty, or holds NaN.
+    TypeError
+        If ``array`` is not a floating-point array.
+    """
+    import OpenEXR
+
+    arr = np.asarray(array)
+    if arr.dtype.kind != "f":
+        raise TypeError(f"array: expected a float array for {str(path)!r}, got dtype {arr.dtype}")
+    if arr.ndim == 2:
+        arr = arr[..., None]
+    if arr.ndim != 3 or arr.shape[2] not in EXR_CHANNELS or min(arr.shape[:2]) < 1:
+        raise ValueError(
+            f"array: expected shape (H, W) or (H, W, C) with C in 1-4 for {str(path)!r}, "
+            f"got {np.shape(array)}"
+        )
+    if np.isnan(arr).any():
+        raise ValueError(f"array: NaN values cannot be exported to {str(path)!r}")
+    arr = arr.astype(np.float32)
+    names = EXR_CHANNELS[arr.shape[2]]
+    channels = {n: np.ascontiguousarray(arr[..., i]) for i, n in enumerate(names)}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    path = Path(path)
+    with atomic_file(path, suffix=".exr") as tmp:
+        with OpenEXR.File(header, channels) as f:
+            f.write(str(tmp))
+    return path
+
+
+def read_exr(path: str | os.PathLike) -> np.ndarray:
+    """Read an EXR written by :func:`write_exr`.
+
+    Returns
+    -------
+    (H, W) float32 for a ``Y`` file, else (H, W, C) float32 in R, G, B, A order.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: missing, unreadable, or with channels other than the naming above.
+    """
+    import OpenEXR
+
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"exr: file {str(path)!r} does not exist")
+    try:
+        with OpenEXR.File(str(p), separate_channels=True) as f:
+            ch = {k: np.asarray(v.pixels) for k, v in f.channels().items()}
+    except Exception as exc:  # noqa: BLE001 -- OpenEXR raises many types
+        raise ValueError(f"exr: cannot read {str(path)!r}: {exc}") from None
+    for names in EXR_CHANNELS.values():
+        if set(ch) == set(names):
+            if names == ("Y",):
+                return ch["Y"].astype(np.float32)
+            return np.stack([ch[n] for n in names], axis=-1).astype(np.float32)
+    raise ValueError(f"exr: {str(path)!r} has channels {sorted(ch)}; expected Y, RG, RGB or RGBA")

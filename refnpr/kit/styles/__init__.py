@@ -1,0 +1,137 @@
+"""Per-style kit exporters (interface A): ``export_style`` dispatches on the style's name.
+
+A style ``NAME`` is exported by ``refnpr.kit.styles.NAME.export(style, scene, case_dir, *,
+width, height, spp) -> StyleExport`` when that module exists, else by :mod:`._generic`
+(``params()`` as they are). A module may also define ``unresolved(params) -> list[str]``: the key
+paths of exported params that still hold something only refnpr could resolve (the kit tests call
+it; the generic check looks for "auto" strings).
+
+The ``contoured`` wrapper (a style with ``contours = {...}``) is unwrapped here: its base style is
+exported by the base's module, then the contour layer by ``refnpr.kit.styles.contours
+.export_contours(layer, scene, case_dir, *, width, height, spp) -> StyleExport`` (its params go
+to ``params["contours"]``, its derived texts and textures are merged). The case's style name is
+the base style's name.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import fields
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from .._json import jsonable
+from ..derived import CONTOURS_DERIVED
+from . import _generic
+from ._export import StyleExport
+
+__all__ = ["StyleExport", "export_style", "exporter_module", "unresolved", "style_name"]
+
+
+def exporter_module(name: str) -> ModuleType:
+    """The kit module that exports style ``name`` (its own, else the generic one)."""
+    if not isinstance(name, str) or not name.isidentifier() or name.startswith("_"):
+        raise ValueError(f"style name: expected a registered style name, got {name!r}")
+    try:
+        return importlib.import_module(f"{__name__}.{name}")
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__name__}.{name}":
+            raise  # the module exists but one of its imports is missing
+        return _generic
+
+
+def style_name(style: Any) -> str:
+    """The name a case.json gives ``style`` (the base style's name for ``contoured``)."""
+    return style.base.name if style.name == "contoured" else style.name
+
+
+def _contours_module() -> ModuleType | None:
+    """``refnpr.kit.styles.contours`` (the contour layer's exporter), None if absent."""
+    try:
+        return importlib.import_module(f"{__name__}.contours")
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__name__}.contours":
+            raise
+        return None
+
+
+def _export_contours(layer: Any, scene: Any, case_dir: Path, **size: int) -> StyleExport:
+    mod = _contours_module()
+    if mod is not None and hasattr(mod, "export_contours"):
+        return mod.export_contours(layer, scene, case_dir, **size)
+    params = {
+        f.name: jsonable(getattr(layer, f.name), where=f"contours.{f.name}") for f in fields(layer)
+    }
+    return StyleExport(params=params)
+
+
+def export_style(
+    style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
+) -> StyleExport:
+    """Export a style for one case: resolved params, texture files, derived texts.
+
+    Parameters
+    ----------
+    style : refnpr.styles.Style
+        The style instance the case renders with (``contoured`` is unwrapped, see the module
+        docstring).
+    scene : refnpr.scenes.Scene
+    case_dir : Path
+        ``DIR/<case>``; texture files go under ``case_dir/textures/<role>/``.
+    width, height, spp : int
+        Image size and samples per pixel of the case.
+
+    Returns
+    -------
+    StyleExport
+        ``params`` JSON data (with ``params["contours"]`` for a contoured style).
+
+    Raises
+    ------
+    TypeError
+        If the module returns something other than a StyleExport (naming the module).
+    """
+    size = {"width": width, "height": height, "spp": spp}
+    case_dir = Path(case_dir)
+    if style.name == "contoured":
+        out = export_style(style.base, scene, case_dir, **size)
+        layer = _export_contours(style.layer, scene, case_dir, **size)
+        if not isinstance(layer, StyleExport):
+            raise TypeError(
+                f"export_contours returned {type(layer).__name__}, expected StyleExport"
+            )
+        out.params = {**out.params, "contours": layer.params}
+        clash = set(out.textures) & set(layer.textures)
+        if clash:
+            raise ValueError(f"contours: texture roles {sorted(clash)} clash with the base style's")
+        out.textures.update(layer.textures)
+        out.derived.update(layer.derived or {"contours": CONTOURS_DERIVED})
+        for k, attrs in layer.vertex_attributes.items():
+            out.vertex_attributes.setdefault(k, {}).update(attrs)
+        return out
+    mod = exporter_module(style.name)
+    out = mod.export(style, scene, case_dir, **size)
+    if not isinstance(out, StyleExport):
+        raise TypeError(
+            f"{mod.__name__}.export returned {type(out).__name__}; expected a StyleExport"
+        )
+    return out
+
+
+def unresolved(name: str, params: dict[str, Any]) -> list[str]:
+    """Key paths of an exported style's params that only refnpr could resolve.
+
+    Uses the style module's own ``unresolved(params)`` when it has one, else the generic check
+    ("auto"/"default"/"preset" strings). The contour layer's params are checked generically.
+    """
+    mod = exporter_module(name)
+    check = getattr(mod, "unresolved", _generic.unresolved)
+    base = {k: v for k, v in params.items() if k != "contours"}
+    out = list(check(base))
+    if "contours" in params:
+        out += _generic.unresolved({"contours": params["contours"]})
+        layer_check = getattr(_contours_module(), "unresolved", None)
+        if layer_check is not None and isinstance(params["contours"], dict):
+            out += [f"params.contours: {k} missing" for k in layer_check(params["contours"])]
+    return out
