@@ -1,0 +1,1 @@
+"""Per-style shading passes: ``refnpr_glsl.styles.<name>.shade(gl, case, gbuffer, size)``."""
