@@ -1,0 +1,280 @@
+"""Kit export of the ``xtoon`` style (Barla, Thollot, Markosian 2006).
+
+Every parameter is resolved by the style's own code: the 2D toon texture (preset, recipe, image
+or array) is :attr:`XToonStyle.texture`, exported as the texture ``toon``; the frame-dependent
+defaults of the attribute map (z_min, r, and z_c of the focus map) come from
+:func:`refnpr.styles.xtoon.detail.resolve_frame` for the case's camera; the abstracted normals of
+the shape (smoothed, ellipsoid, cylinder, sphere) from the style's own evaluation path
+(:func:`refnpr.styles.xtoon.evaluation._abstract`), exported per vertex as ``_ABSTRACT_NORMAL``.
+
+Params layout (``case.json`` ``style.params``)::
+
+    texture ("toon", the role), texture_spec (what the scene file said, for reference),
+    detail, detail_mode, distance, show, tone, light (index into case.lights), z_min, r,
+    z_focus, focus_point, s, one_sided, prev_camera ({eye, target, up, fov_y, near, far,
+    view_matrix, projection_matrix} or null), flow_min, flow_max, flow_behind, tiny,
+    detail_map (role or null), shape, shape_weight ({kind: global | detail | texture | map,
+    value, texture (role), uv_scale}), shape_blend, shape_frame, shape_iterations,
+    shape_objects, modulate, abstract_normal_attribute
+
+Values a detail map does not read are null.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._json import jsonable
+from ..camera import camera_entry
+from ..textures import ORIENTATION_ROW0_TOP, ORIENTATION_ROW0_V0, write_texture_levels
+from ._export import StyleExport
+
+__all__ = ["export", "unresolved", "DERIVED"]
+
+#: The name of the per-vertex abstracted normal attribute (glTF ``_ABSTRACT_NORMAL``).
+ABSTRACT_NORMAL = "abstract_normal"
+
+DERIVED = {
+    "xtoon-tone": (
+        "Tone (X-Toon sec. 3): with n the shading normal and l the unit direction towards light "
+        "params.light of case.lights (point lights: normalize(position - P), P the G-buffer "
+        "position), tone = clip(n.l, 0, 1), or (n.l + 1) / 2 when params.tone = 'half_lambert'. "
+        "Without shape abstraction n = normalize(G-buffer normal) (zero stays zero)."
+    ),
+    "xtoon-detail": (
+        "Detail D (sec. 3.1, 3.2, 5), clamped to [0, 1]. depth: z = view-axis distance "
+        "(params.distance 'axis': the G-buffer depth per sample, or -(V P)_z per vertex) or "
+        "|P - eye| ('eye'), z = max(z, tiny), D = 1 - ln(z / z_min) / ln(r). focus: the same z, "
+        "with z_c = params.z_focus: z < z_c: D = 1 - ln(z / (z_c - z_min)) / ln((z_c - r z_min) "
+        "/ (z_c - z_min)), else D = 1 - ln(z / (z_c + z_min)) / ln((z_c + r z_min) / (z_c + "
+        "z_min)). orientation: v = (eye - P) / max(|eye - P|, tiny), D = min(|clip(n.v, -1, 1)"
+        "|, 1)^r. highlight: refl = 2 (n.l) n - l, x = clip(v.refl, -1, 1), D = min(|x|, 1)^s "
+        "(one_sided: max(x, 0)^s). flow: f = pix(P, camera) - pix(P, prev_camera) with pix the "
+        "pixel position of P through projection_matrix @ view_matrix of a width x height image "
+        "(x = (ndc_x + 1) W / 2, y = (1 - ndc_y) H / 2; W, H the IMAGE size, not the sample "
+        "grid); where w_clip <= 0 for either camera f = (flow_behind, 0); D = 1 - clip((|f| - "
+        "flow_min) / (flow_max - flow_min), 0, 1). map: D = the texture params.detail_map at the "
+        "pixel (per-pixel map) or sample (per-sample map). none: D = 1."
+    ),
+    "xtoon-vertex-mode": (
+        "detail_mode 'vertex' (the paper's vertex shader): D (for flow: the displacement f) is "
+        "evaluated at the three vertices of the sample's triangle (tri_id -> object via "
+        "first_tri_id, glTF index order) from the vertex POSITION and the unit NORMAL (or the "
+        "vertex-blended shape normal, below), then interpolated with the G-buffer bary "
+        "(perspective-correct barycentrics): D_s = sum_k bary_k D_k, clamped; for flow D from |"
+        "sum_k bary_k f_k|. A point light gives each vertex its own l."
+    ),
+    "xtoon-shape": (
+        "Shape abstraction (sec. 4) with n_abs = the vertex attribute _ABSTRACT_NORMAL (unit; "
+        "objects outside shape_objects carry their own unit normals). shape_blend 'vertex': per "
+        "vertex m = (1 - w) normalize(NORMAL) + w n_abs (w = shape_weight.value, or 'detail': w = "
+        "1 - D at the vertex evaluated with the mesh normal), interpolated with bary, then n = "
+        "normalize(m). shape_blend 'pixel': n0 = normalize(G-buffer normal), na = sum_k bary_k "
+        "n_abs_k (na = n0 where |na| = 0; n0 = na, or (0, 0, 1), where |n0| = 0), w per sample "
+        "(value; 'detail': 1 - D(n0) per sample; 'texture': clip(bilinear GL_REPEAT sample of "
+        "texture shape_weight at uv * uv_scale, texel centres, 0, 1); 'map': the texture "
+        "shape_weight at the pixel/sample), n = normalize((1 - w) normalize(n0) + w "
+        "normalize(na)) (where that blend vanishes: normalize(n0) if w < 0.5 else "
+        "normalize(na))."
+    ),
+    "xtoon-lookup": (
+        "Colour: the toon texture (rows grow with D, columns with tone) sampled bilinearly with "
+        "clamp-to-edge at x = clip(clip(tone, 0, 1) cols - 0.5, 0, cols - 1), y = clip(clip(D, 0,"
+        " 1) rows - 0.5, 0, rows - 1), j0 = min(floor(x), max(cols - 2, 0)), i0 likewise, j1 = "
+        "min(j0 + 1, cols - 1), weights x - j0, y - i0. Output straight-alpha RGBA: rgb = "
+        "clip(texel rgb (times the object's material diffuse when modulate), 0, 1), alpha = "
+        "clip(texel alpha, 0, 1); empty samples (mesh_id < 0) are (0, 0, 0, 0). show 'detail' | "
+        "'inverse_detail' | 'tone': opaque grey g = srgb_to_linear(clip(value, 0, 1)) with value "
+        "D, 1 - D or the tone (so that the displayed sRGB grey is the value)."
+    ),
+}
+
+
+def _camera_table(cam: Any, width: int, height: int) -> dict[str, Any]:
+    return {
+        "eye": cam.eye.tolist(),
+        "target": cam.target.tolist(),
+        "up": cam.up.tolist(),
+        "fov_y": float(cam.fov_y),
+        "near": float(cam.near),
+        "far": float(cam.far),
+        "view_matrix": cam.view_matrix().tolist(),
+        "projection_matrix": cam.projection_matrix(width, height).tolist(),
+    }
+
+
+def _unwrap(style: Any) -> Any:
+    if style.name == "contoured":
+        style = style.base
+    if style.name != "xtoon":
+        raise TypeError(f"style: expected an xtoon style, got {style.name!r}")
+    return style
+
+
+def _texture_spec(style: Any) -> Any:
+    spec = style.params().get("texture")
+    return spec if isinstance(spec, (str, dict)) else str(spec)
+
+
+def _weight(cfg: Any, case_dir: Path, textures: dict[str, Any]) -> dict[str, Any]:
+    w = cfg.weight
+    out: dict[str, Any] = {"kind": w.kind, "value": None, "texture": None, "uv_scale": None}
+    if w.kind == "global":
+        out["value"] = float(w.value)
+    elif w.kind == "texture":
+        level0 = np.asarray(cfg.weight_pyramid.levels[0], dtype=np.float32)
+        textures["shape_weight"] = write_texture_levels(
+            case_dir,
+            "shape_weight",
+            [level0],
+            encoding="linear",
+            wrap="repeat",
+            filter="linear",
+            orientation=ORIENTATION_ROW0_V0,
+            used_for="X-Toon shape weight w at uv * uv_scale (bilinear GL_REPEAT, level 0 only)",
+        )
+        out["texture"] = "shape_weight"
+        out["uv_scale"] = [float(s) for s in w.uv_scale]
+    elif w.kind == "map":
+        textures["shape_weight"] = write_texture_levels(
+            case_dir,
+            "shape_weight",
+            [np.asarray(w.texture, dtype=np.float32)],
+            encoding="linear",
+            wrap="clamp",
+            filter="nearest",
+            orientation=ORIENTATION_ROW0_TOP
+            + " (image rows: (H, W) per pixel or (nH, nW) per sample)",
+            used_for="X-Toon shape weight w per pixel or per sample (texelFetch)",
+        )
+        out["texture"] = "shape_weight"
+    return out
+
+
+def export(
+    style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
+) -> StyleExport:
+    """Export an xtoon style for one case (see the module docstring for the params layout).
+
+    Parameters
+    ----------
+    style : refnpr.styles.xtoon.XToonStyle (or a ``contoured`` wrapper of one)
+    scene : refnpr.scenes.Scene
+    case_dir : Path
+        ``DIR/<case>``; the toon texture goes to ``case_dir/textures/toon/level_0.exr``.
+    width, height, spp : int
+        Image size and samples per pixel (the flow map's pixels are image pixels).
+
+    Returns
+    -------
+    StyleExport
+        params, textures (``toon``; ``detail_map`` and ``shape_weight`` where used), derived
+        texts, and ``_ABSTRACT_NORMAL`` per object when the style abstracts the shape.
+    """
+    from refnpr.styles.xtoon.detail import FLOW_BEHIND, TINY, resolve_frame
+    from refnpr.styles.xtoon.evaluation import _abstract, plan
+    from refnpr.styles.xtoon.shape import unit_rows
+
+    style = _unwrap(style)
+    cfg = style._cfg
+    p = cfg.detail
+    case_dir = Path(case_dir)
+    camera = scene.camera
+    plan(cfg, scene)  # validates the light index against the scene (clear error)
+    frame = resolve_frame(p, scene, camera)
+    textures: dict[str, Any] = {}
+    textures["toon"] = write_texture_levels(
+        case_dir,
+        "toon",
+        [np.asarray(cfg.texture, dtype=np.float32)],
+        encoding="linear",
+        wrap="clamp",
+        filter="linear",
+        orientation=(
+            "row i = detail D at (i + 0.5) / rows (row 0: D = 0, most abstract; rows grow with "
+            "D), column j = tone at (j + 0.5) / cols (column 0 darkest); array[i, j], no flip"
+        ),
+        used_for="X-Toon 2D toon texture, bilinear clamp-to-edge lookup at (tone, D)",
+    )
+    kind = p.kind
+    uses_z = kind in ("depth", "focus")
+    detail_map = None
+    if kind == "map":
+        textures["detail_map"] = write_texture_levels(
+            case_dir,
+            "detail_map",
+            [np.asarray(p.user_map, dtype=np.float32)],
+            encoding="linear",
+            wrap="clamp",
+            filter="nearest",
+            orientation=ORIENTATION_ROW0_TOP
+            + " (image rows: (H, W) per pixel or (nH, nW) per sample)",
+            used_for="X-Toon user detail map D per pixel or per sample (texelFetch)",
+        )
+        detail_map = "detail_map"
+    shaped = cfg.shape is not None
+    params: dict[str, Any] = {
+        "texture": "toon",
+        "texture_spec": _texture_spec(style),
+        "detail": kind,
+        "detail_mode": cfg.detail_mode,
+        "distance": p.distance if uses_z else None,
+        "show": style._show,
+        "tone": cfg.tone,
+        "light": int(cfg.light),
+        "z_min": float(frame.z_min) if uses_z else None,
+        "r": float(frame.r) if kind in ("depth", "focus", "orientation") else None,
+        "z_focus": float(frame.z_focus) if kind == "focus" else None,
+        "focus_point": list(p.focus_point) if kind == "focus" else None,
+        "s": float(p.s) if kind == "highlight" else None,
+        "one_sided": bool(p.one_sided),
+        "prev_camera": (_camera_table(p.prev_camera, width, height) if kind == "flow" else None),
+        "flow_min": float(p.flow_min) if kind == "flow" else None,
+        "flow_max": float(p.flow_max) if kind == "flow" else None,
+        "flow_behind": float(FLOW_BEHIND),
+        "tiny": float(TINY),
+        "detail_map": detail_map,
+        "shape": style.params().get("shape") if shaped else None,
+        "shape_weight": _weight(cfg, case_dir, textures) if shaped else None,
+        "shape_blend": cfg.shape_blend if shaped else None,
+        "shape_frame": cfg.shape_frame if shaped else None,
+        "shape_iterations": int(cfg.shape_iterations) if shaped else None,
+        "shape_objects": list(cfg.shape_objects) if cfg.shape_objects is not None else None,
+        "modulate": bool(cfg.modulate),
+        "abstract_normal_attribute": "_" + ABSTRACT_NORMAL.upper() if shaped else None,
+    }
+    vertex_attributes: dict[int, dict[str, np.ndarray]] = {}
+    if shaped:
+        parts = _abstract(cfg, scene)
+        for k, (mesh, n_abs) in enumerate(zip(scene.world_meshes(), parts, strict=True)):
+            if n_abs is None:
+                n_abs = unit_rows(mesh.normals)  # objects outside shape_objects keep their own
+            vertex_attributes[k] = {ABSTRACT_NORMAL: np.asarray(n_abs, dtype=np.float32)}
+    frames = None
+    if kind == "flow":  # every frame's camera: the flow detail reads the previous one (Fig. 6)
+        frames = [
+            {"frame": 0, "camera": camera_entry(p.prev_camera, width, height)},
+            {"frame": 1, "camera": camera_entry(scene.camera, width, height)},
+        ]
+    return StyleExport(
+        params=jsonable(params, where="style 'xtoon' params"),
+        textures=textures,
+        derived=dict(DERIVED),
+        vertex_attributes=vertex_attributes,
+        frames=frames,
+    )
+
+
+def unresolved(params: dict[str, Any]) -> list[str]:
+    """Key paths of exported xtoon params that only refnpr could resolve (none when exported by
+    :func:`export`; ``texture_spec`` is informative only: the texture itself is ``toon``)."""
+    from ._generic import unresolved as generic
+
+    rest = {k: v for k, v in params.items() if k != "texture_spec"}
+    out = generic(rest)
+    if params.get("texture") != "toon":
+        out.append(f"params.texture = {params.get('texture')!r} (expected the role 'toon')")
+    return out
