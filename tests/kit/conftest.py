@@ -66,3 +66,13 @@ def kit_cases(kit_dir: Path) -> dict[str, dict]:
     """name -> parsed case.json of every case in ``kit_dir``."""
     index = json.loads((kit_dir / "index.json").read_text())
     return {c["name"]: json.loads((kit_dir / c["case"]).read_text()) for c in index["cases"]}
+
+
+@pytest.fixture(scope="module")
+def gl():
+    """A headless OpenGL 4.5 core context of the GLSL backend (EGL; llvmpipe on this machine)."""
+    from refnpr_glsl.context import GL
+
+    g = GL()
+    yield g
+    g.release()

@@ -65,15 +65,6 @@ CASES = _cases()
 NAMES = [c.name for c in CASES]
 
 
-@pytest.fixture(scope="module")
-def gl():
-    from refnpr_glsl.context import GL
-
-    g = GL()
-    yield g
-    g.release()
-
-
 def _base_style(case, overrides: dict | None = None):
     scene = load_scene(case.scene)
     spec = case.style if case.style is not None else scene.style

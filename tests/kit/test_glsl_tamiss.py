@@ -46,15 +46,6 @@ def _case(name):
 
 
 @pytest.fixture(scope="module")
-def gl():
-    from refnpr_glsl.context import GL
-
-    g = GL()
-    yield g
-    g.release()
-
-
-@pytest.fixture(scope="module")
 def kit(tmp_path_factory):
     """A kit of the tamiss cases exported by ``refnpr kit export``."""
     from refnpr.kit import export_kit

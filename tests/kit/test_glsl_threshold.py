@@ -121,15 +121,6 @@ def threshold_kit(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return d
 
 
-@pytest.fixture(scope="module")
-def gl():
-    from refnpr_glsl.context import GL
-
-    g = GL()
-    yield g
-    g.release()
-
-
 def _case_inputs(kit: Path, name: str):
     """(golden-style case record, scene, base style) as refnpr renders the case."""
     from refnpr.golden import load_suite

@@ -18,7 +18,6 @@ Three levels:
 from __future__ import annotations
 
 import dataclasses
-import json
 import subprocess
 import sys
 from pathlib import Path
@@ -27,9 +26,9 @@ import numpy as np
 import pytest
 
 from refnpr.golden import load_suite
-from refnpr.raster import rasterize
 from refnpr.scenes import load_scene
-from refnpr.styles import ShadeContext, style_from_spec
+
+from ._harness import isolated
 
 ROOT = Path(__file__).resolve().parents[2]
 SUITE = ROOT / "golden" / "suite.toml"
@@ -57,147 +56,6 @@ def _cases() -> list:
 
 CASES = _cases()
 NAMES = [c.name for c in CASES]
-
-
-@pytest.fixture(scope="module")
-def gl():
-    from refnpr_glsl.context import GL
-
-    g = GL()
-    yield g
-    g.release()
-
-
-class FakeCase:
-    """The parts of ``refnpr_glsl.kit_io.Case`` a style pass reads, built from a refnpr scene
-    and the style's kit export (the files go to ``case_dir``), without a driver."""
-
-    def __init__(self, name, scene, style, case_dir: Path, width: int, height: int, spp: int):
-        from refnpr_glsl.kit_io import MeshData, read_image
-
-        from refnpr.kit.styles import export_style, style_name
-
-        exp = export_style(style, scene, case_dir, width=width, height=height, spp=spp)
-        self.name = name
-        self.dir = case_dir
-        self.width, self.height, self.spp = width, height, spp
-        self.n = int(round(spp**0.5))
-        self.sample_size = (self.n * width, self.n * height)
-        cam = scene.camera
-        lights = []
-        for li in scene.lights:
-            d = {"kind": li.kind, "color": list(li.color)}
-            if li.kind == "point":
-                d["position"] = list(li.position)
-            else:
-                d["direction"] = list(li.direction)
-            lights.append(d)
-        objects = [
-            {"name": o.name, "mesh_id": k, "material": dataclasses.asdict(o.material)}
-            for k, o in enumerate(scene.objects)
-        ]
-        self.data = {
-            "name": name,
-            "width": width,
-            "height": height,
-            "spp": spp,
-            "camera": {
-                "eye": cam.eye.tolist(),
-                "view_matrix": cam.view_matrix().tolist(),
-                "projection_matrix": cam.projection_matrix(width, height).tolist(),
-            },
-            "lights": lights,
-            "ambient": list(scene.ambient),
-            "objects": objects,
-            "style": {"name": style_name(style), "params": json.loads(json.dumps(exp.params))},
-            "textures": exp.textures,
-            "derived": exp.derived,
-        }
-        self.params = self.data["style"]["params"]
-        self.lights = lights
-        self.objects = objects
-        self.eye = np.asarray(cam.eye, dtype=np.float64)
-        self.ambient = np.asarray(scene.ambient, dtype=np.float64)
-        self._textures = exp.textures
-        self._read = read_image
-        meshes, first = [], 0
-        for k, m in enumerate(scene.world_meshes()):
-            attrs = {
-                key: np.asarray(v, dtype=np.float32).astype(np.float64)
-                for key, v in exp.vertex_attributes.get(k, {}).items()
-            }
-            f32 = lambda a: None if a is None else np.asarray(a, np.float32).astype(np.float64)  # noqa: E731
-            meshes.append(
-                MeshData(
-                    name=m.name,
-                    positions=f32(m.positions),
-                    normals=f32(m.normals),
-                    uv=f32(m.uv),
-                    indices=np.asarray(m.faces, dtype=np.int64),
-                    attributes=attrs,
-                    mesh_id=k,
-                    first_tri_id=first,
-                    material=objects[k]["material"],
-                )
-            )
-            first += int(m.faces.shape[0])
-        self.meshes = meshes
-
-    def view_matrix(self):
-        return np.asarray(self.data["camera"]["view_matrix"], dtype=np.float64)
-
-    def projection_matrix(self):
-        return np.asarray(self.data["camera"]["projection_matrix"], dtype=np.float64)
-
-    def materials(self, key, default=0.0):
-        return np.array(
-            [np.asarray(o["material"].get(key, default), dtype=np.float64) for o in self.objects]
-        )
-
-    def texture(self, role):
-        entry = self._textures[role]
-        return [self._read(self.dir / f) for f in entry["levels"]]
-
-
-def upload_gbuffer(gl, gb) -> dict:
-    """refnpr's G-buffer channels as textures (float32 / int32, array layout)."""
-    out = {}
-    for name in gb.channels:
-        a = np.asarray(gb[name])
-        if a.dtype.kind in "iub":
-            out[name] = gl.texture_from_array(a.astype(np.int32), dtype="i4")
-        else:
-            out[name] = gl.texture_from_array(a.astype(np.float32), dtype="f4")
-    return out
-
-
-def isolated(gl, case, tmp_path: Path, width: int, height: int, spp: int, module):
-    """(GLSL result, refnpr result), both (nH, nW, 4) float32, for one golden case's style on
-    refnpr's G-buffer of the case's scene at ``width`` x ``height`` (``case.scene``: a scene
-    name or a Scene; ``case.style``: a style table or a Style)."""
-    scene = load_scene(case.scene) if isinstance(case.scene, str) else case.scene
-    style = style_from_spec(case.style)
-    inner = style.base if style.name == "contoured" else style
-    gb = rasterize(
-        scene,
-        scene.camera,
-        width,
-        height,
-        sorted(inner.requires(scene)),
-        spp,
-        **inner.raster_options(scene),
-    )
-    ref = np.asarray(inner.shade(ShadeContext(gb, scene)), dtype=np.float32)
-    fake = FakeCase(case.name, scene, style, tmp_path, width, height, spp)
-    textures = upload_gbuffer(gl, gb)
-    try:
-        out = module.shade(gl, fake, textures, fake.sample_size)
-        got = gl.read(out)
-        out.release()
-    finally:
-        for t in textures.values():
-            t.release()
-    return got, ref
 
 
 @pytest.mark.parametrize("name", NAMES)
