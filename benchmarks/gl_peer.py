@@ -14,7 +14,21 @@ attachment            format     value
 5  ``normal``         RGBA32F    ``normalize(n)``, read back as 3 components
 ====================  =========  ==========================================================
 
-plus a 24-bit depth renderbuffer with ``GL_LESS`` (the first-drawn, i.e. lower, triangle wins a
+plus a 24-bit depth renderbuffer with ``GL_LESS``. That is the ``"six"`` layout. The ``"packed"``
+layout (``open_peer(..., layout="packed")``, usually the faster on llvmpipe: fewer render targets
+to blend and store per fragment, three large reads) writes the same eleven floats into three
+RGBA32F textures plus a depth texture:
+
+==========  ==============================================
+attachment  value (RGBA32F)
+==========  ==============================================
+0           ``uv.x, uv.y, dFdx(uv).x, dFdx(uv).y``
+1           ``dFdy(uv).x, dFdy(uv).y, tri_id, depth (w)``
+2           ``normal.x, normal.y, normal.z, 0``
+==========  ==============================================
+
+and its ``readback`` returns the same named arrays, as views into the three RGBA reads. In both,
+the depth test is ``GL_LESS`` (the first-drawn, i.e. lower, triangle wins a
 tie, as in refnpr). Every attachment is cleared to -1 (so ``tri_id`` is -1 where empty).
 
 Timings: ``render`` is clear + draw + ``glFinish``; ``readback`` is one ``glReadPixels`` per
@@ -80,6 +94,22 @@ void main() {
 }
 """
 
+FRAGMENT_SHADER_PACKED = """
+#version 450 core
+in vec3 v_normal;
+in vec2 v_uv;
+layout(location = 0) out vec4 out_uv_dx;    // uv, dFdx(uv)
+layout(location = 1) out vec4 out_dy_id_w;  // dFdy(uv), tri_id, w_clip
+layout(location = 2) out vec4 out_normal;   // normalize(n), 0
+void main() {
+    out_uv_dx = vec4(v_uv, dFdx(v_uv));
+    out_dy_id_w = vec4(dFdy(v_uv), float(gl_PrimitiveID), 1.0 / gl_FragCoord.w);
+    out_normal = vec4(normalize(v_normal), 0.0);
+}
+"""
+#: Layouts: name -> (fragment shader, number of RGBA32F / per-channel attachments)
+LAYOUTS = ("six", "packed")
+
 
 class GLUnavailable(RuntimeError):
     """No headless OpenGL 4.5 context could be made (moderngl or EGL missing, or too old a GL)."""
@@ -96,22 +126,26 @@ class GLPeer:
     width: int
     height: int
     setup_s: float
+    layout: str = "six"
 
     @property
     def renderer(self) -> str:
-        return str(self.ctx.info.get("GL_RENDERER", "?"))
+        with self.ctx:
+            return str(self.ctx.info.get("GL_RENDERER", "?"))
 
     @property
     def version(self) -> str:
-        return str(self.ctx.info.get("GL_VERSION", "?"))
+        with self.ctx:
+            return str(self.ctx.info.get("GL_VERSION", "?"))
 
     def render(self) -> float:
         """Clear, draw and ``glFinish``; returns seconds."""
         t0 = time.perf_counter()
-        self.fbo.use()
-        self.fbo.clear(-1.0, -1.0, -1.0, -1.0, depth=1.0)
-        self.vao.render()
-        self.ctx.finish()
+        with self.ctx:  # current on this thread: several peers may be open at once
+            self.fbo.use()
+            self.fbo.clear(-1.0, -1.0, -1.0, -1.0, depth=1.0)
+            self.vao.render()
+            self.ctx.finish()
         return time.perf_counter() - t0
 
     def readback(self) -> tuple[dict[str, np.ndarray], float]:
@@ -119,8 +153,29 @@ class GLPeer:
 
         Arrays are in GL window orientation (row 0 = bottom row).
         """
+        with self.ctx:  # current on this thread: several peers may be open at once
+            return self._readback()
+
+    def _readback(self) -> tuple[dict[str, np.ndarray], float]:
         out: dict[str, np.ndarray] = {}
         t0 = time.perf_counter()
+        if self.layout == "packed":
+            a0, a1, a2 = (
+                np.frombuffer(
+                    self.fbo.read(components=4, attachment=i, dtype="f4"), dtype=np.float32
+                ).reshape(self.height, self.width, 4)
+                for i in range(3)
+            )
+            t = time.perf_counter() - t0
+            out = {
+                "depth": a1[..., 3],
+                "tri_id": a1[..., 2],
+                "uv": a0[..., 0:2],
+                "duv_dx": a0[..., 2:4],
+                "duv_dy": a1[..., 0:2],
+                "normal": a2[..., 0:3],
+            }
+            return out, t
         for i, (name, _, comps) in enumerate(ATTACHMENTS):
             raw = self.fbo.read(components=comps, attachment=i, dtype="f4")
             shape = (self.height, self.width) if comps == 1 else (self.height, self.width, comps)
@@ -128,8 +183,9 @@ class GLPeer:
         return out, time.perf_counter() - t0
 
     def release(self) -> None:
-        for obj in (self.vao, self.fbo, self.program):
-            obj.release()
+        with self.ctx:
+            for obj in (self.vao, self.fbo, self.program):
+                obj.release()
         self.ctx.release()
 
 
@@ -141,6 +197,8 @@ def open_peer(
     view_projection: np.ndarray,
     width: int,
     height: int,
+    *,
+    layout: str = "six",
 ) -> GLPeer:
     """Make an EGL context, upload the mesh and build the MRT framebuffer.
 
@@ -153,12 +211,16 @@ def open_peer(
         ``projection_matrix(width, height) @ view_matrix()`` (row-major numpy; uploaded transposed
         because GL matrices are column-major).
     width, height : int
+    layout : {"six", "packed"}
+        Six per-channel attachments, or three RGBA32F ones plus a depth texture (module docstring).
 
     Raises
     ------
     GLUnavailable
         With the reason, if moderngl is missing or no EGL/GL 4.5 context can be created.
     """
+    if layout not in LAYOUTS:
+        raise ValueError(f"layout: expected one of {LAYOUTS}, got {layout!r}")
     t0 = time.perf_counter()
     try:
         import moderngl
@@ -171,7 +233,8 @@ def open_peer(
             f"no EGL OpenGL 4.5 context ({type(exc).__name__}: {exc}); on Debian install "
             "libegl1 libgl1-mesa-dri libegl-mesa0"
         ) from exc
-    prog = ctx.program(vertex_shader=VERTEX_SHADER, fragment_shader=FRAGMENT_SHADER)
+    fragment = FRAGMENT_SHADER_PACKED if layout == "packed" else FRAGMENT_SHADER
+    prog = ctx.program(vertex_shader=VERTEX_SHADER, fragment_shader=fragment)
     prog["u_view_projection"].write(np.asarray(view_projection, dtype="f4").T.copy().tobytes())
     verts = np.hstack(
         [
@@ -189,14 +252,19 @@ def open_peer(
         index_element_size=4,
     )
     size = (int(width), int(height))
-    colors = [ctx.renderbuffer(size, components=c, dtype="f4") for _, c, _ in ATTACHMENTS]
-    fbo = ctx.framebuffer(color_attachments=colors, depth_attachment=ctx.depth_renderbuffer(size))
+    if layout == "packed":
+        colors = [ctx.texture(size, 4, dtype="f4") for _ in range(3)]
+        depth = ctx.depth_texture(size)
+    else:
+        colors = [ctx.renderbuffer(size, components=c, dtype="f4") for _, c, _ in ATTACHMENTS]
+        depth = ctx.depth_renderbuffer(size)
+    fbo = ctx.framebuffer(color_attachments=colors, depth_attachment=depth)
     ctx.enable(moderngl.DEPTH_TEST)
     ctx.depth_func = "<"
     ctx.disable(moderngl.CULL_FACE)
     fbo.use()
     fbo.viewport = (0, 0, size[0], size[1])
-    peer = GLPeer(ctx, fbo, vao, prog, size[0], size[1], 0.0)
+    peer = GLPeer(ctx, fbo, vao, prog, size[0], size[1], 0.0, layout)
     peer.render()  # llvmpipe JIT-compiles the shaders on the first draw: keep that out of the runs
     peer.readback()
     peer.setup_s = time.perf_counter() - t0

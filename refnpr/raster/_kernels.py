@@ -692,6 +692,59 @@ def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vo
 
 
 @pnjit
+def interp_fused_full(tri_id, lam, faces, dtab, ntab, n, dout, dxout, dyout, nout, wout):
+    """:func:`interp_fused` specialised to the full G-buffer (one 2-column table with
+    derivatives, normals, depth; no plain values): the same operations in the same order, so
+    bit-identical results, with the loop counts fixed at compile time (~1.5x faster).
+
+    dtab (N, 2); ntab (N, 3); dout, dxout, dyout (nH, nW, 2); nout (nH, nW, 3); wout (nH, nW, 1).
+    """
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                wout[sy, sx, 0] = np.inf
+                for c in range(2):
+                    dout[sy, sx, c] = 0.0
+                    dxout[sy, sx, c] = 0.0
+                    dyout[sy, sx, c] = 0.0
+                for c in range(3):
+                    nout[sy, sx, c] = 0.0
+                continue
+            l0, l1, l2 = _lambdas(lam, t, sx, sy)
+            q = l0 + l1 + l2
+            inv_q = 1.0 / q
+            wout[sy, sx, 0] = inv_q
+            i0 = faces[t, 0]
+            i1 = faces[t, 1]
+            i2 = faces[t, 2]
+            ax0 = lam[t, 0, 0] * n
+            ax1 = lam[t, 1, 0] * n
+            ax2 = lam[t, 2, 0] * n
+            ay0 = lam[t, 0, 1] * n
+            ay1 = lam[t, 1, 1] * n
+            ay2 = lam[t, 2, 1] * n
+            qx = ax0 + ax1 + ax2
+            qy = ay0 + ay1 + ay2
+            for c in range(2):
+                f0 = dtab[i0, c]
+                f1 = dtab[i1, c]
+                f2 = dtab[i2, c]
+                f = (l0 * f0 + l1 * f1 + l2 * f2) * inv_q
+                dout[sy, sx, c] = f
+                dxout[sy, sx, c] = (ax0 * f0 + ax1 * f1 + ax2 * f2 - f * qx) * inv_q
+                dyout[sy, sx, c] = (ay0 * f0 + ay1 * f1 + ay2 * f2 - f * qy) * inv_q
+            nx = l0 * ntab[i0, 0] + l1 * ntab[i1, 0] + l2 * ntab[i2, 0]
+            ny = l0 * ntab[i0, 1] + l1 * ntab[i1, 1] + l2 * ntab[i2, 1]
+            nz = l0 * ntab[i0, 2] + l1 * ntab[i1, 2] + l2 * ntab[i2, 2]
+            length = math.sqrt(nx * nx + ny * ny + nz * nz)
+            inv_len = 1.0 / length if length > 0.0 else 0.0
+            nout[sy, sx, 0] = nx * inv_len
+            nout[sy, sx, 1] = ny * inv_len
+            nout[sy, sx, 2] = nz * inv_len
+
+
+@pnjit
 def resolve_coverage(tri_id, n, coverage):
     """coverage[y, x] = fraction of the n x n samples of pixel (x, y) covered by a triangle."""
     nn = float(n * n)

@@ -46,6 +46,11 @@ def box_resolve(samples: np.ndarray, n: int) -> np.ndarray:
     )
 
 
+_FRAME_FIELDS = frozenset(
+    {"camera", "view_projection", "mesh_first_tri", "texture_size", "line_period", "timings"}
+)
+
+
 @dataclass(frozen=True, eq=False)
 class GBuffer(Mapping):
     """Rasterized channels of one view.
@@ -80,6 +85,18 @@ class GBuffer(Mapping):
     texture_size: tuple[int, int] | None = None
     line_period: float = 1.0
     timings: dict[str, float] = field(default_factory=dict)
+    #: Work buffers of ``rasterize(..., out=self)`` (per-triangle tables, a ``tri_id`` when it
+    #: is not a channel), kept so that repeated frames allocate nothing. Private.
+    _scratch: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
+
+    def _refill(self, **frame) -> GBuffer:
+        """Point this G-buffer at a new frame after ``rasterize(..., out=self)`` wrote its
+        channels in place (camera, matrices, parameters, timings). Private."""
+        for key, value in frame.items():
+            if key not in _FRAME_FIELDS:
+                raise TypeError(f"_refill: unknown field {key!r}")
+            object.__setattr__(self, key, value)
+        return self
 
     @property
     def n(self) -> int:

@@ -11,7 +11,13 @@ import numpy as np
 from .. import _memory
 from . import _kernels as K
 from .camera import Camera
-from .channels import attribute_names, check_vertex_data, interpolated_channels
+from .channels import (
+    INTERPOLATED,
+    _concat,
+    attribute_names,
+    check_vertex_data,
+    interpolated_channels,
+)
 from .gbuffer import BUILTIN_CHANNELS, GBuffer
 from .mesh import Mesh
 
@@ -111,6 +117,191 @@ def _parse_channels(channels: Iterable[str], attr_names: set[str]) -> set[str]:
     return set(wanted)
 
 
+_INT_CHANNELS = frozenset({"tri_id", "mesh_id", "coverage_count"})
+#: Interpolated channels the in-place path cannot write straight into ``out`` (computed, then copied).
+_COPIED = frozenset({"ndc_z", "lod", "dyadic_scale"})
+
+
+def _layout(wanted, meshes, n, width, height, dtype) -> dict[str, tuple[tuple, np.dtype]]:
+    """(shape, dtype) of every channel this call produces, for checking ``out``."""
+    nh, nw = n * height, n * width
+    comps = {name: c for name, (c, _) in BUILTIN_CHANNELS.items()}
+    comps["normal"] = int(np.prod(meshes[0].normals.shape[1:])) if "normal" in wanted else 3
+    for a in attribute_names(meshes):
+        c = 0 if meshes[0].attributes[a].ndim == 1 else attribute_widths(meshes)[a]
+        comps[a] = comps[f"d{a}_dx"] = comps[f"d{a}_dy"] = c
+    layout = {}
+    for name in wanted:
+        shape = (height, width) if name == "coverage" else (nh, nw)
+        if comps[name]:
+            shape = (*shape, comps[name])
+        layout[name] = (shape, np.dtype(np.int32) if name in _INT_CHANNELS else dtype)
+    return layout
+
+
+def _check_out(out, layout, width, height, spp, dtype) -> None:
+    """Raise unless ``out`` can hold exactly what this call writes (see ``rasterize``)."""
+    if not isinstance(out, GBuffer):
+        raise TypeError(
+            f"out: expected a GBuffer returned by an earlier rasterize call (or None), "
+            f"got {type(out).__name__}"
+        )
+    fix = (
+        "pass a GBuffer from a rasterize call with the same width, height, spp, channels and "
+        "dtype, or out=None for fresh buffers"
+    )
+    if (out.width, out.height, out.spp) != (width, height, spp):
+        raise ValueError(
+            f"out: holds a {out.width} x {out.height} spp {out.spp} frame, this call renders "
+            f"{width} x {height} spp {spp}; {fix}"
+        )
+    have, want = set(out.channels), set(layout)
+    if have != want:
+        raise ValueError(
+            f"out: holds channels {sorted(have)}, this call asks for {sorted(want)} "
+            f"(missing from out: {sorted(want - have)}, extra in out: {sorted(have - want)}); {fix}"
+        )
+    for name in sorted(layout):
+        shape, dt = layout[name]
+        a = out.channels[name]
+        if not isinstance(a, np.ndarray) or a.dtype != dt or a.shape != shape:
+            got = f"{a.dtype} {a.shape}" if isinstance(a, np.ndarray) else type(a).__name__
+            hint = f"dtype={dtype.name} " if isinstance(a, np.ndarray) and a.dtype != dt else ""
+            raise ValueError(
+                f"out[{name!r}]: is {got}, this call ({hint}with these meshes) writes "
+                f"{dt} {shape}; {fix}"
+            )
+        if not (a.flags.c_contiguous and a.flags.writeable):
+            raise ValueError(
+                f"out[{name!r}]: must be a writeable C-contiguous array (got a read-only or "
+                f"strided view); {fix}"
+            )
+    names = sorted(layout)
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            if np.may_share_memory(out.channels[a], out.channels[b]):
+                raise ValueError(
+                    f"out: channels {a!r} and {b!r} share memory, so writing one would "
+                    f"overwrite the other; {fix}"
+                )
+
+
+class _Scratch:
+    """Work buffers: fresh each call, or kept in ``out._scratch`` so repeated frames reuse them."""
+
+    def __init__(self, store: dict | None):
+        self.store = store
+
+    def get(self, key: str, shape, dtype, *, zero: bool = False) -> np.ndarray:
+        shape = tuple(int(v) for v in shape)
+        if self.store is None:
+            return np.zeros(shape, dtype) if zero else np.empty(shape, dtype)
+        a = self.store.get(key)
+        if a is None or a.shape != shape or a.dtype != np.dtype(dtype):
+            a = np.zeros(shape, dtype) if zero else np.empty(shape, dtype)
+            self.store[key] = a
+        elif zero:
+            a.fill(0)
+        return a
+
+    def grow(self, key: str, size: int, dtype) -> np.ndarray:
+        """A 1-D buffer of ``size`` items (a prefix of a kept one with room to spare)."""
+        if self.store is None:
+            return np.empty(size, dtype)
+        a = self.store.get(key)
+        if a is None or a.size < size or a.dtype != np.dtype(dtype):
+            a = np.empty(size + size // 4 + 1024, dtype)
+            self.store[key] = a
+        return a[:size]
+
+
+def _interp_into(
+    wanted,
+    dest,
+    scratch,
+    *,
+    meshes,
+    positions,
+    faces,
+    clip,
+    qplane,
+    tri_id,
+    n,
+    width,
+    height,
+    dtype,
+) -> bool:
+    """Interpolated channels written straight into ``dest`` (the arrays of ``out``).
+
+    Mirrors :func:`refnpr.raster.channels.interpolated_channels` (same kernels, same tables, so
+    bit-identical values) for channel sets whose outputs are whole kernel buffers: at most one
+    family with derivatives and one without, no ``ndc_z``, ``lod`` or ``dyadic_scale``.
+    Returns False (nothing written) for other sets.
+    """
+    if wanted & _COPIED:
+        return False
+    nh, nw = tri_id.shape
+    attrs = attribute_names(meshes)
+    if not (wanted & INTERPOLATED or wanted & (attrs | {f"d{a}_{x}" for a in attrs for x in "xy"})):
+        if "depth" in wanted:
+            K.interp_depth(tri_id, qplane, dest["depth"])
+        return True
+    d_parts, v_parts = [], []
+    for name in ["uv", "position", *sorted(attrs)]:
+        if {f"d{name}_dx", f"d{name}_dy"} & wanted:
+            d_parts.append(name)
+        elif name in wanted:
+            v_parts.append(name)
+    if len(d_parts) > 1 or len(v_parts) > 1:
+        return False
+
+    def values(name):
+        if name == "uv":
+            return _concat(meshes, "uv", "uv")
+        if name == "position":
+            return np.ascontiguousarray(positions, dtype=np.float64)
+        return _concat(meshes, name, name)
+
+    def target(name, key, comps):
+        if name in wanted:
+            return dest[name].reshape(nh, nw, comps)  # a view: dest is C-contiguous
+        return scratch.get(key, (nh, nw, comps), dtype)
+
+    m_tris = faces.shape[0]
+    mark = scratch.get("mark", (m_tris,), np.uint8, zero=True)
+    K.mark_visible(tri_id, mark)
+    lam = scratch.get("lam", (m_tris, 3, 3), np.float64)
+    K.lam_for_marked(clip, faces, mark, n, width, height, lam)
+    if "bary" in wanted:
+        K.interp_bary(tri_id, lam, dest["bary"])
+    none = np.zeros((1, 0))
+    dtab = vtab = none
+    dout = dxout = dyout = vout = np.empty((nh, nw, 0), dtype)
+    if d_parts:
+        name = d_parts[0]
+        dtab = values(name)
+        c = dtab.shape[1]
+        dout = target(name, "dval", c)
+        dxout = target(f"d{name}_dx", "ddx", c)
+        dyout = target(f"d{name}_dy", "ddy", c)
+    if v_parts:
+        vtab = values(v_parts[0])
+        vout = target(v_parts[0], "vval", vtab.shape[1])
+    ntab, nout = none, np.empty((nh, nw, 0), dtype)
+    if "normal" in wanted:
+        ntab = _concat(meshes, "normals", "normal")
+        nout = dest["normal"].reshape(nh, nw, ntab.shape[1])
+    wout = dest["depth"].reshape(nh, nw, 1) if "depth" in wanted else np.empty((nh, nw, 0), dtype)
+    if dtab.shape[1] == 2 and vtab.shape[1] == 0 and ntab.shape[1] == 3 and wout.shape[2] == 1:
+        # the full G-buffer (uv + derivatives, normal, depth): the specialised kernel
+        K.interp_fused_full(tri_id, lam, faces, dtab, ntab, n, dout, dxout, dyout, nout, wout)
+    else:
+        K.interp_fused(
+            tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout
+        )
+    return True
+
+
 def rasterize(
     mesh_or_scene,
     camera: Camera | None,
@@ -125,6 +316,7 @@ def rasterize(
     dyadic_coord: str = "v",
     dtype=np.float32,
     tile: int = DEFAULT_TILE,
+    out: GBuffer | None = None,
 ) -> GBuffer:
     """Rasterize triangle meshes into a G-buffer holding exactly the requested channels.
 
@@ -153,11 +345,19 @@ def rasterize(
         Floating channels' dtype (ids are int32).
     tile : int
         Tile edge in samples (performance knob; results do not depend on it).
+    out : GBuffer, optional
+        A G-buffer from an earlier call with the same width, height, spp, channel set, dtype
+        (and vertex-attribute widths): its arrays are overwritten in place, it is pointed at
+        this frame (camera, matrices, timings) and returned, and the work buffers it keeps make
+        repeated frames allocate (and page-fault) nothing. Results are bit-identical to
+        ``out=None``. Arrays previously taken from ``out`` see the new frame; copy them first
+        to keep them. Any mismatch is a ``ValueError`` naming what differs.
 
     Returns
     -------
     GBuffer
-        ``gb[name]`` arrays of shape ``(n H, n W)`` or ``(n H, n W, C)`` (``coverage``: ``(H, W)``).
+        ``gb[name]`` arrays of shape ``(n H, n W)`` or ``(n H, n W, C)`` (``coverage``: ``(H, W)``);
+        ``out`` itself when given.
     """
     t_start = time.perf_counter()
     meshes = _meshes_of(mesh_or_scene)
@@ -198,6 +398,11 @@ def rasterize(
         raise ValueError(f"line_period: expected a positive number of pixels, got {line_period}")
     if dyadic_coord not in ("u", "v"):
         raise ValueError(f"dyadic_coord: expected 'u' or 'v', got {dyadic_coord!r}")
+    if out is not None:
+        _check_out(
+            out, _layout(wanted, meshes, n, width, height, dtype), width, height, n * n, dtype
+        )
+    scratch = _Scratch(None if out is None else out._scratch)
     _memory.check_fits(
         width,
         height,
@@ -230,9 +435,9 @@ def rasterize(
     first_tri = np.cumsum([0] + [m.n_faces for m in meshes]).astype(np.int64)
     vp = camera.projection_matrix(width, height) @ camera.view_matrix()
     n_verts = positions.shape[0]
-    clip = np.empty((n_verts, 4), dtype=np.float64)
-    snapped = np.empty((n_verts, 2), dtype=np.int32)
-    outcode = np.empty(n_verts, dtype=np.uint8)
+    clip = scratch.get("clip", (n_verts, 4), np.float64)
+    snapped = scratch.get("snapped", (n_verts, 2), np.int32)
+    outcode = scratch.get("outcode", (n_verts,), np.uint8)
     K.transform_vertices(positions, vp, width, height, guard, clip, snapped, outcode)
     timings: dict[str, float] = {"vertex": time.perf_counter() - t_start}
 
@@ -244,11 +449,11 @@ def rasterize(
     tiles_y = -(-nh // tile)
     n_tiles = tiles_x * tiles_y
     chunk = max(1, -(-m_tris // _BIN_CHUNKS))
-    counts = np.zeros((_BIN_CHUNKS, n_tiles), dtype=np.int64)
-    coords = np.empty((m_tris, 6), dtype=np.int32)
-    bbox = np.empty((m_tris, 4), dtype=np.int32)
-    status = np.empty(m_tris, dtype=np.int8)
-    qplane = np.empty((m_tris, 3), dtype=np.float64)
+    counts = scratch.get("counts", (_BIN_CHUNKS, n_tiles), np.int64, zero=True)
+    coords = scratch.get("coords", (m_tris, 6), np.int32)
+    bbox = scratch.get("bbox", (m_tris, 4), np.int32)
+    status = scratch.get("status", (m_tris,), np.int8)
+    qplane = scratch.get("qplane", (m_tris, 3), np.float64)
     cull = int(cull_backfaces)
     K.setup_triangles(
         clip,
@@ -281,7 +486,9 @@ def rasterize(
     starts = np.concatenate([[0], np.cumsum(counts.T.ravel())])
     offsets = np.ascontiguousarray(starts[:-1].reshape(n_tiles, _BIN_CHUNKS).T)
     tile_first = np.ascontiguousarray(starts[::_BIN_CHUNKS])  # (n_tiles + 1,)
-    lists = np.empty(int(starts[-1]), dtype=np.int32 if m_tris + sub.shape[0] < 2**31 else np.int64)
+    lists = scratch.grow(
+        "lists", int(starts[-1]), np.int32 if m_tris + sub.shape[0] < 2**31 else np.int64
+    )
     K.bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, offsets, lists)
     timings["bin"] = time.perf_counter() - t0
 
@@ -289,7 +496,10 @@ def rasterize(
     t0 = time.perf_counter()
     q_lo = (1.0 - _DEPTH_CLIP_SLACK) / camera.far  # per-sample near/far clip on Q = 1/w
     q_hi = (1.0 + _DEPTH_CLIP_SLACK) / camera.near
-    tri_id = np.empty((nh, nw), dtype=np.int32)
+    if out is not None and "tri_id" in wanted:
+        tri_id = out.channels["tri_id"]
+    else:
+        tri_id = scratch.get("tri_id", (nh, nw), np.int32)
     K.raster_visibility(
         coords,
         bbox,
@@ -312,11 +522,16 @@ def rasterize(
 
     # ---- channels ----------------------------------------------------------------------------
     t0 = time.perf_counter()
-    out: dict[str, np.ndarray] = {}
+    res: dict[str, np.ndarray] = {}
+    dest = out.channels if out is not None else {}
     if "tri_id" in wanted:
-        out["tri_id"] = tri_id
+        res["tri_id"] = tri_id
     if "coverage_count" in wanted:
-        cc = np.zeros((nh, nw), dtype=np.int32)
+        if "coverage_count" in dest:
+            cc = dest["coverage_count"]
+            cc.fill(0)
+        else:
+            cc = np.zeros((nh, nw), dtype=np.int32)
         K.raster_count(
             coords,
             bbox,
@@ -335,37 +550,57 @@ def rasterize(
             tiles_x,
             cc,
         )
-        out["coverage_count"] = cc
+        res["coverage_count"] = cc
     if "mesh_id" in wanted:
         mesh_id = np.searchsorted(first_tri, tri_id, side="right").astype(np.int32) - 1
         mesh_id[tri_id < 0] = -1
-        out["mesh_id"] = mesh_id
+        res["mesh_id"] = mesh_id
     if "coverage" in wanted:
-        cov = np.empty((height, width), dtype=dtype)
+        cov = dest["coverage"] if "coverage" in dest else np.empty((height, width), dtype=dtype)
         K.resolve_coverage(tri_id, n, cov)
-        out["coverage"] = cov
-    out.update(
-        interpolated_channels(
-            wanted,
-            meshes=meshes,
-            positions=positions,
-            faces=faces,
-            clip=clip,
-            qplane=qplane,
-            tri_id=tri_id,
-            n=n,
-            width=width,
-            height=height,
-            dtype=dtype,
-            texture_size=texture_size,
-            line_period=line_period,
-            dyadic_coord=dyadic_coord,
-        )
+        res["coverage"] = cov
+    interp = dict(
+        meshes=meshes,
+        positions=positions,
+        faces=faces,
+        clip=clip,
+        qplane=qplane,
+        tri_id=tri_id,
+        n=n,
+        width=width,
+        height=height,
+        dtype=dtype,
     )
+    if out is not None and _interp_into(wanted, dest, scratch, **interp):
+        pass
+    else:
+        res.update(
+            interpolated_channels(
+                wanted,
+                **interp,
+                texture_size=texture_size,
+                line_period=line_period,
+                dyadic_coord=dyadic_coord,
+            )
+        )
+    if out is not None:
+        for key, arr in res.items():
+            if arr is not dest[key]:
+                np.copyto(dest[key], arr)
+        timings["channels"] = time.perf_counter() - t0
+        timings["total"] = time.perf_counter() - t_start
+        return out._refill(
+            camera=camera,
+            view_projection=vp,
+            mesh_first_tri=first_tri,
+            texture_size=texture_size if "lod" in wanted else None,
+            line_period=float(line_period),
+            timings=timings,
+        )
     timings["channels"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
     return GBuffer(
-        channels={k: out[k] for k in sorted(out)},
+        channels={k: res[k] for k in sorted(res)},
         width=width,
         height=height,
         spp=n * n,
