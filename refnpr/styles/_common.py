@@ -11,6 +11,7 @@ from refnpr.formulas import lighting
 from ._names import warn_caller
 
 __all__ = [
+    "lit_rgba",
     "scatter_rgba",
     "rgba_from",
     "check_choice",
@@ -22,6 +23,194 @@ __all__ = [
     "short_repr",
     "warn_unused",
 ]
+
+
+def lit_rgba(
+    ctx: Any,
+    *,
+    mode: str,
+    specular: bool,
+    model: str = "blinn-phong",
+    n: int = 1,
+    t: float = 0.5,
+    ramp: np.ndarray | None = None,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """Toon or smooth shading of every sample in one numba pass: (nH, nW, 4) float32 RGBA.
+
+    ``mode="smooth"``: Veryovka eq. 1, ``m_a l_a + sum m_d f_d l_i + sum m_s f_s l_i``;
+    ``mode="step"``: eq. 2 with both terms through T_n(., t, n) of eq. 4; ``mode="lake"``:
+    ``m_a l_a + sum m_d ramp(N.L) l_i`` with ``ramp (K,)`` (Lake et al. 2000, nearest texel).
+    f_s is ``model`` (Blinn-Phong or Phong) with each object's shininess (``specular``; needs
+    ``position``); point lights need ``position`` too. Colours are clipped to [0, 1], alpha is 1
+    where covered (``ctx.mask``) and everything is 0 elsewhere. float64 arithmetic in the
+    order of the numpy formulas (``lighting.diffuse``, ``lighting.specular``,
+    ``threshold.step_n``), so the result equals theirs up to ``pow``: the kernel's is libm's,
+    numpy's may be its SIMD one (AVX-512), which can differ by an ulp in f_s (float64), not in
+    the float32 result (see tests/styles/test_shade_kernels.py).
+
+    ``out``, optional: a C-contiguous (nH, nW, 4) float32 (or float64, for tests of the
+    arithmetic) array to write into and return, every element overwritten (repeated frames).
+    """
+    from ._shade_kernels import (
+        LIGHT_DIRECTIONAL,
+        LIGHT_POINT,
+        MODE_LAKE,
+        MODE_SMOOTH,
+        MODE_STEP,
+        shade_lit,
+    )
+
+    codes = {"smooth": MODE_SMOOTH, "step": MODE_STEP, "lake": MODE_LAKE}
+    check_choice("mode", mode, tuple(codes))
+    check_choice("model", model, ("blinn-phong", "phong"))
+    gb, scene = ctx.gb, ctx.scene
+    cover = gb["tri_id"] if "tri_id" in gb else gb["mesh_id"]
+    mesh_id = gb["mesh_id"]
+    normal = gb["normal"]
+    shape = np.shape(cover)
+    points = [light.kind == "point" for light in scene.lights]
+    need_pos = specular or any(points)
+    position = gb["position"] if need_pos else np.zeros((1, 1, 3), dtype=np.float32)
+    for name, arr, want in (
+        ("mesh_id", mesh_id, shape),
+        ("normal", normal, shape + (3,)),
+        ("position", position, shape + (3,) if need_pos else (1, 1, 3)),
+    ):
+        if np.shape(arr) != want:
+            raise ValueError(
+                f"G-buffer channel {name!r}: expected shape {want} (the sample grid), got "
+                f"{np.shape(arr)}; rasterize every channel at the same size and spp"
+            )
+    cover, mesh_id = (_ints(a) for a in (cover, mesh_id))
+    objs = scene.objects
+    if mesh_id.size and int(mesh_id.max()) >= len(objs):
+        raise ValueError(
+            f"G-buffer channel 'mesh_id': got object index {int(mesh_id.max())} but the scene has "
+            f"{len(objs)} objects; shade the G-buffer with the scene it was rasterized from"
+        )
+    normal, position = (_floats(a) for a in (normal, position))
+
+    def table(attr: str) -> np.ndarray:
+        rows = [np.asarray(getattr(o.material, attr), dtype=np.float64) for o in objs]
+        arr = np.array(rows, dtype=np.float64).reshape(len(objs), -1)
+        if arr.shape[1] != (1 if attr == "shininess" else 3):
+            raise ValueError(f"material {attr}: expected an RGB triple per object, got {arr.shape}")
+        return np.ascontiguousarray(arr)
+
+    m_ambient = np.ascontiguousarray(table("ambient") * np.asarray(scene.ambient, float))
+    kinds, vecs, colors = [], [], []
+    for light, point in zip(scene.lights, points, strict=True):
+        colors.append(np.asarray(light.color, dtype=np.float64))
+        if point:
+            kinds.append(LIGHT_POINT)
+            vecs.append(np.asarray(light.position, dtype=np.float64))
+        else:  # exactly as ShadeContext.light_dirs
+            d = np.asarray(light.direction, dtype=np.float64)
+            kinds.append(LIGHT_DIRECTIONAL)
+            vecs.append(d / np.linalg.norm(d))
+    n_lights = len(kinds)
+    shininess = table("shininess").reshape(-1)
+    edges = _step_edges(shininess, n, t) if mode == "step" and specular else None
+    edge_lo, edge_hi, tones = edges or (np.zeros((1, 0)), np.zeros((1, 0)), np.zeros(1))
+    if out is None:
+        out = np.empty(shape + (4,), dtype=np.float32)
+    elif (
+        not isinstance(out, np.ndarray)
+        or out.shape != shape + (4,)
+        or out.dtype not in (np.float32, np.float64)
+        or not out.flags.c_contiguous
+        or not out.flags.writeable
+    ):
+        raise ValueError(
+            f"out: expected a writable C-contiguous {shape + (4,)} float32 array, got "
+            f"{type(out).__name__} {getattr(out, 'shape', '')} {getattr(out, 'dtype', '')}; "
+            "pass None for a new one"
+        )
+    shade_lit(
+        cover,
+        mesh_id,
+        normal,
+        position,
+        m_ambient,
+        table("diffuse"),
+        table("specular"),
+        shininess,
+        np.array(kinds, dtype=np.int64),
+        np.array(vecs, dtype=np.float64).reshape(n_lights, 3),
+        np.array(colors, dtype=np.float64).reshape(n_lights, 3),
+        np.ascontiguousarray(np.asarray(scene.camera.eye, dtype=np.float64)),
+        codes[mode],
+        int(n),
+        float(t),
+        np.ascontiguousarray(np.zeros(1) if ramp is None else ramp, dtype=np.float64),
+        bool(specular),
+        model == "phong",
+        edge_lo,
+        edge_hi,
+        tones,
+        out,
+    )
+    return out
+
+
+#: Relative widening of the breakpoints of T_n in base space (see ``_step_edges``).
+_EDGE_MARGIN = 1e-7
+#: Below this shininess the widening is too small against pow's rounding: always pow.
+_EDGE_MIN_SHININESS = 1e-4
+
+
+def _step_edges(
+    shininess: np.ndarray, n: int, t: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where T_n(base ** p, t, n) (eq. 4 of a specular term) is known without pow.
+
+    T_n (``threshold.step_n``) is a monotone step function of f_s whose steps lie at the
+    breakpoints c = k / n and (k + t) / n; in float64 it is constant on each open interval
+    between them up to a few ulps from its ends. With b_j = c_j ** (1 / p), a base in
+    [b_{j-1} (1 + m), b_j (1 - m)] (m = 1e-7) has pow(base, p) inside (c_{j-1}, c_j) at a
+    relative distance of about p m >= 1e-11 from both ends (pow is accurate to an ulp), so its
+    tone is T_n of the interval's midpoint, ``tones[j]``. ``tones[j] = -1`` marks the intervals
+    where pow must be evaluated: the first one when t = 0 (T_n jumps at f_s = 0 and pow may
+    underflow to 0 there) and the last one (f_s above every breakpoint); objects with
+    shininess < 1e-4, or whose widened edges overlap or underflow, evaluate pow everywhere.
+
+    Returns ``edge_lo (O, B)``, ``edge_hi (O, B)``, ``tones (B + 1,)``, float64.
+    """
+    from refnpr.formulas.threshold.lines import step_n_kernel
+
+    k = np.arange(n + 2, dtype=np.float64)
+    c = np.unique(np.concatenate([k / n, (k[: n + 1] + t) / n]))
+    mid = np.concatenate([[-1.0], (c[:-1] + c[1:]) / 2, [2.0]])
+    tones = step_n_kernel(mid, t, n).astype(np.float64)
+    tones[0] = tones[-1] = -1.0  # below 0 (unreachable), above every breakpoint
+    if t == 0.0:
+        tones[1] = -1.0
+    p = np.asarray(shininess, dtype=np.float64)[:, None]
+    with np.errstate(divide="ignore", over="ignore"):
+        b = c[None, :] ** (1.0 / p)
+    edge_lo = b * (1.0 - _EDGE_MARGIN)
+    edge_hi = b * (1.0 + _EDGE_MARGIN)
+    # pow everywhere for a tiny shininess, or where the widened edges overlap or underflow
+    # (b_j = 0 for j >= 1 when c_j ** (1 / p) is below the smallest float)
+    always = (p[:, 0] < _EDGE_MIN_SHININESS) | ~np.all(edge_hi[:, :-1] < edge_lo[:, 1:], axis=1)
+    edge_lo[always] = -np.inf
+    edge_hi[always] = np.inf
+    return np.ascontiguousarray(edge_lo), np.ascontiguousarray(edge_hi), tones
+
+
+def _ints(arr: Any) -> np.ndarray:
+    arr = np.asarray(arr)
+    if arr.dtype not in (np.int32, np.int64):
+        arr = arr.astype(np.int64)
+    return np.ascontiguousarray(arr)
+
+
+def _floats(arr: Any) -> np.ndarray:
+    arr = np.asarray(arr)
+    if arr.dtype not in (np.float32, np.float64):
+        arr = arr.astype(np.float64)
+    return np.ascontiguousarray(arr)
 
 
 def scatter_rgba(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:

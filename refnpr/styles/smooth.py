@@ -6,9 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.formulas import lighting
-
-from ._common import check_choice, needs_position, scatter_rgba, specular_field
+from ._common import check_choice, lit_rgba, needs_position
 from .base import ShadeContext, Style, register
 
 __all__ = ["SmoothStyle"]
@@ -43,16 +41,6 @@ class SmoothStyle(Style):
         return frozenset(req)
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        mask = ctx.mask  # shade only covered samples: (K, ...) arrays below
-        n = ctx.gb["normal"][mask].astype(np.float64)
-        v = ctx.view_dir(mask) if self.specular else None
-        m_d = ctx.material_field("diffuse", mask)
-        m_s = ctx.material_field("specular", mask)
-        rgb = ctx.material_field("ambient", mask) * np.asarray(ctx.scene.ambient, float)  # eq. 1
-        for light_dir, color in ctx.light_dirs(mask):
-            f_d = lighting.diffuse(n, light_dir, normalize=False)  # eq. 1: f_d (unit inputs)
-            rgb = rgb + m_d * f_d[:, None] * color
-            if self.specular:
-                f_s = specular_field(ctx, n, light_dir, v, self.model, mask)
-                rgb = rgb + m_s * f_s[:, None] * color  # eq. 1: f_s
-        return scatter_rgba(rgb, mask)
+        return lit_rgba(  # eq. 1 in one numba pass over the samples
+            ctx, mode="smooth", specular=self.specular, model=self.model
+        )

@@ -6,16 +6,9 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.formulas import lighting, threshold
+from refnpr.formulas import lighting
 
-from ._common import (
-    check_choice,
-    check_count,
-    check_number,
-    needs_position,
-    scatter_rgba,
-    specular_field,
-)
+from ._common import check_choice, check_count, check_number, lit_rgba, needs_position
 from .base import ShadeContext, Style, register
 
 __all__ = ["ToonStyle"]
@@ -62,23 +55,10 @@ class ToonStyle(Style):
         return frozenset(req)
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        mask = ctx.mask  # shade only covered samples: (K, ...) arrays below
-        n = ctx.gb["normal"][mask].astype(np.float64)
-        m_d = ctx.material_field("diffuse", mask)
-        m_s = ctx.material_field("specular", mask)
-        rgb = ctx.material_field("ambient", mask) * np.asarray(ctx.scene.ambient, float)  # eq. 2
+        ramp = None
         if self.mode == "lake":
             bounds = (np.arange(self.n) + self.t) / self.n
             ramp = lighting.toon_ramp_texture(bounds, np.arange(self.n + 1) / self.n, size=1024)
-        v = ctx.view_dir(mask) if self.specular else None
-        for light_dir, color in ctx.light_dirs(mask):
-            f_d = lighting.diffuse(n, light_dir, normalize=False)  # unit inputs
-            if self.mode == "lake":
-                tone = lighting.toon_ramp(f_d, ramp)
-            else:
-                tone = threshold.step_n(f_d, self.t, self.n)  # eq. 4 applied in eq. 2
-            rgb = rgb + m_d * tone[:, None] * color
-            if self.specular:
-                f_s = specular_field(ctx, n, light_dir, v, mask=mask)
-                rgb = rgb + m_s * threshold.step_n(f_s, self.t, self.n)[:, None] * color
-        return scatter_rgba(rgb, mask)
+        return lit_rgba(  # eq. 2 with eq. 4's T_n, or Lake's ramp: one numba pass
+            ctx, mode=self.mode, specular=self.specular, n=self.n, t=self.t, ramp=ramp
+        )

@@ -1,0 +1,191 @@
+"""numba kernel of toon and smooth shading (private; inputs validated by ``_common.lit_rgba``).
+
+One parallel pass over the samples (a row per task, no reductions, so the result does not
+depend on the thread count): per covered sample, Veryovka eq. 1's ambient + diffuse + specular
+sums (``smooth``), or their multi-tone steps of eqs. 2-4 and Lake et al.'s ramp (``toon``), in
+float64 with the operations in the order of the numpy formulas in ``refnpr.formulas`` (dot
+products summed x + y, then + z; Blinn-Phong's half vector through ``unit_vectors``' max-scaling),
+stored as float32 straight-alpha RGBA clipped to [0, 1].
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from refnpr._jit import njit, pnjit
+
+#: ``mode`` codes of :func:`shade_lit`.
+MODE_SMOOTH = 0
+MODE_STEP = 1
+MODE_LAKE = 2
+#: ``light_kind`` codes.
+LIGHT_DIRECTIONAL = 0
+LIGHT_POINT = 1
+
+
+@njit(inline="always")
+def _step_n(x, t, n):
+    """T_n(x, t) of Veryovka eq. 4 as ``threshold.step_n_kernel`` computes it (float64)."""
+    xn = x * n
+    whole = math.floor(xn)
+    levels = whole + (1.0 if xn - whole >= t else 0.0)  # eq. 4: floor(x n) + T(Frac(x n), t)
+    top = math.ceil(xn)
+    return (levels if levels <= top else top) / n  # eq. 4, divided by n
+
+
+@pnjit
+def shade_lit(
+    cover,
+    mesh_id,
+    normal,
+    position,
+    m_ambient,
+    m_diffuse,
+    m_specular,
+    shininess,
+    light_kind,
+    light_vec,
+    light_color,
+    eye,
+    mode,
+    steps,
+    t,
+    ramp,
+    specular,
+    phong,
+    edge_lo,
+    edge_hi,
+    tones,
+    out,
+):
+    """Shade every sample of ``out (nH, nW, 4) float32`` (written in full; zero where empty).
+
+    cover (nH, nW) int: a sample is covered where ``cover >= 0`` (tri_id, else mesh_id).
+    mesh_id (nH, nW) int: object index (clamped to >= 0, as ``material_field`` does).
+    normal (nH, nW, 3) float: unit normals; position (nH, nW, 3) float (any shape when neither
+    ``specular`` nor a point light needs it). m_ambient (O, 3) float64: m_a * l_a per object;
+    m_diffuse, m_specular (O, 3) float64; shininess (O,) float64. light_kind (L,) int64;
+    light_vec (L, 3) float64: unit direction for directional lights, position for point
+    lights; light_color (L, 3) float64; eye (3,) float64. mode: MODE_SMOOTH / MODE_STEP /
+    MODE_LAKE; steps, t: eq. 4's n and t; ramp (K,) float64: Lake's texture (MODE_LAKE);
+    specular: add the specular sum; phong: Phong instead of Blinn-Phong.
+
+    edge_lo, edge_hi (O, B) float64, tones (B + 1,) float64 (MODE_STEP with ``specular``; else
+    any shape, unused): T_n(f_s) without ``pow`` where the tone is certain. B breakpoints c_j of
+    T_n in f_s (ascending), mapped to base = f_s ** (1 / shininess) and widened to
+    [edge_lo, edge_hi] per object; a base in [edge_hi[j - 1], edge_lo[j]] has f_s strictly
+    inside (c_{j - 1}, c_j), far (relative 1e-11 or more) from both, so T_n(f_s) = tones[j];
+    elsewhere, or where tones[j] < 0, pow is evaluated as the formula does.
+    """
+    nh, nw = cover.shape
+    n_lights = light_kind.shape[0]
+    k_ramp = ramp.shape[0]
+    n_edges = edge_lo.shape[1]
+    for y in numba.prange(nh):
+        for x in range(nw):
+            if cover[y, x] < 0:
+                out[y, x, 0] = 0.0
+                out[y, x, 1] = 0.0
+                out[y, x, 2] = 0.0
+                out[y, x, 3] = 0.0
+                continue
+            mi = max(mesh_id[y, x], 0)
+            nx = np.float64(normal[y, x, 0])
+            ny = np.float64(normal[y, x, 1])
+            nz = np.float64(normal[y, x, 2])
+            r = m_ambient[mi, 0]  # eq. 1: m_a l_a
+            g = m_ambient[mi, 1]
+            b = m_ambient[mi, 2]
+            vx = 0.0
+            vy = 0.0
+            vz = 0.0
+            if specular:  # V: unit vector towards the eye (ShadeContext.view_dir)
+                vx = eye[0] - np.float64(position[y, x, 0])
+                vy = eye[1] - np.float64(position[y, x, 1])
+                vz = eye[2] - np.float64(position[y, x, 2])
+                length = math.sqrt(vx * vx + vy * vy + vz * vz)
+                if length > 0.0:
+                    vx = vx / length
+                    vy = vy / length
+                    vz = vz / length
+                else:
+                    vx = 0.0
+                    vy = 0.0
+                    vz = 0.0
+            p = shininess[mi]
+            for i in range(n_lights):
+                lx = light_vec[i, 0]
+                ly = light_vec[i, 1]
+                lz = light_vec[i, 2]
+                if light_kind[i] == LIGHT_POINT:  # ShadeContext.light_dirs
+                    lx = lx - np.float64(position[y, x, 0])
+                    ly = ly - np.float64(position[y, x, 1])
+                    lz = lz - np.float64(position[y, x, 2])
+                    length = math.sqrt(lx * lx + ly * ly + lz * lz)
+                    if length > 0.0:
+                        lx = lx / length
+                        ly = ly / length
+                        lz = lz / length
+                    else:
+                        lx = 0.0
+                        ly = 0.0
+                        lz = 0.0
+                n_dot_l = nx * lx + ny * ly + nz * lz
+                f_d = n_dot_l if n_dot_l >= 0.0 else 0.0  # eq. 1: f_d = max(N.L, 0)
+                if mode == MODE_LAKE:  # Lake et al.: nearest texel of clip(N.L, 0, 1)
+                    c = f_d if f_d <= 1.0 else 1.0
+                    j = math.floor(c * k_ramp)
+                    tone = ramp[int(j) if j < k_ramp - 1 else k_ramp - 1]
+                elif mode == MODE_STEP:
+                    tone = _step_n(f_d, t, steps)  # eq. 4 in eq. 2
+                else:
+                    tone = f_d
+                r = r + m_diffuse[mi, 0] * tone * light_color[i, 0]
+                g = g + m_diffuse[mi, 1] * tone * light_color[i, 1]
+                b = b + m_diffuse[mi, 2] * tone * light_color[i, 2]
+                if specular and p > 0.0:
+                    if phong:  # R = 2 (N.L) N - L; base = R.V
+                        two = 2.0 * n_dot_l
+                        rx = two * nx - lx
+                        ry = two * ny - ly
+                        rz = two * nz - lz
+                        base = rx * vx + ry * vy + rz * vz
+                    else:  # H = unit_vectors(L + V); base = N.H
+                        hx = lx + vx
+                        hy = ly + vy
+                        hz = lz + vz
+                        m = max(abs(hx), abs(hy), abs(hz))
+                        if m > 0.0:
+                            hx = hx / m
+                            hy = hy / m
+                            hz = hz / m
+                        length = math.sqrt(hx * hx + hy * hy + hz * hz)
+                        if length > 0.0:
+                            hx = hx / length
+                            hy = hy / length
+                            hz = hz / length
+                        base = nx * hx + ny * hy + nz * hz
+                    if base < 0.0:
+                        base = 0.0
+                    if mode != MODE_STEP:
+                        f_s = base**p if n_dot_l > 0.0 else 0.0  # eq. 1: f_s
+                    elif n_dot_l > 0.0:
+                        j = 0
+                        while j < n_edges and base >= edge_hi[mi, j]:
+                            j += 1
+                        if (j < n_edges and base > edge_lo[mi, j]) or tones[j] < 0.0:
+                            f_s = _step_n(base**p, t, steps)  # eq. 4 of eq. 1's f_s
+                        else:
+                            f_s = tones[j]  # the same: T_n is constant around base**p
+                    else:
+                        f_s = _step_n(0.0, t, steps)
+                    r = r + m_specular[mi, 0] * f_s * light_color[i, 0]
+                    g = g + m_specular[mi, 1] * f_s * light_color[i, 1]
+                    b = b + m_specular[mi, 2] * f_s * light_color[i, 2]
+            out[y, x, 0] = min(max(r, 0.0), 1.0)
+            out[y, x, 1] = min(max(g, 0.0), 1.0)
+            out[y, x, 2] = min(max(b, 0.0), 1.0)
+            out[y, x, 3] = 1.0
