@@ -1,0 +1,124 @@
+"""The fused composite + resolve kernel (exactly the numpy code it replaced) and RenderContext
+(frames identical to render(), buffers reused between them)."""
+
+import numba
+import numpy as np
+import pytest
+
+from refnpr.raster import Camera
+from refnpr.raster.gbuffer import box_resolve
+from refnpr.render import RenderContext, composite_resolve, render
+
+
+def numpy_composite_resolve(rgba, n, background):
+    """The compositing and resolve render() ran before issue 11, verbatim."""
+    bg = np.asarray(background, dtype=np.float64)
+    a = rgba[..., 3:4].astype(np.float64)
+    premult = np.concatenate([rgba[..., :3] * a, a], axis=-1)
+    bg_premult = np.concatenate([bg[:3] * bg[3], bg[3:4]])
+    over = premult + bg_premult * (1.0 - a)
+    res = box_resolve(over, n)
+    alpha = res[..., 3:4]
+    rgb = np.divide(res[..., :3], alpha, out=np.zeros_like(res[..., :3]), where=alpha > 0)
+    return np.concatenate([rgb, alpha], axis=-1).astype(np.float32)
+
+
+def random_samples(rng, h, w, n):
+    rgba = rng.random((h * n, w * n, 4), dtype=np.float32)
+    a = rgba[..., 3]
+    a[rng.random(a.shape) < 0.3] = 0.0  # empty samples
+    a[rng.random(a.shape) < 0.3] = 1.0  # opaque samples
+    return rgba
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4])
+@pytest.mark.parametrize(
+    "background", [(0.0, 0.0, 0.0, 1.0), (0.2, 0.7, 0.9, 0.5), (1.0, 1.0, 1.0, 0.0)]
+)
+def test_fused_kernel_equals_numpy_bit_for_bit(n, background):
+    rng = np.random.default_rng(11 + n)
+    rgba = random_samples(rng, 37, 53, n)
+    want = numpy_composite_resolve(rgba, n, background)
+    got = composite_resolve(rgba, n, background)
+    assert got.dtype == np.float32 and got.shape == want.shape
+    assert np.array_equal(got.view(np.uint32), want.view(np.uint32))
+
+
+def test_fused_kernel_is_identical_for_one_and_two_threads():
+    rng = np.random.default_rng(5)
+    rgba = random_samples(rng, 64, 48, 2)
+    saved = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = composite_resolve(rgba, 2, (0.3, 0.3, 0.3, 1.0))
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        two = composite_resolve(rgba, 2, (0.3, 0.3, 0.3, 1.0))
+    finally:
+        numba.set_num_threads(saved)
+    assert np.array_equal(one.view(np.uint32), two.view(np.uint32))
+
+
+def test_fused_kernel_writes_into_out_and_checks_it():
+    rng = np.random.default_rng(1)
+    rgba = random_samples(rng, 8, 6, 2)
+    out = np.full((8, 6, 4), 7.0, dtype=np.float32)
+    assert composite_resolve(rgba, 2, (0, 0, 0, 1), out=out) is out
+    assert np.array_equal(out, numpy_composite_resolve(rgba, 2, (0, 0, 0, 1)))
+    with pytest.raises(ValueError, match=r"out: expected a writable C-contiguous \(8, 6, 4\)"):
+        composite_resolve(rgba, 2, (0, 0, 0, 1), out=np.empty((8, 6, 4), np.float64))
+    with pytest.raises(ValueError, match=r"rgba: shape \(16, 12, 4\) is not a whole number"):
+        composite_resolve(rgba, 3, (0, 0, 0, 1))
+    with pytest.raises(ValueError, match="rgba: expected an"):
+        composite_resolve(rgba.astype(np.float64), 2, (0, 0, 0, 1))
+    with pytest.raises(ValueError, match="background: expected 4 values"):
+        composite_resolve(rgba, 2, (0, 0, 0))
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_fused_kernel_refuses_nan_and_inf(bad):
+    rgba = np.zeros((4, 4, 4), np.float32)
+    rgba[3, 1, 2] = bad
+    with pytest.raises(ValueError, match="style 'toon' produced NaN or inf"):
+        composite_resolve(rgba, 2, (0, 0, 0, 1), style_name="toon")
+
+
+def _bits(img):
+    return img.rgba.view(np.uint32)
+
+
+@pytest.mark.parametrize("spp", [1, 4])
+@pytest.mark.parametrize("style", ["toon", "smooth"])
+def test_context_frames_equal_render(plane_scene, style, spp):
+    ctx = RenderContext(plane_scene, style, 40, 30, spp)
+    other = Camera.look_at((0.5, 0.3, 4.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 45.0, 0.1, 100.0)
+    for cam in (None, other, None):
+        got = ctx.render(cam, copy=True)
+        want = render(plane_scene, style, 40, 30, spp, camera=cam)
+        assert np.array_equal(_bits(got), _bits(want))
+        assert set(got.timings) == set(want.timings)
+
+
+def test_context_reuses_its_output_buffer(plane_scene):
+    ctx = RenderContext(plane_scene, "toon", 32, 24, 4)
+    first = ctx.render()
+    kept = ctx.render(copy=True)
+    second = ctx.render()
+    assert second.rgba is first.rgba  # the context's buffer, overwritten frame to frame
+    assert kept.rgba is not second.rgba
+    assert np.array_equal(kept.rgba, second.rgba)
+    _, gb = ctx.render(return_gbuffer=True)
+    assert gb.sample_shape == (48, 64)
+    _, gb2 = ctx.render(return_gbuffer=True)
+    assert gb2 is gb  # rasterize(..., out=gb): the G-buffer's arrays are overwritten in place
+    assert all(gb2[name] is gb[name] for name in gb)
+
+
+def test_context_checks_its_arguments(plane_scene):
+    with pytest.raises(ValueError, match="width"):
+        RenderContext(plane_scene, "toon", 0, 10)
+    ctx = RenderContext(plane_scene, "toon", 8, 8)
+    with pytest.raises(TypeError, match="camera: expected a refnpr.raster.Camera"):
+        ctx.render("front")
+    with pytest.raises(TypeError, match="copy: expected a bool"):
+        ctx.render(copy=1)
+    assert "toon" in repr(ctx) and "8x8" in repr(ctx)
