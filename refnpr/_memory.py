@@ -41,9 +41,11 @@ _BIN_BYTES_PER_TILE = 3 * 64 * 8 + 2 * 4
 #: Per-sample bytes of a style's own shading work (its temporaries and its float32 RGBA), by
 #: style name, measured with tracemalloc on the golden suite's scenes (the growth of the peak from
 #: the suite's sizes to twice their width and height), plus about 15 %; other styles get 300.
+#: toon and smooth shade in one numba pass (refnpr/styles/_shade_kernels.py): their float32 RGBA
+#: plus the kernel's per-material tables, with a margin.
 SHADE_BYTES_PER_SAMPLE: dict[str, int] = {
-    "toon": 210,
-    "smooth": 260,
+    "toon": 24,
+    "smooth": 24,
     "threshold": 230,
     "halftone": 210,
     "xtoon": 170,
@@ -51,11 +53,11 @@ SHADE_BYTES_PER_SAMPLE: dict[str, int] = {
     "tamiss": 260,
 }
 _SHADE_DEFAULT = 300
-#: Per-sample bytes of render's composite-and-resolve (float64 alpha, premultiplied RGBA, the
-#: background term and the composite; the style's float32 RGBA is counted by the style).
-_RESOLVE_BYTES_PER_SAMPLE = 8 + 32 + 8 + 32 + 32
-#: Per-pixel bytes of the resolved image (float64 mean, rgb, float32 RGBA, sRGB bytes).
-_IMAGE_BYTES_PER_PIXEL = 32 + 24 + 32 + 16 + 4
+#: Per-sample bytes of render's composite-and-resolve: none beyond the style's float32 RGBA (one
+#: fused numba pass, refnpr/_kernels.py, reads it and writes the image).
+_RESOLVE_BYTES_PER_SAMPLE = 0
+#: Per-pixel bytes of the resolved image (float32 RGBA).
+_IMAGE_BYTES_PER_PIXEL = 16
 
 #: Channels that go through the barycentric interpolation pass.
 _INTERPOLATED = frozenset(

@@ -155,10 +155,10 @@ CASES = [
         Correct(_png_written),
     ),
     _c(
-        "golden-width-100000",
-        "a golden suite case of width 100000 (refnpr golden --check --suite S)",
-        _golden(100000, 192),
-        Exits(1, r"FAIL +wide .*" + _size_msg(100000, 192, 1)),
+        "golden-width-1000000",
+        "a golden suite case of width 1000000 (refnpr golden --check --suite S)",
+        _golden(1000000, 192),
+        Exits(1, r"FAIL +wide .*" + _size_msg(1000000, 192, 1)),
     ),
     # ---- rasterize / render: sizes -----------------------------------------------------------
     _c(
