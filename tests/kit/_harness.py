@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from refnpr.raster import rasterize
 from refnpr.scenes import load_scene
@@ -144,3 +147,37 @@ def isolated(gl, case, tmp_path: Path, width: int, height: int, spp: int, module
         for t in textures.values():
             t.release()
     return got, ref
+
+
+def render_and_check(kit: Path, names: list[str], derivatives: str) -> dict:
+    """Render ``names`` of ``kit`` with the backend driver (a subprocess) and check them with
+    ``refnpr kit check``'s comparator: name -> CaseCheck, plus ``"_driver_log"``."""
+    from refnpr.kit.check import check_kit
+
+    renders = kit.parent / f"renders-{derivatives}"
+    run = subprocess.run(
+        [sys.executable, "-m", "refnpr_glsl", str(kit), str(renders), "--only", *names, "-q",
+         "--derivatives", derivatives],
+        capture_output=True,
+        text=True,
+    )  # fmt: skip
+    renders.mkdir(exist_ok=True)
+    results = check_kit(kit, renders, json_path=kit.parent / f"check-{derivatives}.json")
+    out: dict = {r.name: r for r in results}
+    out["_driver_log"] = run.stdout + run.stderr
+    return out
+
+
+def case_params(names: list[str], known: dict[str, str]) -> list:
+    """``names`` as pytest params, the ``known`` failures marked strict xfail with their reason."""
+    return [
+        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=known[n])) if n in known else n
+        for n in names
+    ]
+
+
+def assert_passed(results: dict, name: str) -> None:
+    r = results[name]
+    log = results["_driver_log"]
+    detail = log[log.find(name) :][:600] if name in log else ""
+    assert r.passed, f"{name}: {r.status}: {r.message}\n{detail}"

@@ -18,8 +18,6 @@ Three levels:
 from __future__ import annotations
 
 import dataclasses
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +26,7 @@ import pytest
 from refnpr.golden import load_suite
 from refnpr.scenes import load_scene
 
-from ._harness import isolated
+from ._harness import assert_passed, case_params, isolated, render_and_check
 
 ROOT = Path(__file__).resolve().parents[2]
 SUITE = ROOT / "golden" / "suite.toml"
@@ -83,59 +81,26 @@ def exported_kit(tmp_path_factory) -> Path:
     return kit
 
 
-def _render_and_check(kit: Path, derivatives: str) -> dict:
-    """Render ``kit`` with the backend driver (a subprocess) and check it with ``refnpr kit
-    check``'s comparator: name -> CaseCheck, plus ``"_driver_log"``."""
-    from refnpr.kit.check import check_kit
-
-    renders = kit.parent / f"renders-{derivatives}"
-    run = subprocess.run(
-        [sys.executable, "-m", "refnpr_glsl", str(kit), str(renders), "--only", *NAMES, "-q",
-         "--derivatives", derivatives],
-        capture_output=True,
-        text=True,
-    )  # fmt: skip
-    renders.mkdir(exist_ok=True)
-    results = check_kit(kit, renders, json_path=kit.parent / f"check-{derivatives}.json")
-    out: dict = {r.name: r for r in results}
-    out["_driver_log"] = run.stdout + run.stderr
-    return out
-
-
 @pytest.fixture(scope="module")
 def kit_results(exported_kit) -> dict:
-    return _render_and_check(exported_kit, "analytic")
+    return render_and_check(exported_kit, NAMES, "analytic")
 
 
 @pytest.fixture(scope="module")
 def kit_results_quad(exported_kit) -> dict:
-    return _render_and_check(exported_kit, "quad")
+    return render_and_check(exported_kit, NAMES, "quad")
 
 
-def _params(known: dict[str, str]) -> list:
-    return [
-        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=known[n])) if n in known else n
-        for n in NAMES
-    ]
-
-
-def _assert_passed(results: dict, name: str) -> None:
-    r = results[name]
-    log = results["_driver_log"]
-    detail = log[log.find(name) :][:600] if name in log else ""
-    assert r.passed, f"{name}: {r.status}: {r.message}\n{detail}"
-
-
-@pytest.mark.parametrize("name", _params(KNOWN_FAILURES))
+@pytest.mark.parametrize("name", case_params(NAMES, KNOWN_FAILURES))
 def test_kit_case_passes_its_tolerance(kit_results, name):
     """The backend's render (analytic derivatives) passes the case's own tolerance."""
-    _assert_passed(kit_results, name)
+    assert_passed(kit_results, name)
 
 
-@pytest.mark.parametrize("name", _params(QUAD_KNOWN_FAILURES))
+@pytest.mark.parametrize("name", case_params(NAMES, QUAD_KNOWN_FAILURES))
 def test_kit_case_with_quad_derivatives(kit_results_quad, name):
     """The same with ``--derivatives quad`` (dFdx/dFdy, what a plain GPU shader gets)."""
-    _assert_passed(kit_results_quad, name)
+    assert_passed(kit_results_quad, name)
 
 
 def _point_lit(name: str):
