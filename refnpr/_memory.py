@@ -29,6 +29,8 @@ __all__ = [
     "available_bytes",
     "check_fits",
     "format_bytes",
+    "INTERPOLATED",
+    "needs_interpolation",
 ]
 
 #: Largest samples per pixel (a 256 x 256 grid inside each pixel); memory is checked as well.
@@ -59,8 +61,9 @@ _RESOLVE_BYTES_PER_SAMPLE = 0
 #: Per-pixel bytes of the resolved image (float32 RGBA).
 _IMAGE_BYTES_PER_PIXEL = 16
 
-#: Channels that go through the barycentric interpolation pass.
-_INTERPOLATED = frozenset(
+#: Channels that go through the barycentric interpolation pass (the rasterizer's set: defined
+#: here because raster imports this module, never the other way round).
+INTERPOLATED = frozenset(
     {
         "ndc_z",
         "bary",
@@ -75,6 +78,16 @@ _INTERPOLATED = frozenset(
         "dposition_dy",
     }
 )
+
+
+def needs_interpolation(wanted: Iterable[str], attrs: Iterable[str]) -> bool:
+    """Whether ``wanted`` has a channel of the interpolation pass: one of :data:`INTERPOLATED`,
+    a vertex attribute of ``attrs`` or its derivative ``d<a>_x`` / ``d<a>_y``."""
+    wanted, attrs = set(wanted), set(attrs)
+    derived = {f"d{a}_{x}" for a in attrs for x in "xy"}
+    return bool(wanted & (INTERPOLATED | attrs | derived))
+
+
 _UV_D = frozenset({"duv_dx", "duv_dy", "lod", "dyadic_scale"})
 
 
@@ -83,10 +96,9 @@ def _interp_parts(
 ) -> dict[str, int]:
     """Per-sample-grid buffers of the interpolation pass (mirrors ``raster/channels.py``)."""
     attrs = set(attributes)
-    derived = {f"d{a}_{x}" for a in attrs for x in "xy"}
     need_depth = bool({"depth", "ndc_z"} & wanted)
     parts: dict[str, int] = {}
-    if not (wanted & _INTERPOLATED or wanted & (attrs | derived)):
+    if not needs_interpolation(wanted, attrs):
         if need_depth:
             parts["depth"] = s * f
         return parts

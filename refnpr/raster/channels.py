@@ -12,27 +12,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .._memory import INTERPOLATED, needs_interpolation
 from . import _kernels as K
 from .mesh import Mesh
 
 __all__ = ["interpolated_channels", "attribute_names", "check_vertex_data", "INTERPOLATED"]
 
-#: Channels that need the barycentric planes of the visible triangles.
-INTERPOLATED = frozenset(
-    {
-        "ndc_z",
-        "bary",
-        "position",
-        "normal",
-        "uv",
-        "duv_dx",
-        "duv_dy",
-        "lod",
-        "dyadic_scale",
-        "dposition_dx",
-        "dposition_dy",
-    }
-)
 _LOD_FLOOR = 2.0**-64
 
 
@@ -122,7 +107,7 @@ def interpolated_channels(
     attrs = attribute_names(meshes)
     need_depth = "depth" in wanted or "ndc_z" in wanted
     depth_dtype = np.float64 if "ndc_z" in wanted else dtype
-    if not (wanted & INTERPOLATED or wanted & (attrs | {f"d{a}_{x}" for a in attrs for x in "xy"})):
+    if not needs_interpolation(wanted, attrs):
         if need_depth:  # nothing to interpolate: depth from the depth planes alone
             depth = np.empty((nh, nw), dtype=depth_dtype)
             K.interp_depth(tri_id, qplane, depth)

@@ -12,7 +12,6 @@ from .. import _memory
 from . import _kernels as K
 from .camera import Camera
 from .channels import (
-    INTERPOLATED,
     _concat,
     attribute_names,
     check_vertex_data,
@@ -242,7 +241,7 @@ def _interp_into(
         return False
     nh, nw = tri_id.shape
     attrs = attribute_names(meshes)
-    if not (wanted & INTERPOLATED or wanted & (attrs | {f"d{a}_{x}" for a in attrs for x in "xy"})):
+    if not _memory.needs_interpolation(wanted, attrs):
         if "depth" in wanted:
             K.interp_depth(tri_id, qplane, dest["depth"])
         return True
