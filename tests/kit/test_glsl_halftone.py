@@ -35,6 +35,8 @@ from refnpr.raster import rasterize  # noqa: E402
 from refnpr.scenes import load_scene  # noqa: E402
 from refnpr.styles import ShadeContext, style_from_spec  # noqa: E402
 
+from ._harness import upload_gbuffer  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[2]
 SUITE = ROOT / "golden" / "suite.toml"
 STYLE = "halftone"
@@ -115,11 +117,8 @@ def _isolated(gl, tmp_path: Path, case, overrides=None, *, scale: float = 0.5):
     gb = rasterize(scene, scene.camera, w, h, sorted(channels), case.spp)
     ref = np.asarray(style.shade(ShadeContext(gb, scene)), dtype=np.float32)
     kit_case = Case(_write_case(tmp_path, case.name, scene, style, w, h, case.spp, channels))
-    textures = {}
+    textures = upload_gbuffer(gl, gb)
     try:
-        for ch in channels:
-            a = np.asarray(gb[ch])
-            textures[ch] = gl.texture_from_array(a, dtype="i4" if a.dtype.kind in "iu" else "f4")
         out = glsl_halftone.shade(gl, kit_case, textures, (w * gb.n, h * gb.n))
         got = gl.read(out)
         out.release()
