@@ -64,19 +64,25 @@ def run(args) -> dict:
     ctx_cls = None
     if args.context:
         from refnpr.render import RenderContext as ctx_cls
+    rows = ROWS
+    if args.styles:
+        wanted = set(args.styles)
+        if "tamiss" in wanted:
+            wanted.add("tam")  # tamiss's target is relative to tam's frame
+        rows = tuple(r for r in ROWS if r[1] in wanted)
     results = []
     for spp in args.spp:
         contexts = {}
         # warm-up: one untimed frame per row (and per context)
-        for scene, style in ROWS:
+        for scene, style in rows:
             render(scene, style, width, height, spp)
             if ctx_cls is not None:
                 c = ctx_cls(scene, style, width, height, spp)
                 c.render()
                 contexts[(scene, style)] = c
-        runs = {(s, st, k): [] for s, st in ROWS for k in ("render", "context")}
+        runs = {(s, st, k): [] for s, st in rows for k in ("render", "context")}
         for _ in range(args.runs):
-            for scene, style in ROWS:
+            for scene, style in rows:
                 img = render(scene, style, width, height, spp)
                 runs[(scene, style, "render")].append(dict(img.timings))
                 if ctx_cls is not None:
@@ -229,6 +235,9 @@ def main(argv=None) -> int:
     p.add_argument(
         "--sections", default="frame,resolve", help="frame (render per style), resolve (alone)"
     )
+    p.add_argument(
+        "--styles", default="", help="comma-separated styles to time (default: every row)"
+    )
     p.add_argument("--label", default="", help="free text stored in the JSON (before/after)")
     p.add_argument("--json", default=None, help="write the report here")
     args = p.parse_args(argv)
@@ -236,6 +245,11 @@ def main(argv=None) -> int:
         args.size, args.runs = "480x270", 3
     args.size = tuple(int(v) for v in args.size.lower().split("x"))
     args.spp = [int(v) for v in args.spp.split(",")]
+    known = {style for _, style in ROWS}
+    args.styles = [v for v in args.styles.split(",") if v]
+    unknown = sorted(set(args.styles) - known)
+    if unknown:
+        p.error(f"--styles: unknown {unknown}; choose from {sorted(known)}")
     sections = set(args.sections.split(","))
     report = run(args) if "frame" in sections else {"meta": {"label": args.label}, "rows": []}
     if "frame" in sections:
