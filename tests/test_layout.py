@@ -419,6 +419,8 @@ RANK = {
     "render": 4,
     "compare": 5,
     "explore": 5,
+    "sequence": 5,
+    "coherence": 6,
     "golden": 6,
     "kit": 7,
     "gallery": 7,

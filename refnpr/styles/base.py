@@ -64,6 +64,31 @@ class Style:
         """Per-sample straight-alpha linear RGBA, ``(n H, n W, 4)`` float32; alpha 0 where empty."""
         raise NotImplementedError
 
+    # -- sequences: a still is frame 0 of a one-frame sequence (DESIGN, "Frames, state and speed")
+    def for_frame(self, scene: Any, prev_scene: Any | None) -> Style:
+        """This style configured for one frame of a sequence.
+
+        A sequence driver calls it once per frame, before rasterizing, with the frame's still
+        scene and the previous frame's (None on the first frame). Styles whose per-frame inputs
+        come from the previous frame (X-Toon's optical flow: the previous camera and object
+        transforms) return a configured copy; the default is the style itself.
+        """
+        return self
+
+    def initial_state(self) -> Any:
+        """The state carried into the first frame of a sequence (None: stateless)."""
+        return None
+
+    def shade_frame(self, ctx: ShadeContext, state: Any) -> tuple[np.ndarray, Any]:
+        """Shade one frame of a sequence from the previous frame's ``state``.
+
+        Returns the per-sample RGBA (as :meth:`shade`) and the state for the next frame.
+        Stateless styles (the default) return ``(self.shade(ctx), state)``; a stateful style
+        (TAMISS hash tables and aggregate history) returns its updated state explicitly, so
+        nothing is kept in globals.
+        """
+        return self.shade(ctx), state
+
     def params(self) -> dict[str, Any]:
         """The parameters this instance was built with (for golden metadata and repr)."""
         return dict(getattr(self, "_params", {}))
