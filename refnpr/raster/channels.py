@@ -41,6 +41,18 @@ def check_vertex_data(meshes: Sequence[Mesh], wanted: set[str]) -> None:
                 _concat([m], "normals", "normal")
 
 
+def frozen(a: np.ndarray) -> np.ndarray:
+    """A read-only view of ``a``: kernel inputs are always passed read-only, so numba compiles
+    one specialisation per kernel instead of one per writeable flag (a mesh's own arrays are
+    read-only, concatenations and copies are not; every variant costs a cold-start compile)."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
+_NONE = frozen(np.zeros((1, 0)))
+
+
 def _concat(meshes: Sequence[Mesh], key: str, what: str) -> np.ndarray:
     arrays = []
     for m in meshes:
@@ -60,19 +72,19 @@ def _concat(meshes: Sequence[Mesh], key: str, what: str) -> np.ndarray:
         raise ValueError(
             f"channels: attribute {key!r} has different widths across meshes: {sorted(ncols)}"
         )
-    return np.ascontiguousarray(np.concatenate(arrays), dtype=np.float64)
+    return frozen(np.ascontiguousarray(np.concatenate(arrays), dtype=np.float64))
 
 
 def _table(parts: list[tuple[str, np.ndarray]], n_rows: int) -> tuple[np.ndarray, list]:
     """Concatenate (name, (N, C)) columns; returns the table and (name, start, stop) slices."""
     if not parts:
-        return np.zeros((n_rows, 0)), []
+        return frozen(np.zeros((n_rows, 0))), []
     slices, start = [], 0
     for name, arr in parts:
         slices.append((name, start, start + arr.shape[1]))
         start += arr.shape[1]
     table = parts[0][1] if len(parts) == 1 else np.concatenate([a for _, a in parts], axis=1)
-    return np.ascontiguousarray(table, dtype=np.float64), slices
+    return frozen(np.ascontiguousarray(table, dtype=np.float64)), slices
 
 
 def _column(arr: np.ndarray, start: int, stop: int, squeeze: bool) -> np.ndarray:
@@ -144,10 +156,10 @@ def interpolated_channels(
         if meshes[0].attributes[a].ndim == 1:
             squeeze.add(a)
     if "ndc_z" in wanted:
-        v_parts.append(("z_clip", np.ascontiguousarray(clip[:, 2:3])))
+        v_parts.append(("z_clip", frozen(np.ascontiguousarray(clip[:, 2:3]))))
     dtab, d_slices = _table(d_parts, positions.shape[0])
     vtab, v_slices = _table(v_parts, positions.shape[0])
-    ntab = _concat(meshes, "normals", "normal") if "normal" in wanted else np.zeros((1, 0))
+    ntab = _concat(meshes, "normals", "normal") if "normal" in wanted else _NONE
 
     dout = np.empty((nh, nw, dtab.shape[1]), dtype=dtype)
     dxout = np.empty_like(dout)

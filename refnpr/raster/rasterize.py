@@ -12,9 +12,11 @@ from .. import _memory
 from . import _kernels as K
 from .camera import Camera
 from .channels import (
+    _NONE,
     _concat,
     attribute_names,
     check_vertex_data,
+    frozen,
     interpolated_channels,
 )
 from .gbuffer import BUILTIN_CHANNELS, GBuffer
@@ -258,7 +260,7 @@ def _interp_into(
         if name == "uv":
             return _concat(meshes, "uv", "uv")
         if name == "position":
-            return np.ascontiguousarray(positions, dtype=np.float64)
+            return frozen(np.ascontiguousarray(positions, dtype=np.float64))
         return _concat(meshes, name, name)
 
     def target(name, key, comps):
@@ -273,7 +275,7 @@ def _interp_into(
     K.lam_for_marked(clip, faces, mark, n, width, height, lam)
     if "bary" in wanted:
         K.interp_bary(tri_id, lam, dest["bary"])
-    none = np.zeros((1, 0))
+    none = _NONE
     dtab = vtab = none
     dout = dxout = dyout = vout = np.empty((nh, nw, 0), dtype)
     if d_parts:
@@ -431,6 +433,7 @@ def rasterize(
         positions = np.concatenate([m.positions for m in meshes])
         offsets = np.cumsum([0] + [m.n_vertices for m in meshes])
         faces = np.concatenate([m.faces + o for m, o in zip(meshes, offsets[:-1], strict=True)])
+    positions, faces = frozen(positions), frozen(faces)  # one kernel specialisation (see frozen)
     first_tri = np.cumsum([0] + [m.n_faces for m in meshes]).astype(np.int64)
     vp = camera.projection_matrix(width, height) @ camera.view_matrix()
     n_verts = positions.shape[0]
