@@ -7,9 +7,11 @@ Meshes: :func:`uv_sphere`, :func:`icosphere`, :func:`torus`, :func:`torus_knot`,
 User meshes: :func:`load_mesh`; texture coordinates on demand: :func:`project_uv`,
 :func:`require_uv`. Scenes: :class:`Scene` and friends, :func:`load_scene`, :func:`parse_scene`,
 :func:`list_scenes`, :func:`mesh_from_spec` (the file format is documented in
-:mod:`refnpr.scenes.toml_format`).
+:mod:`refnpr.scenes.toml_format`). Animated scenes: :class:`Animation`, :class:`Track`,
+:class:`Keyframe` (:mod:`refnpr.scenes.animation`); ``scene.at(frame)`` is a frame's still.
 """
 
+from .animation import Animation, Track
 from .knot import rotation_minimising_frames, torus_knot, torus_knot_curve
 from .loading import from_trimesh, load_mesh
 from .primitives import icosphere, spherical_uv, torus, uv_sphere
@@ -20,9 +22,13 @@ from .scene import Light, Material, Scene, SceneObject, transform_matrix
 from .teapot import read_bpt, teapot, teapot_patches
 from .terrain import terrain, terrain_height
 from .toml_format import SceneFileError, builtin_scene_path, list_scenes, load_scene, parse_scene
+from .tracks import Keyframe, quaternion_from_axis_angle
 from .uv_projection import UV_PROJECTIONS, project_uv, require_uv
 
 __all__ = [
+    "Animation",
+    "Keyframe",
+    "Track",
     "Light",
     "MESH_BUILDERS",
     "Material",
@@ -40,6 +46,7 @@ __all__ = [
     "parse_scene",
     "plane",
     "project_uv",
+    "quaternion_from_axis_angle",
     "read_bpt",
     "require_uv",
     "revolve",

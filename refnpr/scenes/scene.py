@@ -16,6 +16,7 @@ import numpy as np
 
 from ..raster import Camera, Mesh
 from ._params import check_real, check_vec
+from .animation import Animation
 
 __all__ = ["Material", "Light", "SceneObject", "Scene", "transform_matrix"]
 
@@ -223,6 +224,9 @@ class Scene:
     style : dict
         Optional default style from the scene file, e.g. ``{"name": "toon", "n": 3}``; the
         renderer interprets it (empty if the file has none).
+    animation : Animation or None
+        Tracks over frames (:mod:`refnpr.scenes.animation`); None for a still scene. Every
+        track must name a part of this scene. :meth:`at` gives the still scene of a frame.
     """
 
     objects: tuple[SceneObject, ...]
@@ -232,6 +236,7 @@ class Scene:
     background: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
     name: str = "scene"
     style: dict = field(default_factory=dict)
+    animation: Animation | None = None
 
     def __post_init__(self) -> None:
         objects = tuple(self.objects)
@@ -263,6 +268,45 @@ class Scene:
         if not isinstance(self.style, dict):
             raise TypeError(f"style: expected a dict, got {type(self.style).__name__}")
         object.__setattr__(self, "style", dict(self.style))
+        if self.animation is not None:
+            if not isinstance(self.animation, Animation):
+                raise TypeError(
+                    "animation: expected a refnpr.scenes.animation.Animation or None, got "
+                    f"{type(self.animation).__name__}"
+                )
+            self.animation.check_scene(self)
+
+    @property
+    def frames(self) -> int:
+        """Number of frames: the animation's, 1 for a still scene (frame 0 of one frame)."""
+        return 1 if self.animation is None else self.animation.frames
+
+    def at(self, frame: float) -> Scene:
+        """The still scene of ``frame``: the same objects and meshes, with the frame's camera,
+        lights, object transforms and style table, and ``animation=None``.
+
+        Parameters
+        ----------
+        frame : float
+            In ``[0, frames - 1]``; fractional frames interpolate (time = frame / fps). A
+            still scene has only frame 0 (it returns itself).
+
+        Raises
+        ------
+        ValueError
+            A frame outside the range, or a frame whose interpolated values are invalid (a
+            camera whose eye reaches its target, a zero scale), naming the frame.
+        """
+        if self.animation is None:
+            if isinstance(frame, bool) or not isinstance(frame, (int, float, np.number)):
+                raise TypeError(f"frame: expected a number, got {type(frame).__name__} {frame!r}")
+            if frame != 0:
+                raise ValueError(
+                    f"frame: {frame!r} is outside [0, 0]: scene {self.name!r} is a still (no "
+                    "[animation] table), which has only frame 0"
+                )
+            return self
+        return self.animation.still(self, frame)
 
     def world_meshes(self) -> list[Mesh]:
         """Each object's mesh transformed to world space, in object order."""

@@ -43,6 +43,13 @@ A scene file has a few top-level keys and tables (unknown keys are errors)::
                                            # a slash) relative to this file
     uv_scale = [4.0, 4.0]                  # or one number
 
+    [animation]                            # optional: an animated scene (docs/animation.md)
+    frames = 48
+    fps = 24
+    [[animation.track]]                    # camera, lights, object transforms, style parameters
+    target = "camera.eye"
+    keys = [{ frame = 0, value = [6.0, 4.5, 8.0] }, { frame = 47, value = [8.0, 4.5, 6.0] }]
+
 ``transform`` applies ``scale``, then the rotations about x, y, z (degrees), then ``translate``
 (:func:`~refnpr.scenes.transform_matrix`). A mesh file with several geometries (glTF) becomes
 several objects named ``name[i]`` sharing the transform and material.
@@ -53,6 +60,7 @@ table, and names the key: ``teapot.toml: [[object]] #1 'teapot': level: expected
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -61,6 +69,7 @@ from importlib import resources
 from pathlib import Path
 
 from ..raster import Camera
+from .animation_toml import parse_animation
 from .registry import mesh_from_spec
 from .scene import Light, Material, Scene, SceneObject, transform_matrix
 
@@ -71,9 +80,20 @@ __all__ = [
     "list_scenes",
     "builtin_scene_path",
     "parse_toml_bytes",
+    "scene_frames",
 ]
 
-_TOP_KEYS = ("name", "description", "ambient", "background", "camera", "style", "light", "object")
+_TOP_KEYS = (
+    "name",
+    "description",
+    "ambient",
+    "background",
+    "camera",
+    "style",
+    "light",
+    "object",
+    "animation",
+)
 _CAMERA_KEYS = ("eye", "target", "up", "fov_y", "near", "far")
 _LIGHT_KEYS = ("kind", "direction", "position", "color")
 _MATERIAL_KEYS = tuple(f.name for f in fields(Material))
@@ -221,7 +241,7 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
     if isinstance(background, list) and len(background) == 3:
         background = [*background, 1.0]
     with _where(src, "top level"):
-        return Scene(
+        scene = Scene(
             objects=tuple(objects),
             camera=camera,
             lights=tuple(lights),
@@ -230,6 +250,15 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
             name=name,
             style=style,
         )
+    if "animation" not in top:
+        return scene
+    try:
+        animation = parse_animation(src, top["animation"])
+        shown = src.replace("{", "{{").replace("}", "}}")
+        animation.check_scene(scene, label=shown + ": [[animation.track]] #{n} {target!r}")
+    except (TypeError, ValueError) as exc:
+        raise SceneFileError(str(exc)) from exc
+    return dataclasses.replace(scene, animation=animation)
 
 
 def _resolve_style_paths(value, base_dir: Path):
@@ -287,6 +316,24 @@ def list_scenes() -> dict[str, str]:
     for path in sorted(_data_dir().glob("*.toml")):
         out[path.stem] = str(_read(path, path.name).get("description", ""))
     return out
+
+
+def scene_frames(name: str) -> int:
+    """Number of frames of built-in scene ``name`` (1 for a still), read without building it.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (listing the valid ones) or a malformed ``frames``.
+    """
+    path = builtin_scene_path(name)
+    animation = _read(path, path.name).get("animation")
+    if animation is None:
+        return 1
+    frames = animation.get("frames") if isinstance(animation, Mapping) else None
+    if isinstance(frames, bool) or not isinstance(frames, int) or frames < 1:
+        raise SceneFileError(f"{path.name}: [animation]: frames: expected an integer >= 1")
+    return frames
 
 
 def builtin_scene_path(name: str) -> Path:
