@@ -1,4 +1,5 @@
-"""The ``refnpr`` command: render, scenes, styles, info, golden, compare, gallery, kit."""
+"""The ``refnpr`` command: render, animate, coherence, scenes, styles, info, golden, compare,
+gallery, kit, warmup."""
 
 from __future__ import annotations
 
@@ -125,6 +126,117 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+class _FrameProgress:
+    """A one-line stderr progress bar for `refnpr animate`: frame i/N, frames per second, ETA."""
+
+    def __init__(self, stream=None) -> None:
+        self.stream = sys.stderr if stream is None else stream
+        self.start = time.perf_counter()
+        self.rendered = 0
+        self._shown = False
+
+    def __call__(self, done: int, total: int, frame: int, status: str) -> None:
+        if status == "rendered":
+            self.rendered += 1
+        elapsed = time.perf_counter() - self.start
+        fps = self.rendered / elapsed if elapsed > 0 and self.rendered else 0.0
+        left = total - done
+        eta = f"{left / fps:6.0f}s" if fps > 0 else "     ?"
+        width = 30
+        filled = int(round(width * done / total)) if total else width
+        bar = "#" * filled + "-" * (width - filled)
+        what = "(state) " if status == "state" else ""
+        self.stream.write(
+            f"\r[{bar}] frame {done}/{total} {what}(#{frame}) {fps:5.2f} fps  ETA {eta}"
+        )
+        self.stream.flush()
+        self._shown = True
+
+    def close(self) -> None:
+        if self._shown:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _style_arg(args: argparse.Namespace, scene) -> dict | None:
+    """The style of --style/--param (None: the scene's own), as `refnpr render` reads them."""
+    if args.style is not None and not args.style.strip():
+        raise ValueError(
+            f"--style: expected a style name, got {args.style!r}; list them with `refnpr styles`, "
+            "or leave --style out to use the scene's own style"
+        )
+    params = _style_params(args.param or [])
+    if not (args.style or params):
+        return None
+    if args.style:
+        return {"name": args.style, **params}
+    base = dict(scene.style or {})
+    if not base:
+        raise ValueError(
+            f"--param needs --style: the scene {args.scene!r} names no style; "
+            "add --style NAME (list them with `refnpr styles`)"
+        )
+    return {**base, **params}
+
+
+def _cmd_animate(args: argparse.Namespace) -> int:
+    from .scenes import load_scene
+    from .sequence import frame_range, render_sequence, write_video
+
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"-o/--output: {args.output!r} is a file; give a directory for the frames")
+    if args.video is not None and Path(args.video).suffix.lower() not in (".mp4", ".gif"):
+        raise ValueError(
+            f"--video: expected a file name ending in .mp4 or .gif, got {args.video!r}"
+        )
+    if args.video is not None and Path(args.video).suffix.lower() == ".mp4":
+        try:
+            import imageio_ffmpeg  # noqa: F401
+        except ImportError:
+            raise ValueError(
+                f"--video: writing {args.video!r} (MP4) needs ffmpeg from the imageio-ffmpeg "
+                "package; install it with `pip install 'refnpr[video]'`, or write a .gif"
+            ) from None
+    scene = load_scene(args.scene)
+    style = _style_arg(args, scene)
+    try:
+        frame_range(args.frames, scene.frames)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"--frames: {exc}") from None
+    width, height = args.size
+    show = not args.quiet and (args.progress or sys.stderr.isatty())
+    progress = _FrameProgress() if show else None
+    try:
+        result = render_sequence(
+            scene,
+            style,
+            width,
+            height,
+            args.spp,
+            out_dir=out,
+            frames=args.frames,
+            exr=args.exr,
+            progress=progress,
+        )
+    finally:
+        if progress:
+            progress.close()
+    if not args.quiet:
+        n = len(result.frames)
+        print(
+            f"wrote {len(result.rendered)} of {n} frame(s) to {out} ({width}x{height}, "
+            f"spp={args.spp}; {len(result.skipped)} already done) in {result.seconds:.2f} s"
+            + ("; stateful style: ran from frame 0" if result.stateful else "")
+        )
+    if args.video is not None:
+        fps = scene.animation.fps if scene.animation is not None else 24.0
+        video = write_video(result.paths, args.video, fps)
+        if not args.quiet:
+            print(f"wrote {video} ({len(result.paths)} frames at {fps:g} fps)")
+    return 0
+
+
 def _style_params(pairs: list[tuple[str, object]]) -> dict[str, object]:
     """--param pairs as a dict: each key once, and never the style's name."""
     params: dict[str, object] = {}
@@ -144,9 +256,12 @@ def _style_params(pairs: list[tuple[str, object]]) -> dict[str, object]:
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
     from .scenes import list_scenes
+    from .scenes.toml_format import scene_frames
 
     for name, desc in list_scenes().items():
-        print(f"{name:16s} {desc}")
+        frames = scene_frames(name)
+        mark = f"[{frames} frames] " if frames > 1 else ""
+        print(f"{name:16s} {mark}{desc}")
     return 0
 
 
@@ -218,6 +333,21 @@ def _fraction(name: str):
         return v
 
     return parse
+
+
+def _cmd_warmup(args: argparse.Namespace) -> int:
+    from .warmup import warm
+
+    t0 = time.perf_counter()
+
+    def progress(label: str, fraction: float) -> None:
+        if not args.quiet and label != "done":
+            print(f"warmup: {label} ...", file=sys.stderr, flush=True)
+
+    times = warm(progress=progress)
+    total = time.perf_counter() - t0
+    print(f"warmup: {len(times)} renders in {total:.1f} s; kernels are cached for the next run")
+    return 0
 
 
 def _cmd_gallery(args: argparse.Namespace) -> int:
@@ -328,6 +458,43 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true")
     r.set_defaults(func=_cmd_render)
 
+    a = sub.add_parser(
+        "animate",
+        help="render the frames of an animated scene to DIR (restartable), optionally a video",
+        description=(
+            "Render frames of an animated scene (one with an [animation] table; a still scene is "
+            "one frame) as DIR/frame_00000.png, ... Frames already in DIR with matching metadata "
+            "are skipped, so a killed run can be restarted (see docs/animation.md)."
+        ),
+    )
+    a.add_argument("scene", help="built-in scene name or .toml file (see `refnpr scenes`)")
+    a.add_argument("--style", default=None, help="style name (default: the scene's own style)")
+    a.add_argument(
+        "--param",
+        action="append",
+        type=_param,
+        metavar="KEY=VALUE",
+        help="style parameter (TOML value), repeatable",
+    )
+    a.add_argument("--size", type=_size, default=DEFAULT_SIZE, help="WxH (default 768x432)")
+    a.add_argument(
+        "--spp", type=int, default=DEFAULT_SPP, help="samples per pixel, a square (default 4)"
+    )
+    a.add_argument(
+        "--frames",
+        default=None,
+        metavar="A:B",
+        help="frames A to B-1, like a Python slice (10:, :24); default all",
+    )
+    a.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for the frames")
+    a.add_argument("--exr", action="store_true", help="also write linear float EXR frames")
+    a.add_argument("--video", default=None, metavar="FILE", help="also encode FILE.mp4 or FILE.gif")
+    a.add_argument(
+        "--progress", action="store_true", help="show the progress bar even if stderr is no tty"
+    )
+    a.add_argument("-q", "--quiet", action="store_true")
+    a.set_defaults(func=_cmd_animate)
+
     sub.add_parser("scenes", help="list built-in scenes").set_defaults(func=_cmd_scenes)
     sub.add_parser("styles", help="list styles").set_defaults(func=_cmd_styles)
     sub.add_parser("info", help="versions, numba threads, cache dir").set_defaults(func=_cmd_info)
@@ -390,6 +557,20 @@ def build_parser() -> argparse.ArgumentParser:
     kc.add_argument("--report", default=None, metavar="DIR", help="write index.html and masks")
     kc.add_argument("--json", default=None, metavar="FILE", help="write the metrics as JSON")
     kc.set_defaults(func=_cmd_kit_check)
+    from .coherence.cli import add_parser as _coherence_parser
+
+    _coherence_parser(sub)
+    w = sub.add_parser(
+        "warmup",
+        help="compile and cache the kernels of every style's default path (once, after install)",
+        description=(
+            "Render tiny frames of each style's benchmark scene and of the default scene (spp 1, "
+            "and spp 4 with contours) so that numba compiles and caches their kernels now, not "
+            "on the first real render (refnpr.warmup)."
+        ),
+    )
+    w.add_argument("-q", "--quiet", action="store_true", help="no line per render")
+    w.set_defaults(func=_cmd_warmup)
     return p
 
 

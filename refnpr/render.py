@@ -46,6 +46,12 @@ def as_scene(scene: Any):
     return scene
 
 
+def _still(scene: Any):
+    """An animated scene rendered as a still is its frame 0 (a still is frame 0 of a one-frame
+    sequence); a still scene is itself."""
+    return scene.at(0) if getattr(scene, "animation", None) is not None else scene
+
+
 def _style_of(style: Any, scene: Any) -> Style:
     if style is None:
         spec = getattr(scene, "style", None) or DEFAULT_STYLE
@@ -159,19 +165,24 @@ def composite_resolve(
 
 def required_channels(scene: Any, style: Any = None) -> frozenset[str]:
     """The G-buffer channels ``render`` will ask the rasterizer for (the style's ``requires``)."""
-    scene = as_scene(scene)
+    scene = _still(as_scene(scene))
     return frozenset(_style_of(style, scene).requires(scene))
 
 
-def _frame(scene, style, cam, width, height, spp, channels, options, progress, t0, gb_out, out):
-    """One frame: rasterize (into ``gb_out`` if given), shade, composite + resolve (into ``out``)."""
+def _frame(
+    scene, style, cam, width, height, spp, channels, options, progress, t0, gb_out, out, shader=None
+):
+    """One frame: rasterize (into ``gb_out`` if given), shade, composite + resolve (into ``out``).
+
+    ``shader(ctx) -> rgba`` replaces ``style.shade`` (a sequence frame's ``shade_frame``)."""
     if progress is not None:
         progress("rasterize", 0.0)
     gb = rasterize(scene, cam, width, height, channels, spp, out=gb_out, **options)
     t1 = time.perf_counter()
     if progress is not None:
         progress("shade", 0.4)
-    rgba = np.asarray(style.shade(ShadeContext(gb, scene.with_camera(cam))), dtype=np.float32)
+    shade = style.shade if shader is None else shader
+    rgba = np.asarray(shade(ShadeContext(gb, scene.with_camera(cam))), dtype=np.float32)
     if rgba.shape != gb.sample_shape + (4,):
         raise ValueError(
             f"style {style.name!r} returned shape {rgba.shape}; expected {gb.sample_shape + (4,)}"
@@ -231,7 +242,7 @@ def render(
     """
     t0 = time.perf_counter()
     width, height, spp = _check_args(width, height, spp, camera, progress, return_gbuffer)
-    scene = as_scene(scene)
+    scene = _still(as_scene(scene))
     style = _style_of(style, scene)
     cam = camera if camera is not None else scene.camera
     channels = sorted(style.requires(scene))
@@ -242,6 +253,14 @@ def render(
     )
     image = Image(out, timings)
     return (image, gb) if return_gbuffer else image
+
+
+def _same_options(a: dict, b: dict) -> bool:
+    """Whether two rasterizer option dicts are equal (False where a value cannot be compared)."""
+    try:
+        return bool(a.keys() == b.keys() and all(a[k] is b[k] or a[k] == b[k] for k in a))
+    except (TypeError, ValueError):
+        return False
 
 
 class RenderContext:
@@ -275,7 +294,7 @@ class RenderContext:
         self, scene: Any, style: Any = None, width: int = 512, height: int = 512, spp: int = 1
     ) -> None:
         width, height, spp = _check_args(width, height, spp, None, None, False)
-        self.scene = as_scene(scene)
+        self.scene = _still(as_scene(scene))
         self.style = _style_of(style, self.scene)
         self.width, self.height, self.spp = width, height, spp
         self.channels = sorted(self.style.requires(self.scene))
@@ -338,3 +357,76 @@ class RenderContext:
         self._gb, self._out = gb, out
         image = Image(out.copy() if copy else out, timings)
         return (image, gb) if return_gbuffer else image
+
+    def render_frame(
+        self,
+        scene: Any,
+        style: Any = None,
+        state: Any = None,
+        *,
+        progress: Progress | None = None,
+        return_gbuffer: bool = False,
+        copy: bool = False,
+    ) -> tuple[Image, Any] | tuple[Image, Any, Any]:
+        """Render one frame of a sequence: its own still scene and style, shaded from ``state``.
+
+        The scene (``scene.at(frame)`` of an animation: the same meshes, the frame's camera,
+        lights and transforms) and the style (``style.for_frame(...)``) replace the context's for
+        this frame only; the buffers are reused whenever the frame needs the same channels and
+        rasterizer options as the previous one. Shading is ``style.shade_frame(ctx, state)``
+        (:class:`~refnpr.styles.Style`'s sequence protocol), so a stateful style gets its state
+        explicitly and returns the next one.
+
+        Parameters
+        ----------
+        scene : Scene
+            The frame's still scene (same image size as the context).
+        style : Style, optional
+            The frame's style (default: the context's).
+        state : any
+            The state from the previous frame (``style.initial_state()`` on the first).
+        progress, copy : as for :meth:`render`.
+        return_gbuffer : bool
+            Also return the G-buffer (the context's: overwritten by the next frame).
+
+        Returns
+        -------
+        (Image, state) or (Image, GBuffer, state)
+            The image (the context's buffer unless ``copy``) and the state for the next frame.
+        """
+        t0 = time.perf_counter()
+        _check_args(self.width, self.height, self.spp, None, progress, return_gbuffer)
+        if not isinstance(copy, (bool, np.bool_)):
+            raise TypeError(f"copy: expected a bool, got {type(copy).__name__} {copy!r}")
+        scene = as_scene(scene)
+        style = self.style if style is None else style_from_spec(style)
+        channels = sorted(style.requires(scene))
+        options = style.raster_options(scene)
+        gb_out = self._gb
+        if channels != self.channels or not _same_options(options, self._options):
+            _check_memory(scene, style, channels, self.width, self.height, self.spp)
+            self.channels, self._options, gb_out = channels, options, None
+        box: list[Any] = [state]
+
+        def shader(ctx: ShadeContext) -> np.ndarray:
+            rgba, box[0] = style.shade_frame(ctx, state)
+            return rgba
+
+        out, timings, gb = _frame(
+            scene,
+            style,
+            scene.camera,
+            self.width,
+            self.height,
+            self.spp,
+            channels,
+            options,
+            progress,
+            t0,
+            gb_out,
+            self._out,
+            shader,
+        )
+        self._gb, self._out = gb, out
+        image = Image(out.copy() if copy else out, timings)
+        return (image, gb, box[0]) if return_gbuffer else (image, box[0])
