@@ -1,0 +1,134 @@
+"""Per frame pair: warping error, plain frame difference, their ratio, flip fraction.
+
+All numbers are computed on the luminance of the rendered linear RGB (Rec. 709 / sRGB primaries,
+``Y = 0.2126 R + 0.7152 G + 0.0722 B``; images are already composited over the scene
+background, so alpha is not used). One channel for every number keeps them comparable, and the
+ink state of the flip fraction needs a scalar anyway. Values are in [0, 1] for images in [0, 1].
+
+With M the valid mask of :func:`refnpr.coherence.motion_field` and ``Y_hat = warp(Y_{t-1})``:
+
+* ``warp_error`` E = sum(M |Y_t - Y_hat|) / sum(M): the temporal warping error E_warp of Lai
+  et al. 2018 ("Learning Blind Video Temporal Consistency", ECCV), a masked mean over pixels of
+  the difference between a frame and its warped predecessor, here in the L1 form of issue 12 on
+  luminance, with the exact motion field in place of estimated optical flow and the exact
+  visibility mask in place of their flow-based occlusion mask (so the values are not comparable
+  with their tables, which use estimated flow on RGB);
+* ``plain_diff`` D = sum(M |Y_t - Y_{t-1}|) / sum(M): the same-pixel difference on the same M;
+* ``ratio`` = E / D. D = 0 means the frame is unchanged on M, so there is no motion against
+  which to judge E: the ratio is undefined and reported as NaN (JSON null), never 0 or inf;
+* ``flip`` = the fraction of M whose ink state differs between Y_t and Y_hat, the ink state
+  being ``Y < 0.5`` (ink) or ``Y >= 0.5`` (paper); ``flip_plain`` the same against Y_{t-1} at
+  the same pixel;
+* ``motion_px`` = the mean length over M of the exact motion (pixels): how far the surface
+  moved, to judge the others by (at a small fraction of a pixel per frame D is small and E / D
+  says little);
+* ``n_valid`` = sum(M), ``n_covered`` = the pixels covered at frame t.
+
+E, D, flip, flip_plain and motion_px are NaN when M is empty.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .motion import MotionField
+from .resample import warp
+
+__all__ = ["LUMA", "INK_THRESHOLD", "PairMetrics", "luminance", "pair_metrics"]
+
+#: Rec. 709 luminance weights of linear RGB.
+LUMA = (0.2126, 0.7152, 0.0722)
+#: Luminance below which a pixel counts as ink (for the flip fraction).
+INK_THRESHOLD = 0.5
+
+
+def luminance(rgb: np.ndarray) -> np.ndarray:
+    """(H, W) float64 luminance of (H, W, 3 or 4) linear RGB[A] (alpha ignored)."""
+    a = np.asarray(rgb)
+    if a.ndim != 3 or a.shape[2] not in (3, 4):
+        raise ValueError(f"rgb: expected an (H, W, 3) or (H, W, 4) image, got shape {a.shape}")
+    a = a[..., :3].astype(np.float64)
+    return a @ np.asarray(LUMA)
+
+
+@dataclass(frozen=True)
+class PairMetrics:
+    """The numbers of one frame pair (t-1, t); see the module docstring.
+
+    Attributes
+    ----------
+    frame : int
+        The index t of the later frame.
+    warp_error, plain_diff, ratio, flip, flip_plain, motion_px : float
+        NaN where undefined.
+    n_valid, n_covered : int
+    """
+
+    frame: int
+    warp_error: float
+    plain_diff: float
+    ratio: float
+    flip: float
+    flip_plain: float
+    motion_px: float
+    n_valid: int
+    n_covered: int
+
+    def as_dict(self) -> dict:
+        """JSON-ready: NaN becomes None."""
+        return {
+            k: (None if isinstance(v, float) and math.isnan(v) else v)
+            for k, v in asdict(self).items()
+        }
+
+
+def pair_metrics(
+    image: np.ndarray, prev_image: np.ndarray, motion: MotionField, *, frame: int = 1
+) -> PairMetrics:
+    """Coherence numbers of frame t against frame t-1.
+
+    Parameters
+    ----------
+    image, prev_image : (H, W, 3 or 4) float
+        Linear RGB[A] of frames t and t-1 (``Image.rgba``), the motion field's size.
+    motion : MotionField
+        ``motion_field`` of the pair.
+    frame : int
+        t, recorded in the result.
+
+    Returns
+    -------
+    PairMetrics
+    """
+    if not isinstance(motion, MotionField):
+        raise TypeError(
+            f"motion: expected a MotionField (motion_field(...)), got {type(motion).__name__}"
+        )
+    for name, img in (("image", image), ("prev_image", prev_image)):
+        shape = np.shape(img)
+        if len(shape) != 3 or shape[:2] != motion.shape:
+            raise ValueError(
+                f"{name}: expected an (H, W, 3 or 4) image of the motion field's size "
+                f"{motion.shape}, got shape {shape}"
+            )
+    y = luminance(image)
+    y_prev = luminance(prev_image)
+    y_hat = warp(y_prev, motion)
+    m = motion.valid
+    n = int(m.sum())
+    nan = float("nan")
+    if n == 0:
+        return PairMetrics(frame, nan, nan, nan, nan, nan, nan, 0, int(motion.covered.sum()))
+    e = float(np.abs(y - y_hat)[m].sum() / n)  # E_warp of Lai et al. 2018, L1 on Y
+    d = float(np.abs(y - y_prev)[m].sum() / n)
+    ratio = e / d if d > 0.0 else nan
+    ink = y < INK_THRESHOLD
+    flip = float(np.count_nonzero((ink != (y_hat < INK_THRESHOLD))[m]) / n)
+    flip_plain = float(np.count_nonzero((ink != (y_prev < INK_THRESHOLD))[m]) / n)
+    motion_px = float(np.hypot(*motion.flow()[m].T).mean())
+    return PairMetrics(
+        frame, e, d, ratio, flip, flip_plain, motion_px, n, int(motion.covered.sum())
+    )

@@ -1,0 +1,1 @@
+"""Tests of refnpr.coherence against hand projections in float64 and naive loops."""
