@@ -13,6 +13,7 @@ silhouette borders a farther surface or the background); ``depth_tolerance`` is 
 
 from __future__ import annotations
 
+import copy
 import functools
 from dataclasses import dataclass, fields
 from typing import Any
@@ -240,19 +241,34 @@ class Contoured(Style):
     def raster_options(self, scene: Any) -> dict[str, Any]:
         return self.base.raster_options(scene)
 
+    def _over(self, ctx: ShadeContext, rgba: np.ndarray) -> np.ndarray:
+        """The contour layer composited over the base style's per-sample RGBA (straight-alpha
+        "over", float64 arithmetic, float32 result; one numba pass, in place on the base's own
+        fresh float32 array, or on a copy when it returned a view or another dtype)."""
+        cov = np.ascontiguousarray(self.layer.coverage(ctx), dtype=np.float64)
+        out = np.require(rgba, dtype=np.float32, requirements=("C", "W", "O"))
+        K.ink_over(out, cov, np.asarray(self.layer.ink, dtype=np.float64))
+        return out
+
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        rgba = np.asarray(self.base.shade(ctx), dtype=np.float64)
-        cov = self.layer.coverage(ctx)[..., None]
-        color = np.asarray(self.layer.ink, dtype=np.float64)
-        out = np.empty_like(rgba)
-        # straight-alpha "over": lines on top of the base
-        a = cov[..., 0] + rgba[..., 3] * (1.0 - cov[..., 0])
-        premult = color * cov + rgba[..., :3] * rgba[..., 3:4] * (1.0 - cov)
-        out[..., :3] = np.divide(
-            premult, a[..., None], out=np.zeros_like(premult), where=a[..., None] > 0
-        )
-        out[..., 3] = a
-        return out.astype(np.float32)
+        return self._over(ctx, self.base.shade(ctx))
+
+    # the sequence protocol goes through to the base style (X-Toon flow, TAMISS state)
+    def for_frame(self, scene: Any, prev_scene: Any | None) -> Style:
+        base = self.base.for_frame(scene, prev_scene)
+        if base is self.base:
+            return self
+        new = copy.copy(self)
+        new.base = base
+        new._params = {**self._params, "base": base.params() | {"name": base.name}}
+        return new
+
+    def initial_state(self) -> Any:
+        return self.base.initial_state()
+
+    def shade_frame(self, ctx: ShadeContext, state: Any) -> tuple[np.ndarray, Any]:
+        rgba, state = self.base.shade_frame(ctx, state)
+        return self._over(ctx, rgba), state
 
 
 def with_contours(style: Any, contours: Any = True) -> Style:
