@@ -59,6 +59,7 @@ def lit_rgba(
         MODE_SMOOTH,
         MODE_STEP,
         shade_lit,
+        shade_smooth,
     )
 
     codes = {"smooth": MODE_SMOOTH, "step": MODE_STEP, "lake": MODE_LAKE}
@@ -127,6 +128,38 @@ def lit_rgba(
             f"{type(out).__name__} {getattr(out, 'shape', '')} {getattr(out, 'dtype', '')}; "
             "pass None for a new one"
         )
+    if mode == "smooth":
+        # f_s = base ** shininess by multiplications where the shininess is a small integer,
+        # checked against pow's float32 result in the kernel (a float64 ``out``: pow itself)
+        p = shininess
+        whole = (p == np.floor(p)) & (p >= 1) & (p <= _POW_INT_MAX)
+        pow_int = np.where(whole, p, 0).astype(np.int64)
+        light_color = np.array(colors, dtype=np.float64).reshape(n_lights, 3)
+        m_specular = table("specular")
+        terms = (m_ambient, table("diffuse"), m_specular, light_color)
+        if not specular or out.dtype != np.float32 or any(np.any(a < 0) for a in terms):
+            pow_int[:] = 0
+        spec_mag = 1.01 * np.abs(m_specular[:, None, :] * light_color[None, :, :]).sum(axis=2)
+        shade_smooth(
+            cover,
+            mesh_id,
+            normal,
+            position,
+            m_ambient,
+            table("diffuse"),
+            m_specular,
+            shininess,
+            pow_int,
+            np.ascontiguousarray(spec_mag),
+            np.array(kinds, dtype=np.int64),
+            np.array(vecs, dtype=np.float64).reshape(n_lights, 3),
+            light_color,
+            np.ascontiguousarray(np.asarray(scene.camera.eye, dtype=np.float64)),
+            bool(specular),
+            model == "phong",
+            out,
+        )
+        return out
     shade_lit(
         cover,
         mesh_id,
@@ -154,6 +187,8 @@ def lit_rgba(
     return out
 
 
+#: Largest integer shininess whose f_s the kernel computes by multiplications (then checked).
+_POW_INT_MAX = 1024
 #: Relative widening of the breakpoints of T_n in base space (see ``_step_edges``).
 _EDGE_MARGIN = 1e-7
 #: Below this shininess the widening is too small against pow's rounding: always pow.

@@ -189,3 +189,179 @@ def shade_lit(
             out[y, x, 1] = min(max(g, 0.0), 1.0)
             out[y, x, 2] = min(max(b, 0.0), 1.0)
             out[y, x, 3] = 1.0
+
+
+#: Relative error of f_s by repeated multiplication, per unit of the exponent (u = 2^-53 with
+#: a margin; x^k by any multiplication chain is within (k - 1) u of the true power, and libm's
+#: pow within an ulp of it).
+_POW_REL = 1.2e-16
+#: Absolute error allowed on top (intermediate powers below 1e-280 may be subnormal).
+_POW_ABS = 1e-280
+#: Bound of the rounding of one float64 operation relative to the magnitudes summed (2^-52).
+_ULP = 2.3e-16
+
+
+@njit(inline="always")
+def _int_pow(base, k):
+    """base ** k for an integer k >= 1 by binary exponentiation (no libm pow)."""
+    result = 1.0
+    b = base
+    e = k
+    while e > 0:
+        if e & 1:
+            result = result * b
+        e = e >> 1
+        if e > 0:
+            b = b * b
+    return result
+
+
+@njit(inline="always")
+def _same_float32(v, e):
+    """Whether every value within ``e`` of ``v`` stores as the same clipped float32."""
+    lo = np.float32(min(max(v - e, 0.0), 1.0))
+    hi = np.float32(min(max(v + e, 0.0), 1.0))
+    return lo == hi
+
+
+@pnjit
+def shade_smooth(
+    cover,
+    mesh_id,
+    normal,
+    position,
+    m_ambient,
+    m_diffuse,
+    m_specular,
+    shininess,
+    pow_int,
+    spec_mag,
+    light_kind,
+    light_vec,
+    light_color,
+    eye,
+    specular,
+    phong,
+    out,
+):
+    """``shade_lit``'s MODE_SMOOTH (Veryovka eq. 1), in a kernel of its own (arguments as
+    there), with f_s = base ** shininess by multiplications where ``pow_int (O,) int64`` holds
+    the object's integer shininess k >= 1 (0: pow); spec_mag (O, L) float64: 1.01 times
+    sum_c |m_s[o, c] light_color[l, c]|, the weight of an error in f_s.
+    A sample whose N.L <= 0 has f_s = 0 (eq. 1) whatever the base: no specular term there.
+
+    Such a sample's colour carries a bound on its distance from the colour with libm's pow
+    (relative (k + 3) u on f_s, then the rounding of the operations that follow); where the
+    bound leaves the clipped float32 value in doubt the sample is shaded again with pow, so the
+    stored result is the pow one, bit for bit. ``out`` must be float32, and every material
+    and light colour non-negative (the terms summed then bound the rounding), where any k > 0.
+    """
+    nh, nw = cover.shape
+    n_lights = light_kind.shape[0]
+    for y in numba.prange(nh):
+        for x in range(nw):
+            if cover[y, x] < 0:
+                out[y, x, 0] = 0.0
+                out[y, x, 1] = 0.0
+                out[y, x, 2] = 0.0
+                out[y, x, 3] = 0.0
+                continue
+            mi = max(mesh_id[y, x], 0)
+            nx = np.float64(normal[y, x, 0])
+            ny = np.float64(normal[y, x, 1])
+            nz = np.float64(normal[y, x, 2])
+            vx = 0.0
+            vy = 0.0
+            vz = 0.0
+            if specular:  # V: unit vector towards the eye (ShadeContext.view_dir)
+                vx = eye[0] - np.float64(position[y, x, 0])
+                vy = eye[1] - np.float64(position[y, x, 1])
+                vz = eye[2] - np.float64(position[y, x, 2])
+                length = math.sqrt(vx * vx + vy * vy + vz * vz)
+                if length > 0.0:
+                    vx = vx / length
+                    vy = vy / length
+                    vz = vz / length
+                else:
+                    vx = 0.0
+                    vy = 0.0
+                    vz = 0.0
+            p = shininess[mi]
+            k = pow_int[mi]
+            while True:  # with f_s by multiplications (k > 0), then with pow if in doubt
+                r = m_ambient[mi, 0]  # eq. 1: m_a l_a
+                g = m_ambient[mi, 1]
+                b = m_ambient[mi, 2]
+                err = 0.0  # bound of the pow replacement, summed over the terms
+                for i in range(n_lights):
+                    lx = light_vec[i, 0]
+                    ly = light_vec[i, 1]
+                    lz = light_vec[i, 2]
+                    if light_kind[i] == LIGHT_POINT:  # ShadeContext.light_dirs
+                        lx = lx - np.float64(position[y, x, 0])
+                        ly = ly - np.float64(position[y, x, 1])
+                        lz = lz - np.float64(position[y, x, 2])
+                        length = math.sqrt(lx * lx + ly * ly + lz * lz)
+                        if length > 0.0:
+                            lx = lx / length
+                            ly = ly / length
+                            lz = lz / length
+                        else:
+                            lx = 0.0
+                            ly = 0.0
+                            lz = 0.0
+                    n_dot_l = nx * lx + ny * ly + nz * lz
+                    f_d = n_dot_l if n_dot_l >= 0.0 else 0.0  # eq. 1: f_d = max(N.L, 0)
+                    dr = m_diffuse[mi, 0] * f_d * light_color[i, 0]
+                    dg = m_diffuse[mi, 1] * f_d * light_color[i, 1]
+                    db = m_diffuse[mi, 2] * f_d * light_color[i, 2]
+                    r = r + dr
+                    g = g + dg
+                    b = b + db
+                    if specular and p > 0.0 and n_dot_l > 0.0:  # else f_s = 0: no term
+                        if phong:  # R = 2 (N.L) N - L; base = R.V
+                            two = 2.0 * n_dot_l
+                            rx = two * nx - lx
+                            ry = two * ny - ly
+                            rz = two * nz - lz
+                            base = rx * vx + ry * vy + rz * vz
+                        else:  # H = unit_vectors(L + V); base = N.H
+                            hx = lx + vx
+                            hy = ly + vy
+                            hz = lz + vz
+                            m = max(abs(hx), abs(hy), abs(hz))
+                            if m > 0.0:
+                                hx = hx / m
+                                hy = hy / m
+                                hz = hz / m
+                            length = math.sqrt(hx * hx + hy * hy + hz * hz)
+                            if length > 0.0:
+                                hx = hx / length
+                                hy = hy / length
+                                hz = hz / length
+                            base = nx * hx + ny * hy + nz * hz
+                        if base < 0.0:
+                            base = 0.0
+                        if k > 0:  # base ** p within e_s (checked below)
+                            f_s = _int_pow(base, k)
+                            err = err + spec_mag[mi, i] * (abs(f_s) * (k + 3) * _POW_REL + _POW_ABS)
+                        else:
+                            f_s = base**p  # eq. 1: f_s
+                        sr = m_specular[mi, 0] * f_s * light_color[i, 0]
+                        sg = m_specular[mi, 1] * f_s * light_color[i, 1]
+                        sb = m_specular[mi, 2] * f_s * light_color[i, 2]
+                        r = r + sr
+                        g = g + sg
+                        b = b + sb
+                if k == 0 or err == 0.0:
+                    break
+                # and the rounding differences of the operations after a replaced pow, at most
+                # an ulp of the (non-negative) terms summed, r + g + b
+                err = err + (4 * n_lights + 4) * _ULP * (abs(r) + abs(g) + abs(b))
+                if _same_float32(r, err) and _same_float32(g, err) and _same_float32(b, err):
+                    break
+                k = 0
+            out[y, x, 0] = min(max(r, 0.0), 1.0)
+            out[y, x, 1] = min(max(g, 0.0), 1.0)
+            out[y, x, 2] = min(max(b, 0.0), 1.0)
+            out[y, x, 3] = 1.0

@@ -574,9 +574,14 @@ def test_local_weights_from_the_detail_map_and_a_texture():
         ({"detail": "fog"}, ValueError, r"detail: expected one of"),
         ({"detail": "focus"}, ValueError, r"focus_point: detail='focus' needs the focus point"),
         (
-            {"detail": "flow"},
+            {"detail": "flow", "prev_transforms": [np.eye(3)]},
             ValueError,
-            r"prev_camera: detail='flow' needs the previous frame's camera",
+            r"prev_transforms: expected one 4x4 matrix per scene object",
+        ),
+        (
+            {"detail": "flow", "prev_transforms": [np.diag([1.0, 1.0, 0.0, 1.0])]},
+            ValueError,
+            r"prev_transforms\[0\]: the 3x3 part is singular",
         ),
         (
             {"detail": "flow", "prev_camera": {"eye": [0, 0, 1]}},

@@ -19,6 +19,10 @@ map        a user-supplied per-pixel map in [0, 1]
 none       1 (the texture's full-detail row)
 ========== ======================================= =========================================
 
+The flow of a point is its screen position now minus that of its object-space position through
+``prev_transforms`` and ``prev_camera`` (default: the current ones, a still: zero flow); in a
+sequence ``XToonStyle.for_frame`` takes both from the previous frame.
+
 ``distance`` swaps the depth of the depth and focus maps (Fig. 2: view axis or eye). All D are
 clamped to [0, 1]. ``show="detail"`` (or ``"inverse_detail"``, ``"tone"``) draws D (1 - D, the
 tone) as a grey image instead of the texture: the attribute-map pictures of Figs. 3 and 4.

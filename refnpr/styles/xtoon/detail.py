@@ -55,6 +55,7 @@ class DetailParams:
     flow_max: float = 16.0
     user_map: np.ndarray | None = None
     distance: str | None = None  # "axis" or "eye" for depth and focus (Fig. 2), else None
+    prev_transforms: np.ndarray | None = None  # (M, 4, 4) previous object transforms (flow)
 
 
 @dataclass(frozen=True)

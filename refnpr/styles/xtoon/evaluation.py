@@ -136,14 +136,68 @@ def _light_dirs(light: Any, points: np.ndarray | None) -> np.ndarray:
     return np.asarray(light.direction, dtype=np.float64)
 
 
-def _flow(points: np.ndarray, cfg: Config, camera: Any, width: int, height: int) -> np.ndarray:
-    """(K, 2) screen displacement in pixels since the previous camera (X-Toon sec. 5)."""
+def _flow(
+    points: np.ndarray,
+    cfg: Config,
+    camera: Any,
+    width: int,
+    height: int,
+    before: np.ndarray | None = None,
+) -> np.ndarray:
+    """(K, 2) screen displacement in pixels since the previous frame (X-Toon sec. 5): world
+    ``points (K, 3)`` through ``camera`` minus their previous world positions ``before`` (default:
+    the same points, a still object) through the previous camera (default: ``camera``)."""
+    prev_camera = camera if cfg.detail.prev_camera is None else cfg.detail.prev_camera
     now, _ = project_pixels(points, camera, width, height)
-    before, _ = project_pixels(points, cfg.detail.prev_camera, width, height)
-    f = now - before
+    then, _ = project_pixels(points if before is None else before, prev_camera, width, height)
+    f = now - then
     bad = ~np.all(np.isfinite(f), axis=1)
     f[bad] = (FLOW_BEHIND, 0.0)  # behind either camera: no screen position, coarsest detail
     return f
+
+
+def _prev_transforms(cfg: Config, scene: Any) -> np.ndarray | None:
+    """The previous object transforms ``(M, 4, 4)``, checked against the scene (or None)."""
+    prev = cfg.detail.prev_transforms
+    if prev is not None and len(prev) != len(scene.objects):
+        raise ValueError(
+            f"prev_transforms: got {len(prev)} transforms but the scene has "
+            f"{len(scene.objects)} objects; give one 4x4 per scene object, in scene order "
+            "(the previous frame's [o.transform for o in prev_scene.objects])"
+        )
+    return prev
+
+
+def _prev_vertices(cfg: Config, scene: Any) -> np.ndarray | None:
+    """Every vertex's previous world position ``(N, 3)``: its object-space position through the
+    previous object transform (as ``Mesh.transformed`` maps it); None without prev_transforms."""
+    prev = _prev_transforms(cfg, scene)
+    if prev is None:
+        return None
+    parts = []
+    for obj, m in zip(scene.objects, prev, strict=True):
+        if np.array_equal(m, obj.transform):  # still object: its world mesh itself
+            parts.append(obj.world_mesh().positions)
+        else:
+            parts.append(obj.mesh.positions @ m[:3, :3].T + m[:3, 3])
+    return np.concatenate(parts)
+
+
+def _prev_pixels(cfg: Config, scene: Any, points: np.ndarray, mesh_id: np.ndarray) -> Any:
+    """Previous world positions ``(K, 3)`` of the world ``points`` seen at samples of objects
+    ``mesh_id (K,)``: back to object space through the current transform, then through the
+    previous one; None without prev_transforms."""
+    prev = _prev_transforms(cfg, scene)
+    if prev is None:
+        return None
+    before = np.array(points, dtype=np.float64)
+    for i, (obj, m) in enumerate(zip(scene.objects, prev, strict=True)):
+        if np.array_equal(m, obj.transform):
+            continue  # still object: same world position
+        sel = mesh_id == i
+        motion = m @ np.linalg.inv(obj.transform)  # world now -> object -> world before
+        before[sel] = points[sel] @ motion[:3, :3].T + motion[:3, 3]
+    return before
 
 
 def vertex_values(
@@ -161,8 +215,12 @@ def vertex_values(
     frame = resolve_frame(cfg.detail, scene, camera)
     out: dict[str, np.ndarray] = {}
 
+    flow_v = None
+    if cfg.detail.kind == "flow":
+        flow_v = _flow(p, cfg, camera, width, height, _prev_vertices(cfg, scene))
+
     def d_at_vertices(normals: np.ndarray) -> np.ndarray:
-        flow = _flow(p, cfg, camera, width, height) if cfg.detail.kind == "flow" else None
+        flow = flow_v
         return detail_values(
             cfg.detail,
             frame,
@@ -190,7 +248,7 @@ def vertex_values(
             out["xtoon_normal"] = blend
         n_shade = unit_rows(blend)
     if "xtoon_flow" in names:
-        out["xtoon_flow"] = _flow(p, cfg, camera, width, height)
+        out["xtoon_flow"] = flow_v
     if "xtoon_d" in names:
         out["xtoon_d"] = d_at_vertices(n_shade)  # sec. 3.1: D per vertex, then interpolated
     return out
@@ -205,7 +263,7 @@ class Evaluated:
     detail: np.ndarray  # (K,)
     normal: np.ndarray  # (K, 3) unit shading normals
     weight: np.ndarray | None  # (K,) shape weight where it varies, else None
-    rgba: np.ndarray  # (K, 4) texture value (straight alpha)
+    rgba: np.ndarray | None  # (K, 4) texture value (straight alpha); None without lookup
 
 
 def _sample_grid(arr: np.ndarray, gb: Any, name: str) -> np.ndarray:
@@ -230,8 +288,9 @@ def _fresh(name: str, carried: np.ndarray, fresh: np.ndarray, mesh: Any) -> None
         )
 
 
-def evaluate(cfg: Config, ctx: Any) -> Evaluated:
-    """Tone, detail, shading normals and the 2D toon texture value at the covered samples."""
+def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
+    """Tone, detail, shading normals and (``lookup``) the 2D toon texture value at the covered
+    samples."""
     gb, scene = ctx.gb, ctx.scene
     camera = scene.camera
     pl = plan(cfg, scene)
@@ -266,7 +325,10 @@ def evaluate(cfg: Config, ctx: Any) -> Evaluated:
 
     def d_at_pixels(normals: np.ndarray) -> np.ndarray:
         kind = cfg.detail.kind
-        flow = _flow(pos, cfg, camera, gb.width, gb.height) if kind == "flow" else None
+        flow = None
+        if kind == "flow":
+            before = _prev_pixels(cfg, scene, pos, gb["mesh_id"][mask])
+            flow = _flow(pos, cfg, camera, gb.width, gb.height, before)
         depth = at("depth") if "depth" in _map_channels(cfg.detail) else None
         return detail_values(
             cfg.detail,
@@ -315,6 +377,8 @@ def evaluate(cfg: Config, ctx: Any) -> Evaluated:
         detail = detail_values(cfg.detail, frame, camera, flow=f)  # |interpolated flow| -> D
     else:
         detail = d_at_pixels(n)
+    if not lookup:
+        return Evaluated(mask, tone, detail, n, weight, None)
     rgba = xtoon.toon_lookup(cfg.texture, tone, detail)  # sec. 3: 2D toon texture lookup
     return Evaluated(mask, tone, detail, n, weight, np.asarray(rgba, dtype=np.float64))
 

@@ -15,6 +15,7 @@ __all__ = [
     "number",
     "vec3",
     "camera_spec",
+    "transforms_spec",
     "unit_map",
     "WeightSpec",
     "weight_spec",
@@ -82,6 +83,36 @@ def camera_spec(name: str, value: Any) -> Camera:
         return Camera.look_at(**dict(value))
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name}: {exc}") from None
+
+
+def transforms_spec(name: str, value: Any) -> np.ndarray:
+    """Object transforms ``(M, 4, 4)`` float64 from a sequence of M 4x4 matrices (one per scene
+    object, in scene order), each finite with last row (0, 0, 0, 1) and an invertible 3x3 part."""
+    try:
+        a = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        a = None
+    if a is None or isinstance(value, (str, bytes)) or a.ndim != 3 or a.shape[1:] != (4, 4):
+        raise ValueError(
+            f"{name}: expected one 4x4 matrix per scene object (a list of (4, 4) arrays, e.g. "
+            f"[o.transform for o in prev_scene.objects]), got {_short(value)}"
+        )
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: the matrices must be finite, got {_short(value)}")
+    for i, m in enumerate(a):
+        if not np.array_equal(m[3], (0.0, 0.0, 0.0, 1.0)):
+            raise ValueError(
+                f"{name}[{i}]: the last row must be (0, 0, 0, 1) (an affine transform), got "
+                f"{m[3].tolist()}"
+            )
+        if np.linalg.det(m[:3, :3]) == 0.0:
+            raise ValueError(f"{name}[{i}]: the 3x3 part is singular; use a non-zero scale")
+    return a
+
+
+def _short(value: Any, limit: int = 80) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 5] + " ...]"
 
 
 def unit_map(name: str, value: Any) -> np.ndarray:

@@ -4,20 +4,22 @@ package docstring (:mod:`refnpr.styles.xtoon`) describes the technique.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from .._common import check_choice, rgba_from, warn_unused
+from .._common import check_choice, warn_unused
 from ..base import ShadeContext, Style, register
 from .detail import DEFAULT_DISTANCE, DISTANCES, DetailParams
 from .evaluation import Config, evaluate, plan, vertex_values
 from .geometry import VertexGeometry
-from .params import DETAILS, camera_spec, number, unit_map, vec3, weight_spec
+from .params import DETAILS, camera_spec, number, transforms_spec, unit_map, vec3, weight_spec
+from .shading import shade_rgba
 from .shape import SHAPES, AbstractedNormals
-from .texture import resolve_texture, srgb_to_linear
+from .texture import resolve_texture
 
 __all__ = ["XToonStyle"]
 
@@ -68,8 +70,15 @@ class XToonStyle(Style):
         Shininess of the highlight map.
     one_sided : bool
         Highlight with max(v . r, 0) instead of the paper's |v . r|.
-    prev_camera : Camera or table {eye, target, up, fov_y, near, far}
-        The previous frame's camera (``flow``).
+    prev_camera : Camera or table {eye, target, up, fov_y, near, far}, optional
+        The previous frame's camera (``flow``). Without it a still has no motion (zero flow,
+        full detail: a still is frame 0 of a sequence), and in a sequence :meth:`for_frame`
+        takes the previous frame's camera.
+    prev_transforms : list of 4x4 matrices, optional
+        The previous frame's object transforms (``flow``), one per scene object in scene order:
+        each object-space vertex goes through them and ``prev_camera`` for its previous screen
+        position (default: the current transforms, still objects). :meth:`for_frame` takes
+        them from the previous frame.
     flow_min, flow_max : float
         Flow lengths in pixels where D starts to fall and reaches 0.
     detail_map : (H, W) or (n H, n W) array in [0, 1], or a grey image path (``map``).
@@ -107,6 +116,7 @@ class XToonStyle(Style):
         s: float = 16.0,
         one_sided: bool = False,
         prev_camera: Any = None,
+        prev_transforms: Any = None,
         flow_min: float = 0.0,
         flow_max: float = 16.0,
         detail_map: Any = None,
@@ -125,14 +135,17 @@ class XToonStyle(Style):
         if isinstance(light, bool) or not isinstance(light, (int, np.integer)) or light < 0:
             raise ValueError(f"light: expected a light index >= 0, got {light!r}")
         tex = resolve_texture(texture)
-        distance, z_min, r, focus_point, prev_camera, detail_map = _without_unused_detail_params(
-            detail,
-            distance=distance,
-            z_min=z_min,
-            r=r,
-            focus_point=focus_point,
-            prev_camera=prev_camera,
-            detail_map=detail_map,
+        (distance, z_min, r, focus_point, prev_camera, prev_transforms, detail_map) = (
+            _without_unused_detail_params(
+                detail,
+                distance=distance,
+                z_min=z_min,
+                r=r,
+                focus_point=focus_point,
+                prev_camera=prev_camera,
+                prev_transforms=prev_transforms,
+                detail_map=detail_map,
+            )
         )
         if distance is not None:
             check_choice("distance", distance, DISTANCES)
@@ -157,14 +170,10 @@ class XToonStyle(Style):
             focus_point = vec3("focus_point", focus_point)
         s = number("s", s, lo=1.0, hint="X-Toon sec. 3.2 takes a shininess s >= 1")
         one_sided = _bool("one_sided", one_sided)
-        prev = None
-        if detail == "flow":
-            if prev_camera is None:
-                raise ValueError(
-                    "prev_camera: detail='flow' needs the previous frame's camera (a Camera or "
-                    "a table {eye, target, up, fov_y})"
-                )
-            prev = camera_spec("prev_camera", prev_camera)
+        prev = None if prev_camera is None else camera_spec("prev_camera", prev_camera)
+        prev_tf = None
+        if prev_transforms is not None:
+            prev_tf = transforms_spec("prev_transforms", prev_transforms)
         flow_min = number("flow_min", flow_min, lo=0.0, hint="a flow length in pixels")
         flow_max = number(
             "flow_max",
@@ -248,6 +257,7 @@ class XToonStyle(Style):
                 flow_max,
                 user,
                 distance,
+                prev_tf,
             ),
             detail_mode=detail_mode,
             tone=tone,
@@ -262,6 +272,8 @@ class XToonStyle(Style):
             weight_pyramid=pyramid,
         )
         self._show = show
+        self._explicit_camera = prev is not None
+        self._explicit_transforms = prev_tf is not None
         self._params = self._summary(
             texture=(
                 texture
@@ -282,6 +294,7 @@ class XToonStyle(Style):
             s=s,
             one_sided=one_sided,
             prev_camera=_camera_table(prev) if prev is not None else None,
+            prev_transforms=prev_tf.tolist() if prev_tf is not None else None,
             flow_min=flow_min,
             flow_max=flow_max,
             detail_map=f"array{user.shape}" if user is not None else None,
@@ -293,6 +306,46 @@ class XToonStyle(Style):
             shape_objects=list(shape_objects) if shape_objects is not None else None,
             modulate=modulate,
         )
+
+    def for_frame(self, scene: Any, prev_scene: Any | None) -> XToonStyle:
+        """This style for one frame of a sequence (``Style.for_frame``).
+
+        With ``detail="flow"``, what the style was not given explicitly comes from the previous
+        frame: ``prev_camera`` is ``prev_scene.camera`` and ``prev_transforms`` are
+        ``prev_scene.objects[i].transform``, so each object-space vertex goes through the
+        previous transform and camera versus the current ones (the exact per-vertex screen
+        motion of sec. 5). On the first frame (``prev_scene`` None) both are the current
+        frame's: zero flow. Other detail maps, and a flow style given both, return ``self``.
+        """
+        p = self._cfg.detail
+        if p.kind != "flow" or (self._explicit_camera and self._explicit_transforms):
+            return self
+        if prev_scene is not None and len(prev_scene.objects) != len(scene.objects):
+            raise ValueError(
+                f"prev_scene: has {len(prev_scene.objects)} objects but the frame's scene has "
+                f"{len(scene.objects)}; the frames of a sequence must show the same objects"
+            )
+        camera = p.prev_camera
+        if not self._explicit_camera:
+            camera = scene.camera if prev_scene is None else prev_scene.camera
+        transforms = p.prev_transforms
+        if not self._explicit_transforms:
+            transforms = None
+            if prev_scene is not None:
+                transforms = np.stack([np.asarray(o.transform, float) for o in prev_scene.objects])
+        out = copy.copy(self)
+        out._cfg = dataclasses.replace(
+            self._cfg,
+            detail=dataclasses.replace(p, prev_camera=camera, prev_transforms=transforms),
+        )
+        out._params = self._summary(
+            **{
+                **self._params,
+                "prev_camera": _camera_table(camera),
+                "prev_transforms": None if transforms is None else transforms.tolist(),
+            }
+        )
+        return out
 
     @staticmethod
     def _summary(**kv: Any) -> dict[str, Any]:
@@ -347,7 +400,7 @@ class XToonStyle(Style):
     def fields(self, ctx: ShadeContext) -> dict[str, np.ndarray]:
         """Per-sample ``tone`` and ``detail`` (nH, nW), ``normal`` (nH, nW, 3) and, where the
         shape weight varies, ``weight``: float32, NaN where no surface is seen."""
-        ev = evaluate(self._cfg, ctx)
+        ev = evaluate(self._cfg, ctx, lookup=False)
         out = {}
         for key in ("tone", "detail", "normal", "weight"):
             v = getattr(ev, key)
@@ -359,20 +412,8 @@ class XToonStyle(Style):
         return out
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        ev = evaluate(self._cfg, ctx)
-        if self._show != "color":
-            value = {"detail": ev.detail, "inverse_detail": 1.0 - ev.detail, "tone": ev.tone}
-            grey = np.zeros(ev.mask.shape)
-            grey[ev.mask] = srgb_to_linear(np.clip(value[self._show], 0.0, 1.0))  # shown = value
-            return rgba_from(grey[..., None], ev.mask)
-        rgb = np.zeros(ev.mask.shape + (3,))
-        alpha = np.zeros(ev.mask.shape)
-        col = ev.rgba[:, :3]
-        if self._cfg.modulate:
-            col = col * ctx.material_field("diffuse")[ev.mask]
-        rgb[ev.mask] = col
-        alpha[ev.mask] = ev.rgba[:, 3]  # texture alpha: composited over the background
-        return rgba_from(rgb, ev.mask, alpha)
+        # sec. 3: tone, detail and the 2D toon texture lookup in one numba pass over the samples
+        return shade_rgba(self._cfg, ctx, self._show)
 
 
 #: Detail maps that read each optional parameter (the others ignore it).
@@ -382,6 +423,7 @@ _USED_BY = {
     "r": ("depth", "focus", "orientation"),
     "focus_point": ("focus",),
     "prev_camera": ("flow",),
+    "prev_transforms": ("flow",),
     "detail_map": ("map",),
 }
 
