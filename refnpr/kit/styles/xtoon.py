@@ -181,6 +181,17 @@ def export(
     style = _unwrap(style)
     cfg = style._cfg
     p = cfg.detail
+    # a flow style without prev_camera is frame 0 of a sequence: zero flow (the current camera)
+    prev_camera = p.prev_camera if p.prev_camera is not None else scene.camera
+    moved = getattr(p, "prev_transforms", None)
+    if p.kind == "flow" and moved is not None:
+        now = np.array([o.transform for o in scene.objects], dtype=np.float64)
+        if not np.array_equal(np.asarray(moved, dtype=np.float64), now):
+            raise ValueError(
+                "prev_transforms: the conformance kit carries one camera per frame but no object "
+                "transforms, so an X-Toon flow case with moving objects cannot be exported; move "
+                "the camera instead (prev_camera), or leave the case out of the kit suite"
+            )
     case_dir = Path(case_dir)
     camera = scene.camera
     plan(cfg, scene)  # validates the light index against the scene (clear error)
@@ -231,7 +242,7 @@ def export(
         "focus_point": list(p.focus_point) if kind == "focus" else None,
         "s": float(p.s) if kind == "highlight" else None,
         "one_sided": bool(p.one_sided),
-        "prev_camera": (_camera_table(p.prev_camera, width, height) if kind == "flow" else None),
+        "prev_camera": (_camera_table(prev_camera, width, height) if kind == "flow" else None),
         "flow_min": float(p.flow_min) if kind == "flow" else None,
         "flow_max": float(p.flow_max) if kind == "flow" else None,
         "flow_behind": float(FLOW_BEHIND),
@@ -256,7 +267,7 @@ def export(
     frames = None
     if kind == "flow":  # every frame's camera: the flow detail reads the previous one (Fig. 6)
         frames = [
-            {"frame": 0, "camera": camera_entry(p.prev_camera, width, height)},
+            {"frame": 0, "camera": camera_entry(prev_camera, width, height)},
             {"frame": 1, "camera": camera_entry(scene.camera, width, height)},
         ]
     return StyleExport(
