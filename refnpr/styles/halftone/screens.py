@@ -24,6 +24,7 @@ lighting (sec. 5.2) when it has one.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -50,6 +51,7 @@ __all__ = [
     "normalize_spec",
     "has_normal_map",
     "build_screen",
+    "cached_screen",
     "screen_coords",
     "screen_lod",
     "Footprint",
@@ -247,6 +249,37 @@ def build_screen(spec: dict[str, Any], material_texture: str | None) -> Screen:
     return Screen("strokes", S.stroke_map_pyramid(strokes), normals)
 
 
+#: Built screens of specs that read no file, shared by every style instance (``render`` builds a
+#: new style per frame; building the hatching set costs about 0.1 s). Bounded; oldest out first.
+_BUILT: dict[str, Screen] = {}
+_BUILT_MAX = 32
+
+
+def _reads_no_file(spec: dict[str, Any], material_texture: str | None) -> bool:
+    if spec["kind"] == "engraving":
+        return True
+    if spec["kind"] == "strokes":
+        return "set" in spec
+    name = material_texture if spec["texture"] == "material" else spec["texture"]
+    return isinstance(name, str) and name in BUILTIN_TEXTURES
+
+
+def cached_screen(spec: dict[str, Any], material_texture: str | None) -> Screen:
+    """:func:`build_screen`, memoized across calls for specs that read no file (engraving,
+    built-in stroke sets, dither screens of built-in textures); file-based specs are rebuilt,
+    so an edited image file is read again. The returned screen is shared: do not modify it."""
+    if not _reads_no_file(spec, material_texture):
+        return build_screen(spec, material_texture)
+    key = json.dumps(spec, sort_keys=True) + "|" + str(material_texture)
+    screen = _BUILT.get(key)
+    if screen is None:
+        screen = build_screen(spec, material_texture)
+        if len(_BUILT) >= _BUILT_MAX:
+            _BUILT.pop(next(iter(_BUILT)))
+        _BUILT[key] = screen
+    return screen
+
+
 def screen_coords(
     screen: Screen, uv: np.ndarray, duv_dx: np.ndarray, duv_dy: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -257,7 +290,8 @@ def screen_coords(
     d = screen.direction
 
     def along(a: np.ndarray, v: float) -> np.ndarray:
-        return np.stack([a @ d, np.full(a.shape[0], v)], axis=-1)
+        t = a[:, 0] * d[0] + a[:, 1] * d[1]  # sec. 4.1 (not a @ d: BLAS may fuse, by CPU)
+        return np.stack([t, np.full(a.shape[0], v)], axis=-1)
 
     return along(uv, 0.5), along(duv_dx, 0.0), along(duv_dy, 0.0)
 

@@ -104,7 +104,9 @@ def lit_intensity(
                 ldk = ld[k] if np.ndim(ld) > 1 else ld
                 f_s[k] = lighting.specular(n[k], ldk, v[k], shininess=float(p))
             rgb = rgb + m_s * f_s[:, None] * color
-    return np.clip(rgb @ LUMA, 0.0, 1.0)
+    # luminance summed r, g, then b (not ``rgb @ LUMA``: BLAS may fuse or reorder, by CPU)
+    lum = (rgb[:, 0] * LUMA[0] + rgb[:, 1] * LUMA[1]) + rgb[:, 2] * LUMA[2]
+    return np.clip(lum, 0.0, 1.0)
 
 
 def parse_indication(value: Any, where: str = "indication") -> np.ndarray | None:

@@ -24,6 +24,7 @@ from .._common import (
 )
 from ..base import ShadeContext, Style, register
 from . import screens as HS
+from .fused import LIGHT_CODES, prepare_into, shade_object_into
 from .shading import lit_intensity, parse_indication, sample_indication, tangent_frame
 
 __all__ = ["HalftoneStyle"]
@@ -257,7 +258,7 @@ class HalftoneStyle(Style):
         """The built screen of a normalized spec (built once per style instance)."""
         key = json.dumps(spec, sort_keys=True) + "|" + str(material_texture)
         if key not in self._screens:
-            self._screens[key] = HS.build_screen(spec, material_texture)
+            self._screens[key] = HS.cached_screen(spec, material_texture)
         return self._screens[key]
 
     def _luts(self, screen: HS.Screen) -> np.ndarray:
@@ -285,7 +286,94 @@ class HalftoneStyle(Style):
             fw += np.abs(plus - minus) / 2
         return 1.0 / np.maximum(fw, 1e-6)
 
+    def uses_kernels(self) -> bool:
+        """Whether :meth:`shade` takes the numba path (every option but ``c = "auto"``)."""
+        return not (self.c == "auto" and self.threshold == "smooth")
+
     def shade(self, ctx: ShadeContext) -> np.ndarray:
+        """Per-sample RGBA (nH, nW, 4) float32: one numba pass per object
+        (:mod:`~refnpr.styles.halftone.fused`), or the numpy path for ``c = "auto"``."""
+        if not self.uses_kernels():
+            return self.shade_numpy(ctx)
+        return self._shade_fused(ctx)
+
+    def _lights(self, scene: Any) -> list[tuple[int, np.ndarray, np.ndarray]]:
+        """(kind code, unit direction or position, colour) per light, as ``light_dirs``."""
+        out = []
+        for light in scene.lights:
+            color = np.asarray(light.color, dtype=np.float64)
+            if light.kind == "point":
+                pos = np.asarray(light.position, dtype=np.float64)
+                out.append((LIGHT_CODES["point"], pos, color))
+            else:
+                d = np.asarray(light.direction, dtype=np.float64)
+                out.append((LIGHT_CODES["directional"], d / np.linalg.norm(d), color))
+        return out
+
+    def _shade_fused(self, ctx: ShadeContext) -> np.ndarray:
+        gb, scene = ctx.gb, ctx.scene
+        mesh_id = np.asarray(gb["mesh_id"])
+        mask = np.asarray(ctx.mask)
+        shape = mesh_id.shape
+        specs = self._object_specs(scene)
+        out = np.empty(shape + (4,), dtype=np.float32)
+        raw = None if self.show == "color" else np.ones(shape + (3,))
+        one = (1.0, 1.0, 1.0) if self.show != "color" else self.paper  # value 1 off objects
+        present = prepare_into(out, mesh_id, mask, one, len(scene.objects))
+        lod_offset = self.lod_bias - (math.log2(gb.n) if self.sample_lod else 0.0)
+        need_pos = needs_position(scene, self.specular)
+        names = ["normal", "uv", "duv_dx", "duv_dy"]
+        names += ["position"] if need_pos else []
+        if self._uses_normal_maps(scene):
+            names += ["dposition_dx", "dposition_dy"]
+        channels = {k: gb[k] for k in names}
+        lights = self._lights(scene)
+        ambient = np.asarray(scene.ambient, dtype=np.float64)
+        eye = np.asarray(scene.camera.eye, dtype=np.float64)
+        for i, obj in enumerate(scene.objects):
+            if not present[i]:
+                continue
+            settings = self.objects.get(obj.name, {})
+            screen = self.screen_for(specs[i], obj.material.texture)
+            scale = settings.get("uv_scale") or self.uv_scale or obj.material.uv_scale
+            equalize = self.tone_correct and screen.kind != "strokes"
+            m = obj.material
+            shade_object_into(
+                out,
+                raw,
+                obj=i,
+                mesh_id=mesh_id,
+                mask=mask,
+                channels=channels,
+                scale=np.asarray(scale, dtype=np.float64),
+                screen=screen,
+                luts=self._luts(screen) if equalize else None,
+                per_level=self.mip == "per_level",
+                indication=settings.get("indication", self.indication),
+                indication_scale=settings.get("indication_scale") or (1.0, 1.0),
+                ambient=np.asarray(m.ambient, dtype=np.float64) * ambient,  # eq. 1: m_a l_a
+                diffuse=np.asarray(m.diffuse, dtype=np.float64),
+                specular_color=np.asarray(m.specular, dtype=np.float64),
+                shininess=float(m.shininess),
+                specular=self.specular,
+                lights=lights,
+                eye=eye,
+                anisotropy=self.anisotropy if screen.direction is None else 1,
+                lod_offset=lod_offset,
+                threshold=self.threshold,
+                c=4.0 if self.c == "auto" else float(self.c),
+                centred=self.centred,
+                show=self.show,
+                ink=self.ink,
+                paper=self.paper,
+            )
+        if raw is not None:  # an 8-bit file of the image stores the raw values
+            return rgba_from(srgb_to_linear(raw), mask)
+        return out
+
+    def shade_numpy(self, ctx: ShadeContext) -> np.ndarray:
+        """The numpy path of :meth:`shade` (whole-object float64 arrays): ``c = "auto"`` and
+        the oracle of the kernel tests."""
         gb, scene = ctx.gb, ctx.scene
         mesh_id = gb["mesh_id"].reshape(-1)
         specs = self._object_specs(scene)
