@@ -115,6 +115,12 @@ def _fmt(v: float) -> str:
     return "       -" if math.isnan(v) else f"{v:8.5f}"
 
 
+def _previous(scene: Any, start: int) -> Any:
+    """The still of frame ``start - 1`` (what the style's ``for_frame`` sees as the previous
+    frame of the first one measured), or None at frame 0."""
+    return None if start == 0 else scene.at(start - 1)
+
+
 def run(args: argparse.Namespace) -> int:
     """The ``refnpr coherence`` command; returns 0 (errors are ValueError / TypeError)."""
     from ..image import check_png_path
@@ -161,6 +167,7 @@ def run(args: argparse.Namespace) -> int:
         depth_rtol=DEPTH_RTOL if args.depth_rtol is None else args.depth_rtol,
         frames=list(frames),
         strokes=args.strokes,
+        previous=_previous(scene, frames.start),
     )
     if args.json:
         report.save(args.json)

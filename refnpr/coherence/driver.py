@@ -73,6 +73,7 @@ def measure(
     keep_images: bool = False,
     strokes: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    previous: Any = None,
 ) -> CoherenceReport:
     """Render ``scenes`` in order with ``style`` and measure every consecutive pair.
 
@@ -108,12 +109,25 @@ def measure(
         state the render carries.
     progress : callable(done, total), optional
         Called after each frame.
+    previous : Scene, optional
+        The still of the frame before ``scenes[0]`` (``anim.at(a - 1)`` when measuring frames
+        ``a, a + 1, ...`` with a > 0): given to ``style.for_frame`` for the first frame, so
+        that a style that reads the previous frame (X-Toon's optical-flow detail) renders it
+        as in the whole sequence. It is not rendered or measured. None (default): the first
+        frame has no previous frame, as frame 0 of a sequence.
 
     Returns
     -------
     CoherenceReport
     """
     scenes = _scenes(scenes)
+    if previous is not None and (
+        not hasattr(previous, "world_meshes") or not hasattr(previous, "camera")
+    ):
+        raise TypeError(
+            f"previous: expected the still Scene of the frame before scenes[0] (anim.at(a - 1)) "
+            f"or None, got {type(previous).__name__}"
+        )
     width = check_int("width", width, minimum=1)
     height = check_int("height", height, minimum=1)
     spp = check_int("spp", spp, minimum=1)
@@ -143,7 +157,7 @@ def measure(
         if own and scene.style != spec:
             spec = scene.style
             base = style_from_spec(spec or DEFAULT_STYLE)
-        frame_style = base.for_frame(scene, prev_scene)
+        frame_style = base.for_frame(scene, previous if t == 0 else prev_scene)
         rgba, state = render_frame(frame_style, scene, width, height, spp, state)
         gb = rasterize(scene, None, width, height, MOTION_CHANNELS, 1, dtype=np.float64)
         if prev_scene is not None:
