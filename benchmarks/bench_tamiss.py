@@ -15,7 +15,10 @@ Sections (``--sections``, comma separated; default all three):
     each phase of ``run_pipeline`` -- gather (G-buffer channels to per-sample inputs, including
     the diffuse tone, plus the two-pass numba fragment kernel), aggregate (exact, float32), fit
     (four CG iterations, float32, drop rule), extrude (segments and strips) and raster
-    (anti-aliased strips, 4 x 4 sub-samples) -- and the fit's share of the total.
+    (anti-aliased strips, 4 x 4 sub-samples) -- and the fit's share of the total. Then the same
+    rows beside the paper's Table 1 (``PAPER_TABLE1``, GPU milliseconds: OLS against gather +
+    aggregate, CGM against fit, E&R against extrude + raster), and at 1920 x 1200 a MET / NOT MET
+    line for issue 11's target: the whole frame (all five phases) <= ``TARGET_16K_S`` at 16k strokes.
 ``hash``
     The paper's double-hashed aggregation on the same G-buffer with about 4k strokes: for table
     sizes from a quarter of the stroke count to 8 times it, three frames of a still view routed from an
@@ -84,6 +87,18 @@ CHANNELS = [
     "dposition_dy",
 ]
 PHASES = ("gather", "aggregate", "fit", "extrude", "raster")
+#: Szécsi et al., Table 1 (GTX 780, 1920 x 1200): (triangles, strokes, OLS, CGM, E&R) in ms.
+#: OLS (fragment streaming and regressor aggregation) compares with refnpr's gather + aggregate,
+#: CGM with fit, E&R (extrusion and rendering) with extrude + raster.
+PAPER_TABLE1 = (
+    (27_000, 1000, 3.06, 0.04, 0.11),
+    (27_000, 4000, 2.96, 0.19, 0.32),
+    (90_000, 4000, 2.86, 0.31, 2.01),
+    (193_000, 4000, 2.78, 0.23, 0.51),
+    (193_000, 16000, 2.88, 0.91, 2.04),
+)
+#: Issue 11, target 2: the whole frame (all phases, G-buffer excluded) at 16k strokes, seconds.
+TARGET_16K_S = 0.25
 
 
 def gbuffer(sc, w, h, camera=None):
@@ -151,6 +166,34 @@ def bench_phases(args) -> list[dict]:
         print(f"{r['strokes']:>8} {r['period_px']:>7.2f} {r['fragments']:>8} "
               + " ".join(f"{m[p]:>9.4f}" for p in PHASES)
               + f" {m['total']:>8.3f} {100 * r['fit_share']:>6.2f}")  # fmt: skip
+    print("\nBeside the paper's Table 1 (GPU, GTX 780), ms: OLS vs gather + aggregate, CGM vs fit, "
+          "E&R vs extrude + raster")  # fmt: skip
+    print(f"{'strokes':>8} {'tris':>6} {'OLS':>6} {'CGM':>6} {'E&R':>6}   refnpr: "
+          f"{'gath+agg':>9} {'fit':>8} {'ext+ras':>8} {'total':>8}")  # fmt: skip
+    for r in rows:
+        m = {k: 1000 * v for k, v in r["median_s"].items()}
+        paper = [p for p in PAPER_TABLE1 if p[1] == r["target_strokes"]] or [None]
+        r["paper_table1_ms"] = [
+            {"triangles": p[0], "strokes": p[1], "ols": p[2], "cgm": p[3], "er": p[4]}
+            for p in paper
+            if p is not None
+        ]
+        for p in paper:
+            cells = "    -      -      -      -" if p is None else (
+                f"{p[0] // 1000:>5}k {p[2]:>6.2f} {p[3]:>6.2f} {p[4]:>6.2f}")  # fmt: skip
+            print(f"{r['strokes']:>8} {cells}   refnpr: {m['gather'] + m['aggregate']:>9.1f} "
+                  f"{m['fit']:>8.1f} {m['extrude'] + m['raster']:>8.1f} {m['total']:>8.1f}")  # fmt: skip
+    big = [r for r in rows if r["target_strokes"] == 16000 and (w, h) == (1920, 1200)]
+    if big:
+        total = big[0]["median_s"]["total"]
+        verdict = "MET" if total <= TARGET_16K_S else "NOT MET"
+        big[0]["target_16k"] = {
+            "limit_s": TARGET_16K_S,
+            "total_s": total,
+            "met": total <= TARGET_16K_S,
+        }
+        print(f"\nwhole frame <= {TARGET_16K_S} s at 16k strokes (1920x1200): {verdict} "
+              f"(median total {total:.3f} s, {big[0]['strokes']} strokes)")  # fmt: skip
     return rows
 
 

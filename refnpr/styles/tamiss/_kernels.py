@@ -6,6 +6,13 @@
   anti-aliased TAM/RPTAM ink.
 * ``raster_strips``: anti-aliased rasterization of image-space triangle strips (supersampled
   coverage of the union of a strip's triangles), composited in order with "over".
+* ``sample_inputs``: the per-sample field inputs straight from the G-buffer channels (compaction,
+  smooth derivatives as ``smooth_duv``, chart orientation, diffuse colour) in one pass.
+* ``field_gather`` / ``finish_fragments``: TAMISS fragments in one pass over sample chunks (the
+  COUNT and EMIT passes of ``field_pass`` fused), then copied to their places in chunk order.
+* ``group_keys`` / ``group_sums``: grouping of fragments by stroke id (a stable argsort by
+  hashing and a counting pass) and the per-stroke min/max and regressor sums, parallel over
+  strokes, each summed in a fixed order (bits do not depend on the thread count).
 """
 
 from __future__ import annotations
@@ -372,6 +379,11 @@ def raster_strips(
     for bi in prange(n_bands):
         y_lo = bi * band
         y_hi = min(nh, y_lo + band) - 1
+        # per-piece scratch (a piece's bbox within the band), reset for each piece
+        mask = np.empty(band * nw, dtype=np.uint64)
+        best = np.empty(band * nw)
+        bu = np.empty(band * nw)
+        bv = np.empty(band * nw)
         for pc in range(n_pieces):
             x0 = bbox[pc, 0]
             y0 = max(bbox[pc, 1], y_lo)
@@ -381,10 +393,11 @@ def raster_strips(
                 continue
             w = x1 - x0 + 1
             h = y1 - y0 + 1
-            mask = np.zeros(h * w, dtype=np.uint64)
-            best = np.full(h * w, -np.inf)
-            bu = np.zeros(h * w)
-            bv = np.zeros(h * w)
+            for idx in range(h * w):
+                mask[idx] = 0
+                best[idx] = -np.inf
+                bu[idx] = 0.0
+                bv[idx] = 0.0
             for seg in range(k - 1):
                 for tri in range(2):
                     if tri == 0:
@@ -415,10 +428,12 @@ def raster_strips(
                                 py = y + (sj + 0.5) * inv
                                 for si in range(aa):
                                     px = x + (si + 0.5) * inv
-                                    e0 = _edge(bx, by, cx, cy, px, py) * sgn
-                                    e1 = _edge(cx, cy, ax, ay, px, py) * sgn
-                                    e2 = _edge(ax, ay, bx, by, px, py) * sgn
-                                    if e0 >= 0.0 and e1 >= 0.0 and e2 >= 0.0:
+                                    # inside all three edges (tested in turn, same values)
+                                    if not _edge(bx, by, cx, cy, px, py) * sgn >= 0.0:
+                                        continue
+                                    if not _edge(cx, cy, ax, ay, px, py) * sgn >= 0.0:
+                                        continue
+                                    if _edge(ax, ay, bx, by, px, py) * sgn >= 0.0:
                                         bits |= np.uint64(1) << np.uint64(sj * aa + si)
                             mask[idx] = bits
                             # brush coordinates from the triangle the sample centre is most inside
@@ -534,3 +549,571 @@ def smooth_duv(tri, bary, faces, frames, normal, position, dpos_dx, dpos_dy, eye
             else:
                 duv_dy[i, 0] = du
                 duv_dy[i, 1] = dv
+
+
+@pnjit
+def sample_inputs(
+    sample,
+    tri_id,
+    mesh_id,
+    uv,
+    duv_dx,
+    duv_dy,
+    scale,
+    charts,
+    smooth,
+    bary,
+    faces,
+    frames,
+    normal,
+    position,
+    dpos_dx,
+    dpos_dy,
+    eye,
+    orient,
+    sym_m,
+    sym,
+    offset,
+    group,
+    shade,
+    m_a,
+    m_d,
+    ambient,
+    l_dir,
+    l_color,
+    l_point,
+    l_pos,
+    out_uv,
+    out_dx,
+    out_dy,
+    out_scale,
+    out_chart,
+    out_rgb,
+    chunk_max,
+):
+    """Per-sample field inputs of the N covered samples ``sample`` (flat G-buffer indices).
+
+    G-buffer channels come flattened to (H W, C) (tri_id, mesh_id: (H W,)) in float32 or
+    float64, read as float64. Per sample: uv, flat duv_dx / duv_dy and the uv_scale of its
+    object (``scale`` (objects, 2)), chart ``charts[tri]``; with ``smooth`` the derivatives of
+    :func:`smooth_duv` (same arithmetic); with ``orient`` u' = M u + offset with M =
+    ``sym_m[sym[tri]]`` (signed permutations) on uv, the derivatives and (|M|) the scale, and
+    chart ``group[tri]``; with ``shade`` the diffuse colour m_a l_a + sum_i m_d f_d(N, L_i) l_i
+    (``out_rgb`` (N, 3); lights (L, 3) directions (unit, directional) or positions
+    (``l_point``), colours). ``chunk_max`` (chunks,) receives max |u' s| over each chunk.
+    """
+    n_samples = sample.shape[0]
+    n_chunks = chunk_max.shape[0]
+    n_lights = l_color.shape[0]
+    for ci in prange(n_chunks):
+        cmax = 0.0
+        for i in range(ci * _CHUNK, min(n_samples, (ci + 1) * _CHUNK)):
+            sp = sample[i]
+            tri = tri_id[sp]
+            mi = max(mesh_id[sp], 0)
+            su = scale[mi, 0]
+            sv = scale[mi, 1]
+            u0 = np.float64(uv[sp, 0])
+            u1 = np.float64(uv[sp, 1])
+            xu = np.float64(duv_dx[sp, 0])
+            xv = np.float64(duv_dx[sp, 1])
+            yu = np.float64(duv_dy[sp, 0])
+            yv = np.float64(duv_dy[sp, 1])
+            if smooth:
+                gu0 = 0.0
+                gu1 = 0.0
+                gu2 = 0.0
+                gv0 = 0.0
+                gv1 = 0.0
+                gv2 = 0.0
+                for c in range(3):
+                    v = faces[tri, c]
+                    b = np.float64(bary[sp, c])
+                    gu0 += b * frames[v, 0, 0]
+                    gu1 += b * frames[v, 1, 0]
+                    gu2 += b * frames[v, 2, 0]
+                    gv0 += b * frames[v, 0, 1]
+                    gv1 += b * frames[v, 1, 1]
+                    gv2 += b * frames[v, 2, 1]
+                a00 = gu0 * gu0 + gu1 * gu1 + gu2 * gu2
+                a01 = gu0 * gv0 + gu1 * gv1 + gu2 * gv2
+                a11 = gv0 * gv0 + gv1 * gv1 + gv2 * gv2
+                det = a00 * a11 - a01 * a01
+                if det > 1e-12 * (a00 * a11) and det > 0.0:
+                    d0 = np.float64(position[sp, 0]) - eye[0]
+                    d1 = np.float64(position[sp, 1]) - eye[1]
+                    d2 = np.float64(position[sp, 2]) - eye[2]
+                    n0 = np.float64(normal[sp, 0])
+                    n1 = np.float64(normal[sp, 1])
+                    n2 = np.float64(normal[sp, 2])
+                    nd = n0 * d0 + n1 * d1 + n2 * d2
+                    dlen = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                    nlen = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+                    if abs(nd) >= 0.05 * dlen * nlen and dlen > 0.0:
+                        for axis in range(2):
+                            if axis == 0:
+                                p0 = np.float64(dpos_dx[sp, 0])
+                                p1 = np.float64(dpos_dx[sp, 1])
+                                p2 = np.float64(dpos_dx[sp, 2])
+                            else:
+                                p0 = np.float64(dpos_dy[sp, 0])
+                                p1 = np.float64(dpos_dy[sp, 1])
+                                p2 = np.float64(dpos_dy[sp, 2])
+                            lam = (n0 * p0 + n1 * p1 + n2 * p2) / nd
+                            p0 -= lam * d0
+                            p1 -= lam * d1
+                            p2 -= lam * d2
+                            r0 = gu0 * p0 + gu1 * p1 + gu2 * p2
+                            r1 = gv0 * p0 + gv1 * p1 + gv2 * p2
+                            du = (a11 * r0 - a01 * r1) / det
+                            dv = (a00 * r1 - a01 * r0) / det
+                            if axis == 0:
+                                xu = du
+                                xv = dv
+                            else:
+                                yu = du
+                                yv = dv
+            if orient:
+                k = sym[tri]
+                m00 = sym_m[k, 0, 0]
+                m01 = sym_m[k, 0, 1]
+                m10 = sym_m[k, 1, 0]
+                m11 = sym_m[k, 1, 1]
+                out_uv[i, 0] = (0.0 + m00 * u0 + m01 * u1) + offset[tri, 0]
+                out_uv[i, 1] = (0.0 + m10 * u0 + m11 * u1) + offset[tri, 1]
+                out_dx[i, 0] = 0.0 + m00 * xu + m01 * xv
+                out_dx[i, 1] = 0.0 + m10 * xu + m11 * xv
+                out_dy[i, 0] = 0.0 + m00 * yu + m01 * yv
+                out_dy[i, 1] = 0.0 + m10 * yu + m11 * yv
+                out_scale[i, 0] = 0.0 + abs(m00) * su + abs(m01) * sv
+                out_scale[i, 1] = 0.0 + abs(m10) * su + abs(m11) * sv
+                out_chart[i] = group[tri]
+            else:
+                out_uv[i, 0] = u0
+                out_uv[i, 1] = u1
+                out_dx[i, 0] = xu
+                out_dx[i, 1] = xv
+                out_dy[i, 0] = yu
+                out_dy[i, 1] = yv
+                out_scale[i, 0] = su
+                out_scale[i, 1] = sv
+                out_chart[i] = charts[tri]
+            e_u = abs(out_uv[i, 0] * out_scale[i, 0])
+            e_v = abs(out_uv[i, 1] * out_scale[i, 1])
+            if e_u != e_u or e_v != e_v:
+                cmax = np.inf  # NaN uv: the caller rejects it
+            else:
+                cmax = max(cmax, e_u, e_v)
+            if shade:
+                # unit normal as refnpr.formulas._shading_checks.unit_vectors computes it
+                n0 = np.float64(normal[sp, 0])
+                n1 = np.float64(normal[sp, 1])
+                n2 = np.float64(normal[sp, 2])
+                nm = max(abs(n0), abs(n1), abs(n2))
+                if nm > 0.0:
+                    n0 /= nm
+                    n1 /= nm
+                    n2 /= nm
+                nl = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+                if nl > 0.0:
+                    n0 /= nl
+                    n1 /= nl
+                    n2 /= nl
+                r = m_a[mi, 0] * ambient[0]  # Veryovka eq. 1: m_a l_a
+                g = m_a[mi, 1] * ambient[1]
+                bl = m_a[mi, 2] * ambient[2]
+                for li in range(n_lights):
+                    if l_point[li]:
+                        e0 = l_pos[li, 0] - np.float64(position[sp, 0])
+                        e1 = l_pos[li, 1] - np.float64(position[sp, 1])
+                        e2 = l_pos[li, 2] - np.float64(position[sp, 2])
+                        el = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+                        if el > 0.0:
+                            e0 /= el
+                            e1 /= el
+                            e2 /= el
+                        else:
+                            e0 = 0.0
+                            e1 = 0.0
+                            e2 = 0.0
+                        em = max(abs(e0), abs(e1), abs(e2))
+                        if em > 0.0:
+                            e0 /= em
+                            e1 /= em
+                            e2 /= em
+                        ell = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+                        if ell > 0.0:
+                            e0 /= ell
+                            e1 /= ell
+                            e2 /= ell
+                    else:
+                        e0 = l_dir[li, 0]
+                        e1 = l_dir[li, 1]
+                        e2 = l_dir[li, 2]
+                    fd = n0 * e0 + n1 * e1 + n2 * e2
+                    fd = fd if fd >= 0.0 else 0.0  # eq. 1: f_d = max(N.L, 0)
+                    fd = fd if fd <= 1.0 else 1.0
+                    r = r + m_d[mi, 0] * fd * l_color[li, 0]  # eq. 1: + m_d f_d l_i
+                    g = g + m_d[mi, 1] * fd * l_color[li, 1]
+                    bl = bl + m_d[mi, 2] * fd * l_color[li, 2]
+                out_rgb[i, 0] = r
+                out_rgb[i, 1] = g
+                out_rgb[i, 2] = bl
+        chunk_max[ci] = cmax
+
+
+@njit(inline="always")
+def _gather_sample(
+    i,
+    p,
+    q,
+    d_p,
+    d_q,
+    s,
+    rho,
+    chart,
+    layer,
+    max_level,
+    lam,
+    len_jit,
+    hw_px,
+    salt_len,
+    salt_tone,
+    k,
+    base,
+    cap,
+    out_id,
+    out_t,
+    out_layer,
+    out_level,
+    out_src,
+):
+    """The fragments of one sample and layer: :func:`_enumerate` (end_px = 0, candidates past
+    the first ``_CAP`` dropped as there) fused with the density and t tests of ``field_pass``
+    (MODE_EMIT). Fragment k (counted on from ``k``) goes to ``base + k`` while k < ``cap``.
+    Returns the new k."""
+    if not (s == s):  # NaN scale
+        return k
+    big_l = math.floor(s)
+    f = s - big_l
+    thin = 1.0
+    if big_l < 0:
+        thin = math.pow(2.0, s)
+        big_l = 0
+        f = 0.0
+    if big_l >= max_level:
+        big_l = max_level
+        f = 0.0
+    top = big_l + 1 if f > 0.0 else big_l
+    alpha = math.pow(2.0, f) - 1.0
+    n = 0
+    for lev in range(top + 1):
+        gain = thin if lev <= big_l else alpha
+        if gain * rho <= 0.0:
+            continue
+        limit = rho * gain
+        scale = float(1 << lev)
+        rows = 7.0 * scale
+        hw_q = hw_px / d_q
+        ry0 = int(math.floor((q - hw_q) * rows))
+        ry1 = int(math.floor((q + hw_q) * rows)) + 1
+        for ry in range(ry0, ry1 + 1):
+            q_row = ry / rows
+            dist = abs(q - q_row) * d_q
+            if dist > hw_px:
+                continue
+            gy = ry // 7
+            r = ry - 7 * gy
+            kx = _KX[r]
+            half_cells = 0.5 * lam * (1.0 + len_jit) + 0.0 / d_p * scale
+            ps = p * scale - kx / 7.0
+            gx0 = int(math.floor(ps - half_cells))
+            gx1 = int(math.floor(ps + half_cells)) + 1
+            reach = 0.5 * lam * (1.0 + abs(len_jit)) + 1e-6 + 1e-9 * abs(ps)
+            for gx in range(gx0, gx1 + 1):
+                if abs(ps - gx) > reach:
+                    continue  # every length puts t outside [0, 1]: rejected below anyway
+                if lev > 0 and (gx & 1) == (kx & 1) and (gy & 1) == (r & 1):
+                    continue  # inherited: enumerated at its birth level
+                sid = _pack(chart, layer, lev, gx, gy, r)
+                h = _hash01(sid, salt_len)
+                length = lam * (1.0 + len_jit * (2.0 * h - 1.0)) / scale
+                p_start = (gx + kx / 7.0) / scale - 0.5 * length
+                t = (p - p_start) / length
+                beyond = max(-t, t - 1.0) * length * d_p
+                if beyond > 0.0:
+                    continue
+                if n < _CAP:
+                    tau = _hash01(sid, salt_tone)
+                    if tau < limit and t >= 0.0 and t <= 1.0:
+                        if k < cap:
+                            o = base + k
+                            out_id[o] = sid
+                            out_t[o] = t
+                            out_layer[o] = layer
+                            out_level[o] = lev
+                            out_src[o] = i
+                        k += 1
+                    n += 1
+    return k
+
+
+@pnjit
+def field_gather(
+    chunks,
+    uv,
+    duv_dx,
+    duv_dy,
+    uv_scale,
+    darkness,
+    chart,
+    cos_a,
+    sin_a,
+    tone_lo,
+    density,
+    period,
+    max_level,
+    lam,
+    len_jit,
+    width_px,
+    salt_tone,
+    salt_len,
+    dst_off,
+    dst_cap,
+    chunk_count,
+    out_id,
+    out_t,
+    out_layer,
+    out_level,
+    out_src,
+):
+    """TAMISS fragments of the sample chunks ``chunks`` (``_CHUNK`` samples each) in one pass.
+
+    The fragments of chunk ``chunks[j]`` (ordered by sample, layer, level, row, cell, as
+    ``field_pass`` emits them) are written from ``dst_off[j]`` into ``out_*`` (id, t, layer,
+    birth level, sample index), at most ``dst_cap[j]`` of them; ``chunk_count[j]`` receives
+    their number (which may exceed the capacity: then run the chunk again with room for all).
+    """
+    n_samples = uv.shape[0]
+    n_layers = cos_a.shape[0]
+    for j in prange(chunks.shape[0]):
+        ci = chunks[j]
+        base = dst_off[j]
+        cap = dst_cap[j]
+        k = 0
+        for i in range(ci * _CHUNK, min(n_samples, (ci + 1) * _CHUNK)):
+            su = uv_scale[i, 0]
+            sv = uv_scale[i, 1]
+            u = uv[i, 0] * su
+            v = uv[i, 1] * sv
+            ux = duv_dx[i, 0] * su
+            vx = duv_dx[i, 1] * sv
+            uy = duv_dy[i, 0] * su
+            vy = duv_dy[i, 1] * sv
+            for lay in range(n_layers):
+                ca = cos_a[lay]
+                sa = sin_a[lay]
+                rho = (darkness[i] - tone_lo[lay]) / (1.0 - tone_lo[lay]) * density
+                rho = min(max(rho, 0.0), 1.0)
+                if rho <= 0.0:
+                    continue
+                p = ca * u + sa * v
+                q = -sa * u + ca * v
+                gp = math.hypot(ca * ux + sa * vx, ca * uy + sa * vy)
+                gq = math.hypot(-sa * ux + ca * vx, -sa * uy + ca * vy)
+                if not (gq > 0.0 and gp > 0.0 and gq < 1e30 and gp < 1e30):
+                    continue
+                d_p = 1.0 / gp
+                d_q = 1.0 / gq
+                s = math.log2(d_q / (7.0 * period))
+                k = _gather_sample(
+                    i, p, q, d_p, d_q, s, rho, chart[i], lay, max_level, lam, len_jit,
+                    0.5 * width_px, salt_len, salt_tone, k, base, cap,
+                    out_id, out_t, out_layer, out_level, out_src,
+                )  # fmt: skip
+        chunk_count[j] = k
+
+
+@pnjit
+def finish_fragments(src_off, src_len, dst_off, src, sample, width, n_axis, in_id, in_t,
+                     in_layer, in_level, out_id, out_t, out_layer, out_level, out_sample,
+                     out_x, out_y):  # fmt: skip
+    """Copy runs ``[src_off[j], + src_len[j])`` of gathered fragments to ``dst_off[j]``, with
+    each fragment's flat sample index ``sample[src]`` and its centre in pixels
+    ((sx + 0.5) / n_axis, (sy + 0.5) / n_axis) on a grid ``width`` samples wide."""
+    for j in prange(src_off.shape[0]):
+        a = src_off[j]
+        b = dst_off[j]
+        for m in range(src_len[j]):
+            sp = sample[src[a + m]]
+            sy = sp // width
+            sx = sp - sy * width
+            out_id[b + m] = in_id[a + m]
+            out_t[b + m] = in_t[a + m]
+            out_layer[b + m] = in_layer[a + m]
+            out_level[b + m] = in_level[a + m]
+            out_sample[b + m] = sp
+            out_x[b + m] = (sx + 0.5) / n_axis
+            out_y[b + m] = (sy + 0.5) / n_axis
+
+
+@njit
+def group_keys(keys):
+    """Stable grouping of ``keys`` (n,) int64 by value, without a full sort.
+
+    Returns ``uid`` (S,) the distinct keys ascending, ``starts`` (S + 1,) int64 and ``perm``
+    (n,) int64: the positions of key ``uid[g]`` are ``perm[starts[g]:starts[g + 1]]`` in
+    increasing order, i.e. ``perm`` is the stable argsort of ``keys``.
+    """
+    n = keys.shape[0]
+    size = 16
+    while size < 2 * n:
+        size *= 2
+    mask = np.uint64(size - 1)
+    slot_key = np.empty(size, dtype=np.int64)
+    slot_grp = np.full(size, -1, dtype=np.int64)
+    grp = np.empty(n, dtype=np.int64)
+    first = np.empty(n, dtype=np.int64)
+    ng = 0
+    for i in range(n):
+        key = keys[i]
+        h = (np.uint64(key) * _M1) >> np.uint64(20)
+        while True:
+            j = np.int64(h & mask)
+            g = slot_grp[j]
+            if g < 0:
+                slot_grp[j] = ng
+                slot_key[j] = key
+                first[ng] = key
+                grp[i] = ng
+                ng += 1
+                break
+            if slot_key[j] == key:
+                grp[i] = g
+                break
+            h = h + np.uint64(1)
+    order = np.argsort(first[:ng])
+    rank = np.empty(ng, dtype=np.int64)
+    uid = np.empty(ng, dtype=np.int64)
+    for r in range(ng):
+        rank[order[r]] = r
+        uid[r] = first[order[r]]
+    starts = np.zeros(ng + 1, dtype=np.int64)
+    for i in range(n):
+        starts[rank[grp[i]] + 1] += 1
+    for r in range(ng):
+        starts[r + 1] += starts[r]
+    fill = starts[:-1].copy()
+    perm = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        r = rank[grp[i]]
+        perm[fill[r]] = i
+        fill[r] += 1
+    return uid, starts, perm
+
+
+@njit
+def _pairwise(a, lo, n, c, zero):
+    """numpy's pairwise summation (``add.reduce``) of ``a[lo:lo + n, c]`` in a's dtype."""
+    if n < 8:
+        res = zero
+        for i in range(lo, lo + n):
+            res += a[i, c]
+        return res
+    if n <= 128:
+        r0 = a[lo, c]
+        r1 = a[lo + 1, c]
+        r2 = a[lo + 2, c]
+        r3 = a[lo + 3, c]
+        r4 = a[lo + 4, c]
+        r5 = a[lo + 5, c]
+        r6 = a[lo + 6, c]
+        r7 = a[lo + 7, c]
+        i = 8
+        while i < n - (n % 8):
+            r0 += a[lo + i, c]
+            r1 += a[lo + i + 1, c]
+            r2 += a[lo + i + 2, c]
+            r3 += a[lo + i + 3, c]
+            r4 += a[lo + i + 4, c]
+            r5 += a[lo + i + 5, c]
+            r6 += a[lo + i + 6, c]
+            r7 += a[lo + i + 7, c]
+            i += 8
+        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while i < n:
+            res += a[lo + i, c]
+            i += 1
+        return res
+    n2 = n // 2
+    n2 -= n2 % 8
+    return _pairwise(a, lo, n2, c, zero) + _pairwise(a, lo + n2, n - n2, c, zero)
+
+
+@pnjit
+def group_sums(perm, starts, t, x, y, half_c, lo, hi, origin, moments, rows):
+    """Per group g (fragments ``perm[starts[g]:starts[g + 1]]``, in that order): min and max of
+    t, the centre of the (x, y) bounding box, and the sums of the 15 regressors (s^0..s^6,
+    s^0..s^3 (x - o_x), s^0..s^3 (y - o_y)) with s = normalize_t(t, lo, hi), all in the dtype of
+    t, x, y, ``half_c`` (a 1-array holding 0.5) and the outputs. The same arithmetic as the
+    formula layer's ``normalize_t``, ``fragment_regressors`` and ``aggregate`` (``reduceat``:
+    the first row plus numpy's pairwise sum of the others); ``rows`` (n, 15) is scratch."""
+    hc = half_c[0]
+    one = hc + hc
+    zero = hc - hc
+    for g in prange(starts.shape[0] - 1):
+        a = starts[g]
+        b = starts[g + 1]
+        i = perm[a]
+        tl = t[i]
+        th = t[i]
+        xl = x[i]
+        xh = x[i]
+        yl = y[i]
+        yh = y[i]
+        for m in range(a + 1, b):
+            i = perm[m]
+            tl = min(tl, t[i])  # min blending pass
+            th = max(th, t[i])  # max blending pass
+            xl = min(xl, x[i])
+            xh = max(xh, x[i])
+            yl = min(yl, y[i])
+            yh = max(yh, y[i])
+        ox = (xl + xh) * hc
+        oy = (yl + yh) * hc
+        half = (th - tl) * hc
+        centre = tl + half
+        lo[g] = tl
+        hi[g] = th
+        origin[g, 0] = ox
+        origin[g, 1] = oy
+        for m in range(a, b):
+            i = perm[m]
+            s = (t[i] - centre) / half if half > 0 else zero  # normalize_t (0 if flat)
+            xr = x[i] - ox
+            yr = y[i] - oy
+            p2 = s * s
+            p3 = p2 * s
+            p4 = p3 * s
+            p5 = p4 * s
+            # eq. 1: t_i t_i^T (as power sums), t_i x_i, t_i y_i
+            rows[m, 0] = one
+            rows[m, 1] = s
+            rows[m, 2] = p2
+            rows[m, 3] = p3
+            rows[m, 4] = p4
+            rows[m, 5] = p5
+            rows[m, 6] = p5 * s
+            rows[m, 7] = xr
+            rows[m, 8] = s * xr
+            rows[m, 9] = p2 * xr
+            rows[m, 10] = p3 * xr
+            rows[m, 11] = yr
+            rows[m, 12] = s * yr
+            rows[m, 13] = p2 * yr
+            rows[m, 14] = p3 * yr
+        for c in range(15):  # additive blending pass
+            acc = rows[a, c]
+            if b - a > 1:
+                acc += _pairwise(rows, a + 1, b - a - 1, c, zero)
+            moments[g, c] = acc

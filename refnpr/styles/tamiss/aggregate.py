@@ -2,7 +2,7 @@
 
 Two routes to the same per-stroke sums:
 
-* :func:`aggregate_exact` groups fragments by their 64-bit id (a sort; the CPU reference).
+* :func:`aggregate_exact` groups fragments by their 64-bit id (stable grouping; the CPU reference).
 * :func:`aggregate_hashed` is the paper's GPU route: fragments are routed by double hashing of a
   32-bit key of the id into a fixed-size table (:class:`refnpr.formulas.tamiss.StrokeHashTable`:
   last frame's table read-only, this frame's write-only, swapped after the frame) and summed per
@@ -30,13 +30,9 @@ from math import comb
 
 import numpy as np
 
-from refnpr.formulas.tamiss import (
-    StrokeHashTable,
-    aggregate,
-    fragment_regressors,
-    normalize_t,
-)
+from refnpr.formulas.tamiss import N_REGRESSORS, StrokeHashTable, aggregate
 
+from . import _kernels as K
 from .field import key32
 from .gather import Fragments
 
@@ -136,21 +132,31 @@ class Aggregates:
 
 
 def _sums(keys, t, x, y, dtype):
-    """Aggregates over groups of ``keys`` (int): (keys, count, lo, hi, origin, M)."""
-    order = np.argsort(keys, kind="stable")
-    keys, t, x, y = keys[order], t[order], x[order], y[order]  # later sorts are then O(n)
-    t_ = t.astype(dtype)
-    xy = np.stack([x, y], axis=-1).astype(dtype)
-    uid, lo = aggregate(keys, t_, op="min")  # min blending pass
-    _, hi = aggregate(keys, t_, op="max")  # max blending pass
-    _, mn = aggregate(keys, xy, op="min")
-    _, mx = aggregate(keys, xy, op="max")
-    origin = (mn + mx) * dtype.type(0.5)
-    inv = np.searchsorted(uid, keys)
-    s = normalize_t(t_, lo[inv], hi[inv])
-    R = fragment_regressors(s, xy[:, 0] - origin[inv, 0], xy[:, 1] - origin[inv, 1])
-    _, M = aggregate(keys, R, op="sum")  # additive blending pass
-    count = np.bincount(inv, minlength=uid.size).astype(np.int64)
+    """Aggregates over groups of ``keys`` (int): (keys, count, lo, hi, origin, M).
+
+    One grouping pass (stable, as a stable sort by key) and one parallel pass over the groups
+    (min/max blending, then the 15 regressors summed in fragment order) in ``dtype``; the same
+    arithmetic as the formula layer's ``normalize_t``, ``fragment_regressors`` and ``aggregate``.
+    """
+    keys = np.ascontiguousarray(keys, dtype=np.int64)
+    uid, starts, perm = K.group_keys(keys)
+    S = uid.shape[0]
+    lo, hi = np.empty(S, dtype=dtype), np.empty(S, dtype=dtype)
+    origin, M = np.empty((S, 2), dtype=dtype), np.empty((S, N_REGRESSORS), dtype=dtype)
+    K.group_sums(
+        perm,
+        starts,
+        np.ascontiguousarray(t, dtype=dtype),
+        np.ascontiguousarray(x, dtype=dtype),
+        np.ascontiguousarray(y, dtype=dtype),
+        np.full(1, 0.5, dtype=dtype),
+        lo,
+        hi,
+        origin,
+        M,
+        np.empty((keys.shape[0], N_REGRESSORS), dtype=dtype),
+    )
+    count = np.diff(starts).astype(np.int64)
     return uid, count, lo, hi, origin, M
 
 

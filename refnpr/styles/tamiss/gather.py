@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from refnpr.formulas import lighting
+from refnpr.formulas._shading_checks import unit_vectors
 
 from ..base import ShadeContext
 from . import _kernels as K
@@ -54,6 +55,7 @@ _CHART_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 #: tangent frames; ``charts``) or "flat" (the rasterizer's per-triangle analytic derivatives).
 DERIVATIVES = ("smooth", "flat")
 _SMOOTH_CHANNELS = frozenset({"bary", "normal", "position", "dposition_dx", "dposition_dy"})
+_REC709 = np.array([0.2126, 0.7152, 0.0722])
 
 
 def _mesh_charts(mesh) -> np.ndarray:
@@ -183,16 +185,12 @@ def field_inputs(
     teapot's patches) and strokes run on across them where the uv continues."""
     ctx = ShadeContext(gb, scene)
     tri = gb["tri_id"]
-    sel = tri >= 0
+    shape = tuple(tri.shape)
+    tri_flat = np.ascontiguousarray(tri).reshape(-1)
+    sample = np.flatnonzero(tri_flat >= 0)
+    n_sel = sample.shape[0]
     charts = scene_charts(scene, gb)
-    scale = np.array([o.material.uv_scale for o in scene.objects], dtype=np.float64)
-    mesh_id = np.maximum(gb["mesh_id"][sel], 0)
-    uv = np.ascontiguousarray(gb["uv"][sel], dtype=np.float64)
-    uv_scale = np.ascontiguousarray(scale[mesh_id])
-    chart = charts[tri[sel]]
-    duv_dx = np.ascontiguousarray(gb["duv_dx"][sel], dtype=np.float64)
-    duv_dy = np.ascontiguousarray(gb["duv_dy"][sel], dtype=np.float64)
-    tri_sel = tri[sel].astype(np.int64)
+    scale = np.array([o.material.uv_scale for o in scene.objects], dtype=np.float64).reshape(-1, 2)
     if derivatives == "smooth":
         missing = sorted(_SMOOTH_CHANNELS - set(gb.channels))
         if missing:
@@ -204,40 +202,123 @@ def field_inputs(
                 stacklevel=2,
             )
             derivatives = "flat"
-    if (derivatives == "smooth" or orient_charts) and tri_sel.size:
+    smooth = derivatives == "smooth" and n_sel > 0
+    orient = bool(orient_charts) and n_sel > 0
+    shade = constant_tone is None and n_sel > 0
+
+    def flat(name: str, width: int) -> np.ndarray:  # (H W, width) view of a channel
+        a = np.asarray(gb[name])
+        if a.dtype not in (np.float32, np.float64):
+            a = a.astype(np.float64)
+        return np.ascontiguousarray(a).reshape(-1, width)
+
+    d3 = np.zeros((1, 3))
+    faces, frames = np.zeros((1, 3), dtype=np.int64), np.zeros((1, 3, 2))
+    sym = np.zeros(1, dtype=np.int64)
+    offset, group = np.zeros((1, 2)), np.zeros(1, dtype=np.int64)
+    if smooth or orient:
         faces, frames, sym, offset, group = _scene_frames(scene)
-        if derivatives == "smooth":
-            f64 = lambda name: np.ascontiguousarray(gb[name][sel], dtype=np.float64)  # noqa: E731
-            eye = np.asarray(scene.camera.eye, dtype=np.float64)
-            K.smooth_duv(
-                tri_sel, f64("bary"), faces, frames, f64("normal"), f64("position"),
-                f64("dposition_dx"), f64("dposition_dy"), eye, duv_dx, duv_dy,
-            )  # fmt: skip
-        if orient_charts:
-            m = SYMMETRIES[sym[tri_sel]]  # (N, 2, 2): u' = M u + offset
-            uv = np.ascontiguousarray(np.einsum("nij,nj->ni", m, uv) + offset[tri_sel])
-            chart = group[tri_sel]
-            duv_dx = np.ascontiguousarray(np.einsum("nij,nj->ni", m, duv_dx))
-            duv_dy = np.ascontiguousarray(np.einsum("nij,nj->ni", m, duv_dy))
-            uv_scale = np.ascontiguousarray(np.einsum("nij,nj->ni", np.abs(m), uv_scale))
-    if uv.size:
-        extent = float(np.max(np.abs(uv * uv_scale))) * np.sqrt(2.0)
+    m_a = m_d = d3
+    ambient = np.zeros(3)
+    l_dir, l_color, l_pos = np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))
+    l_point = np.zeros(0, dtype=np.bool_)
+    if shade:
+        objs = scene.objects
+        m_a = np.array([o.material.ambient for o in objs], dtype=np.float64).reshape(-1, 3)
+        m_d = np.array([o.material.diffuse for o in objs], dtype=np.float64).reshape(-1, 3)
+        ambient = np.broadcast_to(np.asarray(scene.ambient, dtype=np.float64), (3,)).copy()
+        l_dir, l_color, l_pos, l_point = _light_arrays(scene)
+    uses_position = smooth or (shade and bool(l_point.any()))
+    uses_normal = smooth or shade
+    uv = np.empty((n_sel, 2))
+    duv_dx = np.empty((n_sel, 2))
+    duv_dy = np.empty((n_sel, 2))
+    uv_scale = np.empty((n_sel, 2))
+    chart = np.empty(n_sel, dtype=np.int64)
+    rgb = np.empty((n_sel if shade else 0, 3))
+    chunk_max = np.zeros((n_sel + K._CHUNK - 1) // K._CHUNK)
+    K.sample_inputs(
+        sample,
+        tri_flat,
+        np.ascontiguousarray(gb["mesh_id"]).reshape(-1),
+        flat("uv", 2),
+        flat("duv_dx", 2),
+        flat("duv_dy", 2),
+        scale,
+        charts,
+        smooth,
+        flat("bary", 3) if smooth else d3,
+        faces,
+        frames,
+        flat("normal", 3) if uses_normal else d3,
+        flat("position", 3) if uses_position else d3,
+        flat("dposition_dx", 3) if smooth else d3,
+        flat("dposition_dy", 3) if smooth else d3,
+        np.asarray(scene.camera.eye, dtype=np.float64).reshape(3),
+        orient,
+        SYMMETRIES,
+        sym,
+        offset,
+        group,
+        shade,
+        m_a,
+        m_d,
+        ambient,
+        l_dir,
+        l_color,
+        l_point,
+        l_pos,
+        uv,
+        duv_dx,
+        duv_dy,
+        uv_scale,
+        chart,
+        rgb,
+        chunk_max,
+    )
+    if n_sel:
+        extent = float(np.max(chunk_max)) * np.sqrt(2.0)
         if not extent < TILE_LIMIT:
             raise ValueError(
                 f"uv: scaled texture coordinates reach {extent:.4g} tiles, but stroke ids hold "
                 f"tiles within +-{TILE_LIMIT}; lower the material's uv_scale"
             )
+    if constant_tone is not None:
+        dark = np.full(n_sel, float(constant_tone))
+    elif n_sel:
+        lum = rgb @ _REC709
+        dark = 1.0 - np.clip(lum, 0.0, 1.0)
+    else:
+        dark = darkness(ctx, tri >= 0, None)
     return FieldInputs(
-        sample=np.flatnonzero(sel.ravel()),
+        sample=sample,
         uv=uv,
         duv_dx=duv_dx,
         duv_dy=duv_dy,
         uv_scale=uv_scale,
-        darkness=np.ascontiguousarray(darkness(ctx, sel, constant_tone)),
-        chart=np.ascontiguousarray(chart),
-        shape=tuple(tri.shape),
+        darkness=np.ascontiguousarray(dark),
+        chart=chart,
+        shape=shape,
         n=gb.n,
     )
+
+
+def _light_arrays(scene) -> tuple[np.ndarray, ...]:
+    """Per light of ``scene``: unit direction (directional lights; as ``ShadeContext.light_dirs``
+    then ``lighting.diffuse`` normalize it), colour, position (point lights), is-point flag."""
+    lights = list(scene.lights)
+    n = len(lights)
+    l_dir, l_color, l_pos = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+    l_point = np.zeros(n, dtype=np.bool_)
+    for k, light in enumerate(lights):
+        l_color[k] = np.asarray(light.color, dtype=np.float64)
+        if light.kind == "point":
+            l_point[k] = True
+            l_pos[k] = np.asarray(light.position, dtype=np.float64)
+        else:
+            d = np.asarray(light.direction, dtype=np.float64)
+            l_dir[k] = unit_vectors(d / np.linalg.norm(d))
+    return l_dir, l_color, l_pos, l_point
 
 
 def layer_scale(inp: FieldInputs, field: StrokeField) -> np.ndarray:
@@ -344,28 +425,84 @@ def gather_fragments(
     centre across, with t in [0, 1], passing tau < rho * gain. Ordered by sample, then layer, birth
     level, row and cell (deterministic)."""
     n = inp.sample.shape[0]
-    counts = np.zeros(n, dtype=np.int64)
-    dummy_i = np.zeros(1, dtype=np.int64)
-    dummy_f = np.zeros(1)
-    dummy_b = np.zeros(1, dtype=np.int8)
-    _run(
-        K.MODE_COUNT, inp, field, gather_width, 1.0, dummy_i, counts,
-        (dummy_i, dummy_f, dummy_b, dummy_b, dummy_f),
+    n_chunks = (n + K._CHUNK - 1) // K._CHUNK
+    chunks = np.arange(n_chunks, dtype=np.int64)
+    # one pass into per-chunk runs of room _ROOM; chunks with more fragments are run again
+    room = np.full(n_chunks, _ROOM, dtype=np.int64)
+    buf = _fragment_arrays(n_chunks * _ROOM)
+    count = np.zeros(n_chunks, dtype=np.int64)
+    _gather(inp, field, gather_width, chunks, chunks * _ROOM, room, count, buf)
+    offsets = np.zeros(n_chunks, dtype=np.int64)
+    np.cumsum(count[:-1], out=offsets[1:])
+    total = int(count.sum())
+    out = _fragment_arrays(total)
+    sample, x, y = np.empty(total, dtype=np.int64), np.empty(total), np.empty(total)
+    fits = count <= room
+    run_src = np.empty(n_chunks, dtype=np.int64)
+    run_src[fits] = chunks[fits] * _ROOM
+    run_len = np.where(fits, count, 0)
+    over = chunks[~fits]
+    if over.size:  # write the overflowing chunks straight to their place
+        src = np.zeros(total, dtype=np.int32)
+        count_over = np.zeros(over.size, dtype=np.int64)
+        dst = (*out[:4], src)
+        _gather(inp, field, gather_width, over, offsets[over], count[over], count_over, dst)
+        run_src[over] = offsets[over]
+        run_len[over] = count[over]
+        K.finish_fragments(
+            offsets[over], count[over], offsets[over], src, inp.sample, inp.shape[1], inp.n,
+            *out[:4], *out[:4], sample, x, y,
+        )  # fmt: skip
+    sel = np.flatnonzero(fits)
+    K.finish_fragments(
+        run_src[sel], run_len[sel], offsets[sel], buf[4], inp.sample, inp.shape[1], inp.n,
+        *buf[:4], *out[:4], sample, x, y,
     )  # fmt: skip
-    offsets = np.zeros(n, dtype=np.int64)
-    np.cumsum(counts[:-1], out=offsets[1:])
-    total = int(counts.sum())
-    ids = np.empty(total, dtype=np.int64)
-    t = np.empty(total)
-    layer = np.empty(total, dtype=np.int8)
-    level = np.empty(total, dtype=np.int8)
-    _run(
-        K.MODE_EMIT, inp, field, gather_width, 1.0, offsets, counts,
-        (ids, t, layer, level, dummy_f),
-    )  # fmt: skip
-    sample = np.repeat(inp.sample, counts)
-    x, y = inp.pixel_xy(sample)
+    ids, t, layer, level = out[:4]
     return Fragments(sample, x, y, t, ids, layer, level, inp.shape, inp.n)
+
+
+#: Room for fragments per chunk of ``_kernels._CHUNK`` samples in the single gathering pass.
+_ROOM = 2 * K._CHUNK
+
+
+def _fragment_arrays(n: int) -> tuple[np.ndarray, ...]:
+    """Empty (id int64, t float64, layer int8, level int8, sample-in-inputs int32) of length n."""
+    return (
+        np.empty(n, dtype=np.int64),
+        np.empty(n),
+        np.empty(n, dtype=np.int8),
+        np.empty(n, dtype=np.int8),
+        np.empty(n, dtype=np.int32),
+    )
+
+
+def _gather(inp, field, width_px, chunks, dst_off, dst_cap, count, outs) -> None:
+    cos_a, sin_a, tone_lo = _layer_arrays(field)
+    K.field_gather(
+        chunks,
+        inp.uv,
+        inp.duv_dx,
+        inp.duv_dy,
+        inp.uv_scale,
+        inp.darkness,
+        inp.chart,
+        cos_a,
+        sin_a,
+        tone_lo,
+        float(field.density),
+        float(field.period),
+        int(field.max_level),
+        float(field.length),
+        float(field.length_jitter),
+        float(width_px),
+        salt_offset(SALT_TONE),
+        salt_offset(SALT_LENGTH),
+        dst_off,
+        dst_cap,
+        count,
+        *outs,
+    )
 
 
 def tam_ink(

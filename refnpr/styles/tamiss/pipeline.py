@@ -32,6 +32,7 @@ from .strokes import (
     extrude,
     fit_aggregates,
     keep_mask,
+    mean_speed,
     take_fit,
 )
 
@@ -296,6 +297,8 @@ def run_pipeline(
     t2 = time.perf_counter()
     timings["aggregate"] = t2 - t1
     fit = fit_aggregates(agg, iterations=p.iterations, prior_weight=p.prior_weight)
+    with np.errstate(invalid="ignore", over="ignore"):  # dropped (non-finite) fits
+        speed = mean_speed(fit)  # once for the drop rule, the overdraw and the extrusion
     keep = keep_mask(
         agg,
         fit,
@@ -303,6 +306,7 @@ def run_pipeline(
         min_t_span=p.min_t_span,
         max_stretch=p.max_stretch,
         px_per_fragment=1.0 / (p.gather_width * inp.n * inp.n),
+        speed=speed,
     )
     t3 = time.perf_counter()
     timings["fit"] = t3 - t2
@@ -316,6 +320,7 @@ def run_pipeline(
             p.extent,
             threshold=p.visibility_threshold,
             overdraw=p.overdraw,
+            speed=speed[kept],
         )
         segments[kept] = seg_k
         n_seg[kept] = n_k
@@ -330,6 +335,7 @@ def run_pipeline(
         wobble_frequency=p.wobble_frequency,
         end_jitter=p.end_jitter,
         samples=p.samples,
+        speed=speed,
     )
     t4 = time.perf_counter()
     timings["extrude"] = t4 - t3

@@ -82,6 +82,7 @@ def keep_mask(
     min_t_span: float = 0.05,
     max_stretch: float | None = None,
     px_per_fragment: float = 1.0,
+    speed: np.ndarray | None = None,
 ) -> np.ndarray:
     """(S,) bool: count >= max(min_fragments, 4), t_max - t_min >= min_t_span, finite fit, and
     (with ``max_stretch``) a fitted curve no longer over [t_min, t_max] than ``max_stretch``
@@ -92,13 +93,14 @@ def keep_mask(
     far past them, a line tens of pixels long where the stroke covers a few. A band
     ``gather_width`` pixels across on n x n samples per pixel emits about gather_width n^2
     fragments per pixel of stroke, so ``px_per_fragment = 1 / (gather_width n^2)``.
+    ``speed`` (S,) float64: :func:`mean_speed` of ``fit`` if already known.
     """
     span = agg.t_max.astype(np.float64) - agg.t_min.astype(np.float64)
     finite = np.all(np.isfinite(fit.c_x), -1) & np.all(np.isfinite(fit.c_y), -1)
     keep = (agg.count >= max(int(min_fragments), 4)) & (span >= min_t_span) & finite
     if max_stretch is not None and keep.any():
         with np.errstate(invalid="ignore", over="ignore"):
-            arc = mean_speed(fit) * span
+            arc = (mean_speed(fit) if speed is None else speed) * span
         covered = agg.count * float(px_per_fragment)
         keep &= arc <= float(max_stretch) * covered + 4.0
     return keep
@@ -122,10 +124,12 @@ def drawn_segments(
     *,
     threshold: float | None = None,
     overdraw: float = 6.0,
+    speed: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Drawn t intervals per stroke: ``(S, 2, 2)`` float64 (start, end), NaN if absent, and
     ``(S,)`` int64 counts (see module docstring for the extents). ``overdraw`` (pixels) bounds
-    how far ``"overdraw"`` runs the outer ends on (converted to t with :func:`mean_speed`)."""
+    how far ``"overdraw"`` runs the outer ends on (converted to t with :func:`mean_speed`;
+    ``speed`` (S,): its values if already known)."""
     S = fit.batch_shape[0] if fit.batch_shape else 1
     lo = np.asarray(fit.t_min, dtype=np.float64).reshape(S)
     hi = np.asarray(fit.t_max, dtype=np.float64).reshape(S)
@@ -140,7 +144,7 @@ def drawn_segments(
         seg = np.asarray(vis, dtype=np.float64).reshape(S, 2, 2).copy()
         count = np.asarray(count, dtype=np.int64).reshape(S)
         if extent == "overdraw":
-            speed = mean_speed(fit)
+            speed = mean_speed(fit) if speed is None else speed
             dt = np.where(speed > 0, overdraw / np.where(speed > 0, speed, 1.0), 0.0)
             rows = np.flatnonzero(count >= 1)
             last = count[rows] - 1
@@ -159,11 +163,12 @@ def _unit(dx, dy, fx, fy):
     return ux, uy
 
 
-def centreline(fit: StrokeFit, t) -> tuple[np.ndarray, ...]:
+def centreline(fit: StrokeFit, t, *, speed: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
     """Points and unit tangents of the drawn curve at t, ``(S, K)`` each: x, y, tx, ty (float64).
 
     r(t) from the fit on [t_min, t_max]; outside, the tangent line at the nearer end, traversed
-    at the fit's mean speed over [t_min, t_max] (:func:`mean_speed`).
+    at the fit's mean speed over [t_min, t_max] (:func:`mean_speed`; ``speed`` (S,): its
+    values if already known).
     """
     t = np.asarray(t, dtype=np.float64)
     lo = np.asarray(fit.t_min, dtype=np.float64)[:, None]
@@ -171,7 +176,7 @@ def centreline(fit: StrokeFit, t) -> tuple[np.ndarray, ...]:
     tc = np.clip(t, lo, hi)
     x, y = (np.asarray(a, dtype=np.float64) for a in fit.evaluate(tc))
     dx, dy = (np.asarray(a, dtype=np.float64) for a in fit.derivative(tc))
-    speed = mean_speed(fit)[:, None]
+    speed = (mean_speed(fit) if speed is None else np.asarray(speed, dtype=np.float64))[:, None]
     (x0, y0), (x1, y1) = fit.evaluate(lo), fit.evaluate(hi)
     chord_x = np.asarray(x1, dtype=np.float64) - np.asarray(x0, dtype=np.float64)
     chord_y = np.asarray(y1, dtype=np.float64) - np.asarray(y0, dtype=np.float64)
@@ -218,6 +223,7 @@ def extrude(
     wobble_frequency: float = 1.5,
     end_jitter: float = 0.0,
     samples: int = 16,
+    speed: np.ndarray | None = None,
 ) -> Strips:
     """Triangle strips of the drawn intervals (see module docstring).
 
@@ -230,6 +236,7 @@ def extrude(
     wobble : amplitude in px; wobble_frequency : cycles per unit t
     end_jitter : fraction of the drawn length by which outer ends may move
     samples : vertex pairs per interval (>= 2)
+    speed : (S,) float64, :func:`mean_speed` of ``fit`` if already known
     """
     S = int(np.asarray(ids).shape[0])
     ids = np.asarray(ids, dtype=np.int64)
@@ -255,7 +262,8 @@ def extrude(
     t1 = seg[stroke, slot, 1][:, None]
     t = t0 + (t1 - t0) * u  # (P, K)
     sub = take_fit(fit, stroke)
-    x, y, tx, ty = centreline(sub, t) if P else (np.zeros((0, K)),) * 4
+    sub_speed = None if speed is None else np.asarray(speed)[stroke]
+    x, y, tx, ty = centreline(sub, t, speed=sub_speed) if P else (np.zeros((0, K)),) * 4
     nx, ny = -ty, tx  # left normal
     wf = 1.0 + field.width_jitter * (2.0 * hash01(ids, SALT_WIDTH) - 1.0)
     w = width * wf[stroke]
