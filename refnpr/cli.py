@@ -205,20 +205,26 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     except (TypeError, ValueError) as exc:
         raise ValueError(f"--frames: {exc}") from None
     width, height = args.size
+    cluster = _cluster_args(args)
+    if cluster is None and (args.chunk is not None or args.warmup is not None):
+        raise ValueError(
+            "--chunk / --warmup: they split a stateful style's frames over a cluster; add "
+            "--workers N or --scheduler ADDR (a serial run shades every frame from frame 0)"
+        )
     show = not args.quiet and (args.progress or sys.stderr.isatty())
     progress = _FrameProgress() if show else None
+    kwargs = dict(out_dir=out, frames=args.frames, exr=args.exr, progress=progress)
     try:
-        result = render_sequence(
-            scene,
-            style,
-            width,
-            height,
-            args.spp,
-            out_dir=out,
-            frames=args.frames,
-            exr=args.exr,
-            progress=progress,
-        )
+        if cluster is None:
+            result = render_sequence(scene, style, width, height, args.spp, **kwargs)
+        else:
+            from . import distributed
+
+            if args.warmup is not None:
+                cluster["warmup"] = args.warmup
+            result = distributed.render_sequence(
+                scene, style, width, height, args.spp, chunk=args.chunk, **cluster, **kwargs
+            )
     finally:
         if progress:
             progress.close()
@@ -235,6 +241,33 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"wrote {video} ({len(result.paths)} frames at {fps:g} fps)")
     return 0
+
+
+def _cluster_args(args: argparse.Namespace) -> dict | None:
+    """--workers / --scheduler as keyword arguments of refnpr.distributed (None: serial)."""
+    if args.workers is None and args.scheduler is None:
+        return None
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers: expected a whole number >= 1, got {args.workers}")
+    return {"workers": args.workers, "scheduler": args.scheduler}
+
+
+def _add_cluster_options(parser: argparse.ArgumentParser) -> None:
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="render on a local Dask cluster of N worker processes (pip install "
+        "'refnpr[distributed]'); results identical to a serial run",
+    )
+    where.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDR",
+        help="render on a running Dask cluster, e.g. tcp://10.0.0.5:8786",
+    )
 
 
 def _style_params(pairs: list[tuple[str, object]]) -> dict[str, object]:
@@ -310,6 +343,14 @@ def _cmd_golden(args: argparse.Namespace) -> int:
             f"{str(DEFAULT_SUITE)!r}, relative to the current directory); run refnpr golden in "
             "a refnpr checkout, or pass --suite FILE"
         )
+    cluster = _cluster_args(args)
+    if cluster is not None:  # the same files and report, the cases rendered on a Dask cluster
+        import functools
+
+        from . import distributed
+
+        check_suite = functools.partial(distributed.check_suite, **cluster)
+        update_suite = functools.partial(distributed.update_suite, **cluster)
     if args.update:
         update_suite(suite, only=args.only)
         return 0
@@ -492,6 +533,23 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument(
         "--progress", action="store_true", help="show the progress bar even if stderr is no tty"
     )
+    _add_cluster_options(a)
+    a.add_argument(
+        "--chunk",
+        type=int,
+        default=None,
+        metavar="N",
+        help="with --workers/--scheduler, stateful styles: frames per chunk (default: split "
+        "evenly over the workers)",
+    )
+    a.add_argument(
+        "--warmup",
+        type=int,
+        default=None,
+        metavar="K",
+        help="with --workers/--scheduler, stateful styles: frames shaded before each chunk for "
+        "the state only (default 8)",
+    )
     a.add_argument("-q", "--quiet", action="store_true")
     a.set_defaults(func=_cmd_animate)
 
@@ -507,6 +565,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
     )
     g.add_argument("--only", nargs="+", default=None, metavar="NAME", help="only these cases")
+    _add_cluster_options(g)
     g.set_defaults(func=_cmd_golden)
 
     c = sub.add_parser("compare", help="compare another backend's renders with reference images")

@@ -54,6 +54,7 @@ Tolerance keys a conformance kit carries per case (``refnpr kit export``; see do
 from __future__ import annotations
 
 import re
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -66,7 +67,21 @@ from .raster import rasterize
 from .render import render
 from .scenes.toml_format import parse_toml_bytes
 
-__all__ = ["GoldenCase", "CaseResult", "load_suite", "update_suite", "check_suite", "render_case"]
+__all__ = [
+    "GoldenCase",
+    "CaseResult",
+    "RenderCases",
+    "load_suite",
+    "update_suite",
+    "check_suite",
+    "render_case",
+    "render_or_error",
+]
+
+#: render_cases(cases) -> (index in cases, rendered case, error message or None) for every case,
+#: in any order: how check_suite / update_suite get their renders (refnpr.distributed passes one
+#: that renders on a Dask cluster; the default renders here, one case after another).
+RenderCases = Callable[[Sequence["GoldenCase"]], Iterable[tuple[int, Any, "str | None"]]]
 
 _DEFAULTS: dict[str, Any] = {
     "kind": "image",
@@ -95,6 +110,8 @@ class GoldenCase:
     params: dict[str, Any] = field(default_factory=dict)
 
     def __getattr__(self, key: str) -> Any:
+        if key == "params" or key.startswith("__"):  # unpickling asks before params is set
+            raise AttributeError(key)
         try:
             return self.params[key]
         except KeyError:
@@ -232,26 +249,65 @@ def render_case(case: GoldenCase) -> np.ndarray | dict[str, np.ndarray]:
     return render(case.scene, case.style, case.width, case.height, case.spp).to_srgb8()
 
 
+def render_or_error(case: GoldenCase) -> tuple[Any, str | None]:
+    """``(render_case(case), None)``, or ``(None, "render failed: ...")`` when the case's
+    scene or style is invalid (ValueError, TypeError, OSError): one broken case must not hide
+    the rest of a check."""
+    try:
+        return render_case(case), None
+    except (ValueError, TypeError, OSError) as exc:
+        return None, f"render failed: {exc}"
+
+
+def _serial_check_renders(cases: Sequence[GoldenCase]) -> Iterator[tuple[int, Any, str | None]]:
+    for i, case in enumerate(cases):
+        got, error = render_or_error(case)
+        yield i, got, error
+
+
+def _serial_update_renders(cases: Sequence[GoldenCase]) -> Iterator[tuple[int, Any, str | None]]:
+    for i, case in enumerate(cases):
+        yield i, render_case(case), None
+
+
 def _files(root: Path, case: GoldenCase) -> Path:
     return root / (f"{case.name}.npz" if case.kind == "gbuffer" else f"{case.name}.png")
 
 
-def update_suite(suite_path: str | Path, *, only: list[str] | None = None, log=print) -> list[Path]:
-    """Render every case (or those named in ``only``) and write the golden files."""
+def update_suite(
+    suite_path: str | Path,
+    *,
+    only: list[str] | None = None,
+    log=print,
+    render_cases: RenderCases | None = None,
+) -> list[Path]:
+    """Render every case (or those named in ``only``) and write the golden files.
+
+    ``render_cases`` (see :data:`RenderCases`) renders the cases elsewhere (a Dask cluster:
+    :func:`refnpr.distributed.update_suite`); each file is written as its render arrives.
+    Returns the files in suite order.
+    """
     suite_path = Path(suite_path)
     root = suite_path.parent
-    written = []
-    for case in _select(load_suite(suite_path), only):
-        result = render_case(case)
-        target = _files(root, case)
-        if case.kind == "gbuffer":
-            with atomic_file(target, suffix=".npz") as tmp:
-                np.savez_compressed(tmp, **result)
-        else:
-            write_png_atomic(target, result)
-        written.append(target)
-        log(f"wrote {target}")
-    return written
+    cases = _select(load_suite(suite_path), only)
+    written: dict[int, Path] = {}
+    renders = iter((render_cases or _serial_update_renders)(cases))
+    try:
+        for i, result, _ in renders:
+            case = cases[i]
+            target = _files(root, case)
+            if case.kind == "gbuffer":
+                with atomic_file(target, suffix=".npz") as tmp:
+                    np.savez_compressed(tmp, **result)
+            else:
+                write_png_atomic(target, result)
+            written[i] = target
+            log(f"wrote {target}")
+    finally:  # a generator of renders elsewhere cancels what is left (errors, Ctrl-C)
+        close = getattr(renders, "close", None)
+        if close is not None:
+            close()
+    return [written[i] for i in sorted(written)]
 
 
 def _select(cases: list[GoldenCase], only: list[str] | None) -> list[GoldenCase]:
@@ -315,63 +371,75 @@ def check_suite(
     *,
     only: list[str] | None = None,
     failure_dir: str | Path | None = None,
+    render_cases: RenderCases | None = None,
 ) -> list[CaseResult]:
-    """Re-render every case and compare with its golden file. Missing golden files fail."""
+    """Re-render every case and compare with its golden file. Missing golden files fail.
+
+    ``render_cases`` (see :data:`RenderCases`) renders the cases elsewhere (a Dask cluster:
+    :func:`refnpr.distributed.check_suite`); the comparison, the messages and the failure
+    images are the same. Results are in suite order.
+    """
     suite_path = Path(suite_path)
     root = suite_path.parent
     fail_root = Path(failure_dir) if failure_dir is not None else root / "_failures"
-    results = []
-    for case in _select(load_suite(suite_path), only):
+    cases = _select(load_suite(suite_path), only)
+    results: dict[int, CaseResult] = {}
+    present = []
+    for i, case in enumerate(cases):
         target = _files(root, case)
         if not target.exists():
-            results.append(
-                CaseResult(
-                    case.name, False, f"missing golden file {target}; run `refnpr golden --update`"
-                )
+            results[i] = CaseResult(
+                case.name, False, f"missing golden file {target}; run `refnpr golden --update`"
             )
-            continue
-        try:
-            got = render_case(case)
-        except (ValueError, TypeError, OSError) as exc:  # one broken case must not hide the rest
-            results.append(CaseResult(case.name, False, f"render failed: {exc}"))
-            continue
-        if case.kind == "gbuffer":
-            results.append(_check_gbuffer(case, target, got))
-            continue
-        try:
-            ref = load_image(target, what="golden file")
-        except ValueError as exc:  # a corrupt golden file fails its case, not the suite
-            results.append(
-                CaseResult(case.name, False, f"{exc}; run `refnpr golden --update` to rewrite it")
-            )
-            continue
-        cand = got.astype(np.float64) / 255.0
-        m = compare_images(ref, cand, name=case.name, tolerance=case.tolerance)
-        if m.status == "size":
-            gh, gw = ref.shape[:2]
-            results.append(
-                CaseResult(
-                    case.name,
-                    False,
-                    f"size: golden file {str(target)!r} is {gw}x{gh} but the case renders "
-                    f"{case.width}x{case.height}; if the suite's size changed on purpose, "
-                    "run `refnpr golden --update`",
-                    m,
-                )
-            )
-            continue
-        ok = m.passes(max_frac_over=case.max_frac_over, min_ssim=case.min_ssim)
-        if not ok:
-            d = fail_root / case.name
-            write_png_atomic(d / "reference.png", np.rint(ref * 255).astype(np.uint8))
-            write_png_atomic(d / "result.png", got)
-            if m.status == "ok":
-                write_png_atomic(d / "diff.png", difference_image(ref, cand))
-        msg = (
-            f"{m.status}: max_abs={m.max_abs:.4f} rmse={m.rmse:.5f} "
-            f"frac>tol={m.frac_over:.5f} (allowed {case.max_frac_over}) ssim={m.ssim:.4f}"
+        else:
+            present.append(i)
+    renders = iter((render_cases or _serial_check_renders)([cases[i] for i in present]))
+    try:
+        for j, got, error in renders:
+            i = present[j]
+            case = cases[i]
+            if error is not None:
+                results[i] = CaseResult(case.name, False, error)
+            else:
+                results[i] = _check_case_render(case, _files(root, case), got, fail_root)
+    finally:  # a generator of renders elsewhere cancels what is left (errors, Ctrl-C)
+        close = getattr(renders, "close", None)
+        if close is not None:
+            close()
+    return [results[i] for i in sorted(results)]
+
+
+def _check_case_render(case: GoldenCase, target: Path, got: Any, fail_root: Path) -> CaseResult:
+    """Compare one case's render with its golden file (writing failure images)."""
+    if case.kind == "gbuffer":
+        return _check_gbuffer(case, target, got)
+    try:
+        ref = load_image(target, what="golden file")
+    except ValueError as exc:  # a corrupt golden file fails its case, not the suite
+        return CaseResult(case.name, False, f"{exc}; run `refnpr golden --update` to rewrite it")
+    cand = got.astype(np.float64) / 255.0
+    m = compare_images(ref, cand, name=case.name, tolerance=case.tolerance)
+    if m.status == "size":
+        gh, gw = ref.shape[:2]
+        return CaseResult(
+            case.name,
+            False,
+            f"size: golden file {str(target)!r} is {gw}x{gh} but the case renders "
+            f"{case.width}x{case.height}; if the suite's size changed on purpose, "
+            "run `refnpr golden --update`",
+            m,
         )
-        if not ok:
-            msg += f"; images written to {fail_root / case.name}"
-        results.append(CaseResult(case.name, ok, msg, m))
-    return results
+    ok = m.passes(max_frac_over=case.max_frac_over, min_ssim=case.min_ssim)
+    if not ok:
+        d = fail_root / case.name
+        write_png_atomic(d / "reference.png", np.rint(ref * 255).astype(np.uint8))
+        write_png_atomic(d / "result.png", got)
+        if m.status == "ok":
+            write_png_atomic(d / "diff.png", difference_image(ref, cand))
+    msg = (
+        f"{m.status}: max_abs={m.max_abs:.4f} rmse={m.rmse:.5f} "
+        f"frac>tol={m.frac_over:.5f} (allowed {case.max_frac_over}) ssim={m.ssim:.4f}"
+    )
+    if not ok:
+        msg += f"; images written to {fail_root / case.name}"
+    return CaseResult(case.name, ok, msg, m)

@@ -19,15 +19,17 @@ specification, the size, spp and frame number, and the refnpr version; and the S
 PNG (and EXR) it describes. A frame whose record matches, and whose files match the record, is
 done:
 
-* a **stateless** style (``initial_state()`` is None and ``shade_frame`` is the default) skips
-  it: a killed run loses nothing but the frame it was on;
+* a **stateless** style (``initial_state()`` is None and ``shade_frame`` is the default; the
+  contour layer counts as its base style) skips it: a killed run loses nothing but the frame it
+  was on;
 * a **stateful** style (TAMISS hash tables, aggregate history) re-runs from frame 0 of the
   animation up to the last frame still to render, since the state of frame f depends on all
   frames before it; frames before ``A`` are shaded for their state only, and frames already
   done are not rewritten (a range that is all done is not shaded at all).
 
 Either way the frames on disk after any number of kills and restarts are byte-identical to an
-uninterrupted run. One run per directory at a time.
+uninterrupted run. One run per directory at a time. :mod:`refnpr.distributed` renders the same
+frames on a Dask cluster with these files and rules (the client writes them).
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from . import __version__
-from .image import atomic_file, write_png_atomic
+from .image import atomic_file
 from .render import DEFAULT_STYLE, RenderContext, as_scene
 from .scenes._params import check_int
 from .styles import Style, style_from_spec
@@ -145,7 +147,15 @@ def frame_range(frames: Any, count: int) -> range:
 
 
 def is_stateful(style: Style) -> bool:
-    """Whether ``style`` carries state from frame to frame (see the module docstring)."""
+    """Whether ``style`` carries state from frame to frame (see the module docstring).
+
+    The contour layer (``contoured``) passes the sequence protocol through to its base style, so
+    it is stateful exactly when its base style is: its own ``shade_frame`` override carries no
+    state of its own.
+    """
+    base = getattr(style, "base", None)
+    if style.name == "contoured" and isinstance(base, Style):
+        return is_stateful(base)
     return style.initial_state() is not None or type(style).shade_frame is not Style.shade_frame
 
 
@@ -284,6 +294,171 @@ def _check_style_tracks(scene: Any, spec: Any, style: Style, user_style: bool) -
             )
 
 
+@dataclass
+class _Plan:
+    """Everything a frame's pixels and record depend on, checked once per run (picklable: a
+    distributed run sends it to the workers)."""
+
+    scene: Any
+    spec: Any
+    label: Any
+    digest: str
+    base_style: Style
+    animated_style: bool
+    stateful: bool
+    todo: range
+    out: Path
+    width: int
+    height: int
+    spp: int
+    exr: bool
+
+    def key_of(self, f: int) -> str:
+        """The restart hash of frame ``f`` (module docstring)."""
+        blob = {
+            "refnpr": __version__,
+            "scene": self.digest,
+            "style": self.label,
+            "size": [self.width, self.height],
+            "spp": self.spp,
+            "frame": f,
+        }
+        return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
+
+    def style_of(self, f: int) -> Style:
+        """The style of frame ``f``: the base style with the frame's style tracks applied."""
+        if not self.animated_style:
+            return self.base_style
+        return style_from_spec({**self.spec, **self.scene.animation.style_values(float(f))})
+
+    def done(self, f: int) -> bool:
+        return _done(self.out, FRAME_NAME.format(f), self.key_of(f), self.exr)
+
+
+def _plan(
+    scene: Any,
+    style: Any,
+    width: int,
+    height: int,
+    spp: int,
+    out_dir: str | os.PathLike,
+    frames: Any,
+    exr: bool,
+    progress: Any,
+) -> _Plan:
+    """Check the arguments of a sequence run, create ``out_dir`` and remove stray temporaries."""
+    width = check_int("width", width, minimum=1)
+    height = check_int("height", height, minimum=1)
+    spp = check_int("spp", spp, minimum=1)
+    if not isinstance(exr, (bool, np.bool_)):
+        raise TypeError(f"exr: expected a bool, got {type(exr).__name__} {exr!r}")
+    if progress is not None and not callable(progress):
+        raise TypeError(
+            f"progress: expected a callable progress(done, total, frame, status) or None, got "
+            f"{type(progress).__name__}"
+        )
+    scene = as_scene(scene)
+    todo = frame_range(frames, scene.frames)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"out_dir: {str(out)!r} is a file; give a directory for the frames")
+    user_style = style is not None
+    spec = style if user_style else (scene.style or DEFAULT_STYLE)
+    base_style = style_from_spec(spec)
+    _check_style_tracks(scene, spec, base_style, user_style)
+    animated_style = bool(_style_tracks(scene))
+    if isinstance(spec, str):
+        spec = {"name": spec}
+    out.mkdir(parents=True, exist_ok=True)
+    _remove_stray_temporaries(out)
+    return _Plan(
+        scene=scene,
+        spec=spec,
+        label=_style_label(spec),
+        digest=scene_digest(scene),
+        base_style=base_style,
+        animated_style=animated_style,
+        stateful=is_stateful(base_style),
+        todo=todo,
+        out=out,
+        width=width,
+        height=height,
+        spp=spp,
+        exr=bool(exr),
+    )
+
+
+class _Shader:
+    """Shades consecutive frames of a plan: the style protocol, one reused RenderContext.
+
+    ``shade(f)`` renders frame ``f`` from the state the previous ``shade`` left (the style's
+    ``initial_state()`` at first); ``skip()`` marks a gap, after which the next frame computes
+    its own previous still.
+    """
+
+    def __init__(self, plan: _Plan, first: int) -> None:
+        self.plan = plan
+        self.ctx: RenderContext | None = None
+        self.state = plan.base_style.initial_state()
+        self.prev = plan.scene.at(first - 1) if first > 0 else None
+
+    def skip(self) -> None:
+        self.prev = None
+
+    def shade(self, f: int) -> Any:
+        plan = self.plan
+        still = plan.scene.at(f)
+        if self.prev is None and f > 0:
+            self.prev = plan.scene.at(f - 1)
+        frame_style = plan.style_of(f).for_frame(still, self.prev)
+        if self.ctx is None:
+            self.ctx = RenderContext(still, frame_style, plan.width, plan.height, plan.spp)
+        image, self.state = self.ctx.render_frame(still, frame_style, self.state)
+        self.prev = still
+        return image
+
+
+def _png_bytes(image: Any) -> bytes:
+    """The frame's 8-bit sRGB RGBA PNG, encoded in memory (the bytes every run writes)."""
+    import imageio.v3 as iio
+
+    return bytes(iio.imwrite("<bytes>", image.to_srgb8(), extension=".png"))
+
+
+def _write_frame(
+    plan: _Plan,
+    f: int,
+    png: bytes,
+    rgba: np.ndarray | None,
+    extra: dict[str, Any] | None = None,
+) -> None:
+    """Write frame ``f``: its PNG (and EXR from ``rgba``), then its record, each atomically.
+
+    ``extra`` adds keys to the record (not to its hash): a distributed chunk's ``state_from``.
+    """
+    out = plan.out
+    stem = FRAME_NAME.format(f)
+    (out / f"{stem}.json").unlink(missing_ok=True)  # a stale record must not outlive its PNG
+    with atomic_file(out / f"{stem}.png", suffix=".png") as tmp:
+        tmp.write_bytes(png)
+    record = {
+        "hash": plan.key_of(f),
+        "frame": f,
+        "scene": plan.scene.name,
+        "style": plan.label,
+        "size": [plan.width, plan.height],
+        "spp": plan.spp,
+        "refnpr": __version__,
+        "png_sha256": hashlib.sha256(png).hexdigest(),
+        **(extra or {}),
+    }
+    if plan.exr:
+        _write_exr(out / f"{stem}.exr", rgba)
+        record["exr_sha256"] = _file_sha(out / f"{stem}.exr")
+    with atomic_file(out / f"{stem}.json", suffix=".json") as tmp:
+        tmp.write_text(json.dumps(record, indent=1, sort_keys=True))
+
+
 def render_sequence(
     scene: Any,
     style: Any = None,
@@ -319,56 +494,18 @@ def render_sequence(
     Returns
     -------
     SequenceResult
+
+    See Also
+    --------
+    refnpr.distributed.render_sequence : the same frames, bytes and records on a Dask cluster.
     """
     t_start = time.perf_counter()
-    width = check_int("width", width, minimum=1)
-    height = check_int("height", height, minimum=1)
-    spp = check_int("spp", spp, minimum=1)
-    if not isinstance(exr, (bool, np.bool_)):
-        raise TypeError(f"exr: expected a bool, got {type(exr).__name__} {exr!r}")
-    if progress is not None and not callable(progress):
-        raise TypeError(
-            f"progress: expected a callable progress(done, total, frame, status) or None, got "
-            f"{type(progress).__name__}"
-        )
-    scene = as_scene(scene)
-    todo = frame_range(frames, scene.frames)
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"out_dir: {str(out)!r} is a file; give a directory for the frames")
-    user_style = style is not None
-    spec = style if user_style else (scene.style or DEFAULT_STYLE)
-    base_style = style_from_spec(spec)
-    _check_style_tracks(scene, spec, base_style, user_style)
-    animated_style = bool(_style_tracks(scene))
-    if isinstance(spec, str):
-        spec = {"name": spec}
-    stateful = is_stateful(base_style)
-    out.mkdir(parents=True, exist_ok=True)
-    _remove_stray_temporaries(out)
-
-    digest = scene_digest(scene)
-    label = _style_label(spec)
-
-    def key_of(f: int) -> str:
-        blob = {
-            "refnpr": __version__,
-            "scene": digest,
-            "style": label,
-            "size": [width, height],
-            "spp": spp,
-            "frame": f,
-        }
-        return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
-
-    def style_of(f: int) -> Style:
-        if not animated_style:
-            return base_style
-        return style_from_spec({**spec, **scene.animation.style_values(float(f))})
+    plan = _plan(scene, style, width, height, spp, out_dir, frames, exr, progress)
+    todo, out, stateful = plan.todo, plan.out, plan.stateful
 
     result = SequenceResult(out, list(todo), stateful=stateful)
     result.paths = [out / f"{FRAME_NAME.format(f)}.png" for f in todo]
-    done_flags = {f: _done(out, FRAME_NAME.format(f), key_of(f), exr) for f in todo}
+    done_flags = {f: plan.done(f) for f in todo}
     if all(done_flags.values()):  # nothing to render: no state to rebuild either
         result.skipped = list(todo)
         result.seconds = time.perf_counter() - t_start
@@ -381,9 +518,7 @@ def render_sequence(
     stop = max(f for f in todo if not done_flags[f]) + 1 if stateful else todo.stop
     run = range(first, todo.stop)
 
-    ctx = None
-    state = base_style.initial_state()
-    prev = scene.at(first - 1) if first > 0 else None
+    shader = _Shader(plan, first)
     count = 0
     for f in run:
         in_range = f in todo
@@ -393,16 +528,9 @@ def render_sequence(
             count += 1
             if progress is not None:
                 progress(count, len(todo), f, "skipped")
-            prev = None  # the next frame computes its own previous still
+            shader.skip()
             continue
-        still = scene.at(f)
-        if prev is None and f > 0:
-            prev = scene.at(f - 1)
-        frame_style = style_of(f).for_frame(still, prev)
-        if ctx is None:
-            ctx = RenderContext(still, frame_style, width, height, spp)
-        image, state = ctx.render_frame(still, frame_style, state)
-        prev = still
+        image = shader.shade(f)
         if not in_range:
             if progress is not None:
                 progress(count, len(todo), f, "state")
@@ -413,24 +541,7 @@ def render_sequence(
             if progress is not None:
                 progress(count, len(todo), f, "skipped")
             continue
-        stem = FRAME_NAME.format(f)
-        (out / f"{stem}.json").unlink(missing_ok=True)  # a stale record must not outlive its PNG
-        png = write_png_atomic(out / f"{stem}.png", image.to_srgb8())
-        record = {
-            "hash": key_of(f),
-            "frame": f,
-            "scene": scene.name,
-            "style": label,
-            "size": [width, height],
-            "spp": spp,
-            "refnpr": __version__,
-            "png_sha256": _file_sha(png),
-        }
-        if exr:
-            _write_exr(out / f"{stem}.exr", image.rgba)
-            record["exr_sha256"] = _file_sha(out / f"{stem}.exr")
-        with atomic_file(out / f"{stem}.json", suffix=".json") as tmp:
-            tmp.write_text(json.dumps(record, indent=1, sort_keys=True))
+        _write_frame(plan, f, _png_bytes(image), image.rgba if plan.exr else None)
         result.rendered.append(f)
         if progress is not None:
             progress(count, len(todo), f, "rendered")

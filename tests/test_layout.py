@@ -122,9 +122,18 @@ PUBLIC_API = {
         "CaseResult",
         "GoldenCase",
         "check_suite",
+        "RenderCases",
         "load_suite",
         "render_case",
+        "render_or_error",
         "update_suite",
+    ),
+    "refnpr.distributed": (
+        "check_suite",
+        "open_client",
+        "render_sequence",
+        "update_suite",
+        "worker_threads",
     ),
     "refnpr.image": (
         "Image",
@@ -451,6 +460,7 @@ RANK = {
     "golden": 6,
     "kit": 7,
     "gallery": 7,
+    "distributed": 7,
     "cli": 8,
 }
 #: Names the root package exports on first use (module ``__getattr__``): ``refnpr.explore``
