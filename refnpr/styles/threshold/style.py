@@ -14,6 +14,7 @@ from refnpr.texture import MipPyramid
 from .._common import needs_position, rgba_from, specular_field
 from ..base import ShadeContext, Style, register
 from .bump import BumpMap
+from .fast import shade_fast
 from .images import PyramidCache, image_thresholds
 from .params import DEPRECATED, PARAMETERS, RENAMED, ThresholdParams, parse_params
 from .sources import (
@@ -250,6 +251,11 @@ class ThresholdStyle(Style):
         return blend(x, tx, st)
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
+        return shade_fast(self, ctx)  # one numba pass (refnpr.styles.threshold._kernels)
+
+    def _shade_numpy(self, ctx: ShadeContext) -> np.ndarray:
+        """The numpy shading path: whole-array formula calls (eqs. 1-8, sec. 4-5), kept as the
+        tests' oracle of the kernel path (:func:`.fast.shade_fast`), the same image."""
         p = self.p
         gb = ctx.gb
         mask = ctx.mask
