@@ -5,7 +5,10 @@ Usage::
     python benchmarks/bench_tamiss.py                       # full run, writes results/tamiss.json
     python benchmarks/bench_tamiss.py --quick --json /tmp/t.json   # smoke run, seconds
 
-Sections (``--sections``, comma separated; default all three):
+Sections (``--sections``, comma separated; default phases,hash,jitter; ``options`` on request)::
+
+    python benchmarks/bench_tamiss.py --sections options          # the jitter remedies (issue 12)
+    python benchmarks/bench_tamiss.py --sections options --quick  # smoke run
 
 ``phases``
     The ``tamiss_torus_knot`` scene at 1920 x 1200 (the paper's Table 1 resolution), one G-buffer
@@ -42,6 +45,28 @@ Sections (``--sections``, comma separated; default all three):
     proposal, sec. 4.1). Averaging lags true motion by (frames - 1) / 2 frames, constant for a
     steady orbit, so it cancels in these frame-to-frame differences.
 
+``options``
+    The jitter remedies as style parameters, each beside the texture-space TAM baseline of the
+    same field (golden case ``tamiss-knot-tam``) on two sequences: the built-in
+    ``tamiss_knot_orbit`` (0.625 degrees a frame) and ``knot_1deg``, the ``tamiss_torus_knot``
+    scene in the ``tamiss-knot-pen`` style with its camera orbiting 1 degree a frame about the
+    vertical axis through the knot. Variants (``OPTION_VARIANTS``): the default; the paper's
+    hashed aggregation; ``gather_scale`` (gathering on a g x g grid per pixel, independent of
+    spp); ``average_frames`` (the paper's sec. 4.1 averaging of aggregates over k frames);
+    ``smooth`` (refnpr's exponential smoothing of the fitted curves by stroke id); a combination.
+    Per variant, frames rendered through the sequence protocol (``shade_frame`` and its state):
+    E (warping error) and E/D (its ratio to the plain difference), medians over the pairs
+    (``refnpr.coherence.pair_metrics`` with the exact motion field), the frame time (median of
+    rasterize + shade + composite, from a second pass rendering each frame with every variant in
+    turn, so that the ratio to the default tamiss is measured side by side);
+    and the stroke-end jitter (px after removing the true motion; median over pairs of the
+    per-pair mean and 95th percentile) and strokes appeared / vanished per pair, from the style's
+    pipeline on a spp-1 G-buffer with its own state threaded through the frames (as
+    ``refnpr.coherence.measure(strokes=True)`` does, but stateful: that one runs each frame's
+    pipeline without the state). ``drawn``: the same jitter with the ends on the drawn centreline
+    (past [t_min, t_max] the tangent extension of extent ``overdraw``), where
+    ``coherence.stroke_ends`` evaluates the cubic's extrapolation there.
+
 All times are wall-clock ``time.perf_counter`` seconds; nothing here asserts a time.
 """
 
@@ -72,6 +97,28 @@ from refnpr.styles.tamiss import (  # noqa: E402
     stroke_geometry,
 )
 from refnpr.styles.tamiss.strokes import take_fit  # noqa: E402
+
+#: The ``options`` section's variants: label -> parameters over the scene's tamiss style.
+OPTION_VARIANTS: dict[str, dict] = {
+    "default": {},
+    "hashed": {"aggregation": "hashed"},
+    "gather_scale=3": {"gather_scale": 3},
+    "gather_scale=4": {"gather_scale": 4},
+    "average_frames=2": {"average_frames": 2},
+    "average_frames=4": {"average_frames": 4},
+    "smooth=0.3": {"smooth": 0.3},
+    "smooth=0.5": {"smooth": 0.5},
+    "smooth=0.7": {"smooth": 0.7},
+    "smooth=0.5+gather_scale=3": {"smooth": 0.5, "gather_scale": 3},
+}
+#: The TAM baseline of the options section (golden case tamiss-knot-tam).
+TAM_KNOT = {
+    "name": "tam",
+    "directions": ["v"],
+    "period": 4.0,
+    "density": 1.0,
+    "contours": {"width": 1.2},
+}
 
 #: what the tamiss style reads (``derivatives="smooth"`` needs bary, position and its derivatives)
 CHANNELS = [
@@ -336,6 +383,177 @@ def bench_jitter(args) -> dict:
             "frames": args.frames, "average_frames": args.average, "results": out}  # fmt: skip
 
 
+def _orbit_scenes(name: str, step_deg: float, frames: int) -> list:
+    """``frames`` stills of scene ``name`` with its camera orbiting ``step_deg`` a frame about
+    the vertical axis through its target."""
+    sc = load_scene(name)
+    cam0 = sc.camera
+    eye0, target = np.asarray(cam0.eye, np.float64), np.asarray(cam0.target, np.float64)
+    out = []
+    for k in range(frames):
+        a = np.radians(step_deg * k)
+        rot = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+        cam = Camera.look_at(
+            target + rot @ (eye0 - target), target, cam0.up, cam0.fov_y, cam0.near, cam0.far
+        )
+        out.append(sc.with_camera(cam))
+    return out
+
+
+def _drawn_ends(result):
+    """``refnpr.coherence.stroke_ends`` with the ends on the *drawn* centreline: past [t_min,
+    t_max] (extent overdraw) the tangent extension the strips follow, where ``stroke_ends``
+    evaluates the cubic's extrapolation."""
+    from refnpr.coherence import StrokeEnds
+    from refnpr.styles.tamiss.strokes import centreline
+
+    seg = np.asarray(result.segments, dtype=np.float64)
+    drawn = np.asarray(result.n_segments) > 0
+    with np.errstate(invalid="ignore"):
+        t0 = np.where(drawn, np.nanmin(np.where(drawn[:, None], seg[..., 0], 0.0), axis=1), 0.0)
+        t1 = np.where(drawn, np.nanmax(np.where(drawn[:, None], seg[..., 1], 0.0), axis=1), 0.0)
+    with np.errstate(invalid="ignore", over="ignore"):
+        x0, y0, _, _ = centreline(result.fit, t0[:, None])
+        x1, y1, _, _ = centreline(result.fit, t1[:, None])
+    ids = np.asarray(result.stroke_ids, dtype=np.int64)
+    pick = np.flatnonzero(drawn)[np.argsort(ids[drawn], kind="stable")]
+    return StrokeEnds(
+        ids[pick],
+        np.stack([x0[pick, 0], y0[pick, 0]], -1),
+        np.stack([x1[pick, 0], y1[pick, 0]], -1),
+    )
+
+
+def _measure_variant(style, scenes, w, h, spp, strokes: bool) -> dict:
+    """E, E/D, frame time and (stroke styles) stroke jitter of one style on ``scenes``."""
+    from refnpr.coherence import (
+        MOTION_CHANNELS,
+        STROKE_CHANNELS,
+        motion_field,
+        pair_metrics,
+        render_frame,
+        stroke_ends,
+        stroke_pair_metrics,
+    )
+    from refnpr.coherence.strokes import stroke_style
+    from refnpr.styles import ShadeContext
+
+    state = style.initial_state()
+    times, rows = [], []
+    prev = None
+    for t, scene in enumerate(scenes):
+        t0 = time.perf_counter()
+        rgba, state = render_frame(style, scene, w, h, spp, state)
+        times.append(time.perf_counter() - t0)
+        gb = rasterize(scene, None, w, h, MOTION_CHANNELS, 1, dtype=np.float64)
+        if prev is not None:
+            motion = motion_field(gb, prev[1], scene, prev[2])
+            rows.append(pair_metrics(rgba, prev[0], motion, frame=t))
+        prev = (rgba, gb, scene)
+    out = {
+        "E": statistics.median(r.warp_error for r in rows),
+        "E_over_D": statistics.median(r.ratio for r in rows),
+        "flip": statistics.median(r.flip for r in rows),
+        "frame_s": statistics.median(times),
+        "frame_s_spread": [min(times), max(times)],
+    }
+    if not strokes:
+        return out
+    tam = stroke_style(style)
+    sstate = tam.initial_state()
+    srows, drows = [], []
+    prev_e = None
+    for t, scene in enumerate(scenes):
+        chans = sorted(set(tam.requires(scene)) | set(STROKE_CHANNELS))
+        sgb = rasterize(
+            scene, None, w, h, chans, 1, **{"dtype": np.float64, **tam.raster_options(scene)}
+        )
+        result, sstate = tam.run_frame(ShadeContext(sgb, scene), sstate)
+        ends, dends = stroke_ends(result), _drawn_ends(result)
+        if prev_e is not None:
+            srows.append(stroke_pair_metrics(ends, prev_e[0], prev_e[1], scene, prev_e[2], frame=t))
+            drows.append(stroke_pair_metrics(dends, prev_e[3], prev_e[1], scene, prev_e[2]))
+        prev_e = (ends, sgb, scene, dends)
+    ok = [r for r in srows if r.n_ends]
+    dok = [r for r in drows if r.n_ends]
+    out.update(
+        {
+            "jitter_mean_px": statistics.median(r.jitter_mean for r in ok) if ok else None,
+            "jitter_p95_px": statistics.median(r.jitter_p95 for r in ok) if ok else None,
+            "drawn_end_mean_px": statistics.median(r.jitter_mean for r in dok) if dok else None,
+            "drawn_end_p95_px": statistics.median(r.jitter_p95 for r in dok) if dok else None,
+            "appeared": statistics.mean(r.appeared for r in srows),
+            "vanished": statistics.mean(r.vanished for r in srows),
+            "n_strokes": statistics.mean(r.n_strokes for r in srows),
+        }
+    )
+    return out
+
+
+def _interleaved_times(styles: dict, scenes, w, h, spp) -> dict:
+    """Median frame time (rasterize + shade + composite) of each style, frames rendered in turn
+    across the styles (each with its own state), so that the machine's load is shared."""
+    from refnpr.coherence import render_frame
+
+    states = {k: s.initial_state() for k, s in styles.items()}
+    times: dict = {k: [] for k in styles}
+    for scene in scenes:
+        for k, style in styles.items():
+            t0 = time.perf_counter()
+            _, states[k] = render_frame(style, scene, w, h, spp, states[k])
+            times[k].append(time.perf_counter() - t0)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def bench_options(args) -> dict:
+    from refnpr.styles import style_from_spec
+
+    if args.quick:
+        w, h, spp, n = 160, 120, 1, 4
+    else:
+        w, h, spp, n = 480, 360, 4, 8
+    anim = load_scene("tamiss_knot_orbit")
+    sequences = {
+        "tamiss_knot_orbit": [anim.at(f) for f in range(n)],
+        "knot_1deg": _orbit_scenes("tamiss_torus_knot", 1.0, n),
+    }
+    pen = dict(anim.at(0).style)  # the tamiss-knot-pen style, contours included
+    variants = [("tam", TAM_KNOT, False)] + [
+        (label, {**pen, **extra}, True) for label, extra in OPTION_VARIANTS.items()
+    ]
+    if args.quick:
+        keep = ("tam", "default", "gather_scale=3", "average_frames=2", "smooth=0.5")
+        variants = [v for v in variants if v[0] in keep]
+    out: dict = {"size": [w, h], "spp": spp, "frames": n, "sequences": {}}
+    for seq, scenes in sequences.items():
+        res = {}
+        for label, spec, strokes in variants:
+            res[label] = _measure_variant(style_from_spec(spec), scenes, w, h, spp, strokes)
+        side = _interleaved_times(
+            {label: style_from_spec(spec) for label, spec, _ in variants}, scenes, w, h, spp
+        )
+        for label, v in res.items():
+            v["frame_s_interleaved"] = side[label]
+            v["time_ratio"] = side[label] / side["default"]
+        out["sequences"][seq] = res
+        print(f"\nTAMISS jitter options, {seq} {w}x{h} spp {spp}, {n} frames (medians over pairs)")
+        print(f"{'variant':>26} {'end mean':>9} {'end p95':>8} {'drawn':>6} {'d p95':>6} "
+              f"{'appear':>7} {'vanish':>7} "
+              f"{'E':>8} {'E/D':>6} {'frame s':>8} {'x time':>7}")  # fmt: skip
+        for label, v in res.items():
+            jm, jp = v.get("jitter_mean_px"), v.get("jitter_p95_px")
+            jm = f"{jm:9.3f}" if jm is not None else f"{'-':>9}"
+            jp = f"{jp:8.3f}" if jp is not None else f"{'-':>8}"
+            dm, dp = v.get("drawn_end_mean_px"), v.get("drawn_end_p95_px")
+            dm = f"{dm:6.3f}" if dm is not None else f"{'-':>6}"
+            dp = f"{dp:6.3f}" if dp is not None else f"{'-':>6}"
+            ap = f"{v['appeared']:7.1f}" if "appeared" in v else f"{'-':>7}"
+            va = f"{v['vanished']:7.1f}" if "vanished" in v else f"{'-':>7}"
+            print(f"{label:>26} {jm} {jp} {dm} {dp} {ap} {va} {v['E']:8.5f} {v['E_over_D']:6.3f} "
+                  f"{v['frame_s_interleaved']:8.3f} {v['time_ratio']:7.2f}")  # fmt: skip
+    return out
+
+
 def _size(s: str) -> tuple[int, int]:
     w, h = s.lower().split("x")
     return int(w), int(h)
@@ -372,6 +590,7 @@ def main(argv=None) -> int:
         "phases": bench_phases(args) if "phases" in sections else [],
         "hash": bench_hash(args) if "hash" in sections else [],
         "jitter": bench_jitter(args) if "jitter" in sections else {},
+        "options": bench_options(args) if "options" in sections else {},
     }
     path = Path(args.json)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -31,3 +31,24 @@ def test_quick_run_writes_every_section(tmp_path):
     jit = report["jitter"]["results"]
     assert set(jit) == {"none", "average4"} and all(v["samples"] > 0 for v in jit.values())
     assert "TAMISS phases" in proc.stdout and "Stroke jitter" in proc.stdout
+
+
+@pytest.mark.slow
+def test_quick_options_section_writes_every_variant(tmp_path):
+    out = tmp_path / "tamiss.json"
+    proc = subprocess.run(
+        [sys.executable, str(SCRIPT), "--quick", "--sections", "options", "--json", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    opts = json.loads(out.read_text())["options"]
+    assert set(opts["sequences"]) == {"tamiss_knot_orbit", "knot_1deg"}
+    for res in opts["sequences"].values():
+        assert {"tam", "default", "smooth=0.5"} <= set(res)
+        assert res["default"]["time_ratio"] == 1.0
+        for label, v in res.items():
+            assert v["E"] > 0 and v["E_over_D"] > 0 and v["frame_s_interleaved"] > 0
+            assert ("jitter_mean_px" in v) == (label != "tam")
+    assert "TAMISS jitter options" in proc.stdout

@@ -49,6 +49,7 @@ def test_requires_only_what_the_field_needs():
         ({"ink": [1, 2, 3]}, ValueError, r"ink: expected 3 numbers in \[0, 1\]"),
         ({"brush": 3}, TypeError, r"brush: expected None"),
         ({"width": -1}, ValueError, r"width: expected a value > 0.0, got -1.0"),
+        ({"directions": [10**400]}, ValueError, r"directions: each layer is 'u', 'v' or"),
         (
             {"colour": 1},
             TypeError,

@@ -13,7 +13,9 @@ Public API: the style :class:`TamissStyle` (registered as ``"tamiss"``), and for
 phases :func:`run_pipeline` -> :class:`PipelineResult`, :class:`TamissParams`,
 :class:`StrokeField`, :func:`stroke_geometry`, :class:`AggregateHistory`, the chart layout
 (:func:`chart_layout`: orientation, atlas and smooth derivatives of patch-wise uv maps) and the
-``show`` views of the stages (:func:`show_layers`). See ``docs/tamiss.md``.
+``show`` views of the stages (:func:`show_layers`); in sequences the state carried from frame
+to frame (:class:`TamissState`: hash table, aggregate window, previous curves for
+:func:`smooth_fit`). See ``docs/tamiss.md``.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from .gather import FieldInputs, Fragments, field_inputs, gather_fragments, laye
 from .pipeline import PipelineResult, TamissParams, run_pipeline
 from .raster import BRUSHES, brush_texture, rasterize_strips
 from .show import show_layers
+from .state import StrokeCoefficients, TamissState, reexpress, smooth_fit
 from .strokes import EXTENTS, Strips, centreline, drawn_segments, extrude, keep_mask
 from .style import TamissStyle
 from .tam import TamStyle
@@ -74,4 +77,8 @@ __all__ = [
     "chart_layout",
     "vertex_frames",
     "show_layers",
+    "TamissState",
+    "StrokeCoefficients",
+    "smooth_fit",
+    "reexpress",
 ]

@@ -274,11 +274,20 @@ class AggregateHistory:
     normalization and averaged. Averaging lags true motion by about (frames - 1) / 2 frames.
     """
 
-    def __init__(self, frames: int = 4):
+    def __init__(self, frames: int = 4, window: tuple = ()):
         if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or frames < 1:
             raise ValueError(f"frames: expected an integer >= 1, got {frames!r}")
         self.frames = int(frames)
         self._window: deque = deque(maxlen=self.frames)
+        for past in window:  # a sequence state's window (the last frames' float64 sums)
+            if not isinstance(past, Aggregates):
+                raise TypeError(f"window: expected Aggregates, got {type(past).__name__}")
+            self._window.append(past.astype(np.float64))
+
+    @property
+    def window(self) -> tuple:
+        """The aggregates in the window, oldest first (float64; at most ``frames``)."""
+        return tuple(self._window)
 
     def push(self, agg: Aggregates) -> Aggregates:
         agg = agg.astype(np.float64)

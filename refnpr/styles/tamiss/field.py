@@ -51,6 +51,7 @@ uses rho 2^s instead: the rows are thinned at random so that the ink stays the s
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -107,6 +108,14 @@ DEFAULT_DENSITY = 2.0
 SALT_TONE, SALT_LENGTH, SALT_WIDTH = 1, 2, 3
 
 
+def _finite(d: float) -> bool:
+    """Whether the number ``d`` is a finite float (a Python int past float64 is not)."""
+    try:
+        return math.isfinite(float(d))
+    except OverflowError:
+        return False
+
+
 def _check_angle_list(directions) -> tuple[float, ...]:
     vals = directions if isinstance(directions, (list, tuple)) else [directions]
     if not 1 <= len(vals) <= 4:
@@ -119,7 +128,7 @@ def _check_angle_list(directions) -> tuple[float, ...]:
             out.append(0.0)
         elif d == "v":
             out.append(90.0)
-        elif isinstance(d, (int, float)) and not isinstance(d, bool) and np.isfinite(d):
+        elif isinstance(d, (int, float)) and not isinstance(d, bool) and _finite(d):
             out.append(float(d))
         else:
             raise ValueError(

@@ -25,6 +25,7 @@ from .aggregate import (
 from .field import DEFAULT_DENSITY, StrokeField
 from .gather import DERIVATIVES, FieldInputs, Fragments, field_inputs, gather_fragments
 from .raster import BRUSHES, rasterize_strips
+from .state import StrokeCoefficients, smooth_fit
 from .strokes import (
     EXTENTS,
     Strips,
@@ -47,6 +48,9 @@ SHOW = ("color", "ids", "fits", "strokes", "levels")
 #: Largest ``prior_weight`` (zero-visibility points per fragment): the prior's moment sums are
 #: float32 in the default precision, and a larger weight drowns every fragment anyway.
 MAX_PRIOR_WEIGHT = 1e6
+
+#: Largest ``gather_scale`` (gather samples per pixel along an axis): 16 x 16 per pixel.
+MAX_GATHER_SCALE = 16
 
 
 def _check_bool(name: str, value: Any) -> bool:
@@ -90,6 +94,9 @@ class TamissParams:
     derivatives: str = "smooth"
     orient_charts: bool = True
     show: str = "color"
+    gather_scale: int | None = None
+    average_frames: int = 1
+    smooth: float = 0.0
 
     @classmethod
     def from_params(
@@ -130,6 +137,9 @@ class TamissParams:
         derivatives: str = "smooth",
         orient_charts: bool = True,
         show: str = "color",
+        gather_scale: int | None = None,
+        average_frames: int = 1,
+        smooth: float = 0.0,
     ) -> TamissParams:
         fld = StrokeField.from_params(
             directions=directions,
@@ -155,6 +165,14 @@ class TamissParams:
             visibility_threshold = check_number("visibility_threshold", visibility_threshold)
         if constant_tone is not None:
             constant_tone = check_number("constant_tone", constant_tone, lo=0.0, hi=1.0)
+        if gather_scale is not None:
+            gather_scale = check_count("gather_scale", gather_scale, lo=1, hi=MAX_GATHER_SCALE)
+        smooth = check_number("smooth", smooth, lo=0.0, hi=1.0)
+        if smooth >= 1.0:
+            raise ValueError(
+                f"smooth: expected a weight in [0, 1) (0: off; the previous frame's curve gets "
+                f"weight smooth), got {smooth!r}; 1 would freeze every stroke forever"
+            )
         return cls(
             field=fld,
             gather_width=check_number("gather_width", gather_width, lo=0.0, lo_open=True, hi=16.0),
@@ -186,6 +204,9 @@ class TamissParams:
             derivatives=check_choice("derivatives", derivatives, DERIVATIVES),
             orient_charts=_check_bool("orient_charts", orient_charts),
             show=check_choice("show", show, SHOW),
+            gather_scale=gather_scale,
+            average_frames=check_count("average_frames", average_frames, lo=1, hi=16),
+            smooth=smooth,
         )
 
     def as_dict(self) -> dict:
@@ -212,6 +233,9 @@ class PipelineResult:
     ink : (nH, nW) float64 ink coverage on the sample grid
     pieces : (nH, nW) int32 pieces touching each sample
     timings : dict of seconds per phase: gather, aggregate, fit, extrude, raster, total
+    table : StrokeHashTable or None, the table after this frame's routing (hashed route)
+    n : int, samples per pixel along an axis of the output grid of ``ink`` (``inputs.n`` is the
+        gather grid's, larger with ``gather_scale``)
     """
 
     params: TamissParams
@@ -226,6 +250,8 @@ class PipelineResult:
     ink: np.ndarray
     pieces: np.ndarray
     timings: dict = field(default_factory=dict)
+    table: StrokeHashTable | None = None
+    n: int = 1
 
     @property
     def stroke_ids(self) -> np.ndarray:
@@ -252,6 +278,8 @@ def run_pipeline(
     *,
     table: StrokeHashTable | None = None,
     history: AggregateHistory | None = None,
+    previous: StrokeCoefficients | None = None,
+    gather_gb=None,
 ) -> PipelineResult:
     """Run TAMISS on a G-buffer (channels uv, duv_dx, duv_dy, tri_id, mesh_id, normal).
 
@@ -266,6 +294,12 @@ def run_pipeline(
         of this frame's ids, as if the view had been still that long.
     history : AggregateHistory, optional
         Average aggregates over the last frames before fitting (sec. 4.1's proposal).
+    previous : StrokeCoefficients, optional
+        The previous frame's fitted curves by stroke id: with ``params.smooth`` > 0 this frame's
+        fits are blended towards them (:func:`~refnpr.styles.tamiss.state.smooth_fit`).
+    gather_gb : GBuffer, optional
+        The G-buffer fragments are gathered from (same scene, camera and pixel size as ``gb``,
+        more samples: ``gather_scale``); default ``gb``. The ink is drawn on ``gb``'s samples.
     """
     p = params if params is not None else TamissParams()
     if not isinstance(p, TamissParams):
@@ -273,8 +307,14 @@ def run_pipeline(
     dtype = np.dtype(p.dtype)
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
+    src = gb if gather_gb is None else gather_gb
+    if src is not gb and (src.width, src.height) != (gb.width, gb.height):
+        raise ValueError(
+            f"gather_gb: expected the pixel size of gb ({gb.width}x{gb.height}), got "
+            f"{src.width}x{src.height}; rasterize the gather grid at the image size, more spp"
+        )
     inp = field_inputs(
-        gb,
+        src,
         scene,
         constant_tone=p.constant_tone,
         derivatives=p.derivatives,
@@ -297,6 +337,8 @@ def run_pipeline(
     t2 = time.perf_counter()
     timings["aggregate"] = t2 - t1
     fit = fit_aggregates(agg, iterations=p.iterations, prior_weight=p.prior_weight)
+    if p.smooth > 0.0:
+        fit = smooth_fit(fit, agg.stroke_ids, previous, p.smooth)  # refnpr's, not the paper's
     with np.errstate(invalid="ignore", over="ignore"):  # dropped (non-finite) fits
         speed = mean_speed(fit)  # once for the drop rule, the overdraw and the extrusion
     keep = keep_mask(
@@ -339,8 +381,9 @@ def run_pipeline(
     )
     t4 = time.perf_counter()
     timings["extrude"] = t4 - t3
+    out_shape = tuple(gb.sample_shape) if src is not gb else inp.shape
     ink, pieces = rasterize_strips(
-        strips, inp.shape, inp.n, aa=p.aa, brush=p.brush, opacity=p.opacity
+        strips, out_shape, gb.n, aa=p.aa, brush=p.brush, opacity=p.opacity
     )
     t5 = time.perf_counter()
     timings["raster"] = t5 - t4
@@ -358,4 +401,6 @@ def run_pipeline(
         ink=ink,
         pieces=pieces,
         timings=timings,
+        table=table,
+        n=gb.n,
     )

@@ -60,22 +60,27 @@ def level_colors(ids: np.ndarray) -> np.ndarray:
 
 def _ids_view(result: PipelineResult) -> tuple[np.ndarray, np.ndarray]:
     frags = result.fragments
-    nh, nw = frags.shape
+    nh, nw = result.ink.shape
     alpha = np.zeros(nh * nw)
     rgb = np.zeros((nh * nw, 3))
-    if len(frags):
+    if len(frags) and frags.n_axis == result.n:
         first = np.r_[True, frags.sample[1:] != frags.sample[:-1]]  # ordered by sample
         alpha[frags.sample[first]] = 1.0
         rgb[frags.sample[first]] = id_colors(frags.id[first])
+    elif len(frags):  # gathered on a finer grid (gather_scale): the first id per output sample
+        n = result.n
+        sx = np.minimum((frags.x * n).astype(np.int64), nw - 1)
+        sy = np.minimum((frags.y * n).astype(np.int64), nh - 1)
+        out, first = np.unique(sy * nw + sx, return_index=True)
+        alpha[out] = 1.0
+        rgb[out] = id_colors(frags.id[first])
     return alpha.reshape(nh, nw), rgb.reshape(nh, nw, 3)
 
 
 def _strip_view(result: PipelineResult, strips, by_level: bool = False):
     p = result.params
     colors = level_colors(strips.ids) if by_level else id_colors(strips.ids)
-    alpha, _, rgb = rasterize_strips(
-        strips, result.inputs.shape, result.inputs.n, aa=p.aa, colors=colors
-    )
+    alpha, _, rgb = rasterize_strips(strips, result.ink.shape, result.n, aa=p.aa, colors=colors)
     straight = np.divide(rgb, alpha[..., None], out=np.zeros_like(rgb), where=alpha[..., None] > 0)
     return alpha, straight
 

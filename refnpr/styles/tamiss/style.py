@@ -4,15 +4,21 @@ docstring (:mod:`refnpr.styles.tamiss`) describes the technique and the pipeline
 
 from __future__ import annotations
 
+import copy
 import inspect
 from typing import Any
 
 import numpy as np
 
+from refnpr.formulas.tamiss import StrokeHashTable
+from refnpr.raster import rasterize
+
 from ..base import ShadeContext, Style, register
+from .aggregate import AggregateHistory, aggregate_exact
 from .compose import base_style, check_color, composite_ink, field_channels
 from .pipeline import PipelineResult, TamissParams, run_pipeline
 from .show import show_layers
+from .state import StrokeCoefficients, TamissState
 
 __all__ = ["TamissStyle"]
 
@@ -49,6 +55,15 @@ class TamissStyle(Style):
     false-coloured by stroke id
     ink : colour of the strokes (black); paper : colour of the paper under them on the object
     (None: the background shows); base : a style drawn under the strokes (overrides paper)
+    gather_scale : int or None, gather fragments on a grid of gather_scale x gather_scale samples
+    per pixel (its own rasterization), independent of spp (None: the G-buffer's samples)
+    average_frames : int, average aggregates over this many frames in a sequence (1: off;
+    sec. 4.1's proposal); smooth : float in [0, 1), exponential smoothing of the fitted curves
+    by stroke id in a sequence (0: off; refnpr's remedy, not the paper's)
+
+    Sequences: :meth:`initial_state` / :meth:`shade_frame` carry a
+    :class:`~refnpr.styles.tamiss.state.TamissState` (hash table, aggregate window, previous
+    curves); :meth:`shade` is frame 0 of a one-frame sequence.
     """
 
     name = "tamiss"
@@ -91,12 +106,91 @@ class TamissStyle(Style):
         opts["dtype"] = np.float64  # uv to ~1e-12: cells of level 12 stay exact
         return opts
 
+    def gather_gbuffer(self, ctx: ShadeContext) -> Any:
+        """The G-buffer fragments are gathered from: ``ctx.gb``, or with ``gather_scale`` g (and
+        g^2 != the G-buffer's spp) the scene rasterized again at g x g samples per pixel with
+        the same channels (float64)."""
+        g = self.pipeline_params.gather_scale
+        gb = ctx.gb
+        if g is None or g == gb.n:
+            return gb
+        p = self.pipeline_params
+        channels = sorted(field_channels(ctx.scene, p.constant_tone, p.derivatives))
+        return rasterize(
+            ctx.scene, gb.camera, gb.width, gb.height, channels, g * g, dtype=np.float64
+        )
+
     def run(self, ctx: ShadeContext, **kwargs: Any) -> PipelineResult:
-        """The pipeline on this frame (``kwargs``: ``table``, ``history``)."""
+        """The pipeline on this frame (``kwargs``: ``table``, ``history``, ``previous``)."""
+        if "gather_gb" not in kwargs:
+            kwargs["gather_gb"] = self.gather_gbuffer(ctx)
         return run_pipeline(ctx.gb, ctx.scene, self.pipeline_params, **kwargs)
 
+    def initial_state(self) -> TamissState | None:
+        """Frame 0's state: None when nothing carries over (exact aggregation, no averaging, no
+        smoothing), else an empty :class:`TamissState` (frame 0 then equals the still)."""
+        p = self.pipeline_params
+        if p.aggregation == "exact" and p.average_frames == 1 and p.smooth == 0.0:
+            return None
+        return TamissState()
+
+    def run_frame(self, ctx: ShadeContext, state: TamissState | None) -> tuple[PipelineResult, Any]:
+        """The pipeline on one frame of a sequence from ``state`` (not modified) and the state
+        of the next frame (a new object; None when the style carries nothing)."""
+        if state is None:
+            state = self.initial_state()
+            if state is None:
+                return self.run(ctx), None
+        if not isinstance(state, TamissState):
+            raise TypeError(
+                f"state: expected a TamissState from initial_state() or the previous "
+                f"shade_frame, got {type(state).__name__}"
+            )
+        p = self.pipeline_params
+        table = None
+        if p.aggregation == "hashed" and state.table is not None:
+            if not isinstance(state.table, StrokeHashTable) or (
+                state.table.size,
+                state.table.max_probes,
+            ) != (p.table_size, p.max_probes):
+                raise ValueError(
+                    f"state: its hash table does not match table_size={p.table_size}, "
+                    f"max_probes={p.max_probes}; start the sequence from initial_state()"
+                )
+            table = copy.deepcopy(state.table)  # routed in place below; the state stays as is
+        history = None
+        if p.average_frames > 1 and state.window:
+            history = AggregateHistory(p.average_frames, window=state.window)
+        previous = state.coefficients if p.smooth > 0.0 else None
+        result = self.run(ctx, table=table, history=history, previous=previous)
+        window: tuple = ()
+        if history is not None:
+            window = history.window[1 - p.average_frames :]
+        elif p.average_frames > 1:
+            # the first frame of the window: drawn from its own sums (an average of one frame,
+            # so the still is unchanged); its float64 sums start the window. Exact sums of the
+            # strokes drawn are the hashed route's too (a valid slot holds one stroke's
+            # fragments, summed in the same order)
+            exact = aggregate_exact(result.fragments, dtype=np.float64)
+            window = (exact.take(np.isin(exact.stroke_ids, result.stroke_ids)),)
+        new = TamissState(
+            frame=state.frame + 1,
+            table=result.table if p.aggregation == "hashed" else None,
+            window=window,
+            coefficients=StrokeCoefficients.from_fit(result.stroke_ids, result.fit)
+            if p.smooth > 0.0
+            else None,
+        )
+        return result, new
+
+    def shade_frame(self, ctx: ShadeContext, state: Any) -> tuple[np.ndarray, Any]:
+        result, new = self.run_frame(ctx, state)
+        return self._composite(ctx, result), new
+
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        result = self.run(ctx)
+        return self._composite(ctx, self.run_frame(ctx, self.initial_state())[0])
+
+    def _composite(self, ctx: ShadeContext, result: PipelineResult) -> np.ndarray:
         if self.pipeline_params.show == "color":
             return composite_ink(ctx, result.ink, self.ink, base=self.base, paper=self.paper)
         cover, rgb = show_layers(result)
