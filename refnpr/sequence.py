@@ -149,14 +149,12 @@ def frame_range(frames: Any, count: int) -> range:
 def is_stateful(style: Style) -> bool:
     """Whether ``style`` carries state from frame to frame (see the module docstring).
 
-    The contour layer (``contoured``) passes the sequence protocol through to its base style, so
-    it is stateful exactly when its base style is: its own ``shade_frame`` override carries no
-    state of its own.
+    The protocol's contract (:meth:`refnpr.styles.Style.initial_state`): a style is stateful
+    exactly when its initial state is not None. Overriding ``shade_frame`` alone says nothing
+    (the contour layer passes it through to its base; TAMISS's default configuration has no
+    state and is rendered frame by frame like any stateless style).
     """
-    base = getattr(style, "base", None)
-    if style.name == "contoured" and isinstance(base, Style):
-        return is_stateful(base)
-    return style.initial_state() is not None or type(style).shade_frame is not Style.shade_frame
+    return style.initial_state() is not None
 
 
 def _hash_arrays(h: Any, *arrays: Any) -> None:
