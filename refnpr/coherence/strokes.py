@@ -37,6 +37,7 @@ import numpy as np
 
 from ..raster import rasterize
 from ..styles import ShadeContext, style_from_spec
+from ..styles.tamiss.strokes import centreline
 from .motion import _check_gbuffer, _relative_transforms
 
 __all__ = [
@@ -87,7 +88,9 @@ def stroke_ends(result: Any) -> StrokeEnds:
     """The drawn strokes of a TAMISS frame (``run_pipeline`` / ``TamissStyle.run``).
 
     A stroke is drawn when it has at least one drawn interval (``n_segments > 0``); its start is
-    the fitted curve at the first interval's lower t, its end at the last interval's upper t.
+    the drawn curve (``refnpr.styles.tamiss.strokes.centreline``: the fit, extended along its
+    end tangents beyond [t_min, t_max]) at the first interval's lower t, its end at the last
+    interval's upper t.
     """
     for attr in ("stroke_ids", "fit", "segments", "n_segments"):
         if not hasattr(result, attr):
@@ -101,9 +104,10 @@ def stroke_ends(result: Any) -> StrokeEnds:
     with np.errstate(invalid="ignore"):
         t0 = np.where(drawn, np.nanmin(np.where(drawn[:, None], seg[..., 0], 0.0), axis=1), 0.0)
         t1 = np.where(drawn, np.nanmax(np.where(drawn[:, None], seg[..., 1], 0.0), axis=1), 0.0)
-    dt = np.asarray(result.fit.c_x).dtype
-    x0, y0 = (np.asarray(v, np.float64)[:, 0] for v in result.fit.evaluate(t0[:, None].astype(dt)))
-    x1, y1 = (np.asarray(v, np.float64)[:, 0] for v in result.fit.evaluate(t1[:, None].astype(dt)))
+    # the drawn curve: r(t) on [t_min, t_max], its tangent extension beyond (extent "overdraw"
+    # draws past the fitted range), exactly as the stroke raster places it
+    x0, y0 = (v[:, 0] for v in centreline(result.fit, t0[:, None])[:2])
+    x1, y1 = (v[:, 0] for v in centreline(result.fit, t1[:, None])[:2])
     order = np.argsort(ids[drawn], kind="stable")
     pick = np.flatnonzero(drawn)[order]
     return StrokeEnds(
