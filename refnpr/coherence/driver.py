@@ -14,7 +14,7 @@ from ..styles import ShadeContext, Style, style_from_spec
 from .metrics import pair_metrics
 from .motion import DEPTH_RTOL, MOTION_CHANNELS, motion_field
 from .report import CoherenceReport
-from .strokes import frame_stroke_ends, stroke_pair_metrics, stroke_style
+from .strokes import frame_stroke_ends_from, stroke_pair_metrics, stroke_style
 
 __all__ = ["measure", "render_frame"]
 
@@ -105,8 +105,9 @@ def measure(
     strokes : bool
         Also measure the strokes by stroke id (``report.strokes``; a stroke style such as
         TAMISS, or one wrapping it): each frame's strokes come from a run of the style's
-        pipeline on a pixel-resolution G-buffer (``strokes.frame_stroke_ends``), without the
-        state the render carries.
+        pipeline on a pixel-resolution G-buffer (``strokes.frame_stroke_ends_from``), in frame
+        order through the style's own state across frames (``run_frame``: aggregate history,
+        smoothed fits, hash tables), as the sequence's render does.
     progress : callable(done, total), optional
         Called after each frame.
     previous : Scene, optional
@@ -153,6 +154,7 @@ def measure(
         )
     rows, images, stroke_rows = [], [], []
     prev_scene = prev_rgba = prev_gb = prev_ends = None
+    stroke_state = None
     for t, scene in enumerate(scenes):
         if own and scene.style != spec:
             spec = scene.style
@@ -164,7 +166,12 @@ def measure(
             motion = motion_field(gb, prev_gb, scene, prev_scene, depth_rtol=depth_rtol)
             rows.append(pair_metrics(rgba, prev_rgba, motion, frame=frames[t]))
         if strokes:
-            ends, sgb = frame_stroke_ends(stroke_style(frame_style), scene, width, height)
+            stroker = stroke_style(frame_style)
+            if t == 0:
+                stroke_state = stroker.initial_state()
+            ends, sgb, stroke_state = frame_stroke_ends_from(
+                stroker, scene, width, height, stroke_state
+            )
             if prev_ends is not None:
                 stroke_rows.append(
                     stroke_pair_metrics(

@@ -271,10 +271,29 @@ def frame_stroke_ends(
     the style's channels plus ``STROKE_CHANNELS``; the strokes come from
     ``style.run(ctx, **run_kwargs)``.
     """
+    gb = _stroke_gbuffer(style, scene, width, height)
+    return stroke_ends(style.run(ShadeContext(gb, scene), **dict(run_kwargs or {}))), gb
+
+
+def _stroke_gbuffer(style: Any, scene: Any, width: int, height: int) -> Any:
     channels = sorted(set(style.requires(scene)) | set(STROKE_CHANNELS))
     options = {"dtype": np.float64, **style.raster_options(scene)}  # the style's dtype wins
-    gb = rasterize(scene, None, width, height, channels, 1, **options)
-    return stroke_ends(style.run(ShadeContext(gb, scene), **dict(run_kwargs or {}))), gb
+    return rasterize(scene, None, width, height, channels, 1, **options)
+
+
+def frame_stroke_ends_from(
+    style: Any, scene: Any, width: int, height: int, state: Any
+) -> tuple[StrokeEnds, Any, Any]:
+    """:func:`frame_stroke_ends` for one frame of a sequence: the strokes of
+    ``style.run_frame(ctx, state)`` (the style's state across frames: hash tables, aggregate
+    history, smoothed fits), returned with the G-buffer and the next frame's state. A style
+    without ``run_frame`` runs statelessly (the state passes through)."""
+    gb = _stroke_gbuffer(style, scene, width, height)
+    ctx = ShadeContext(gb, scene)
+    if not hasattr(style, "run_frame"):
+        return stroke_ends(style.run(ctx)), gb, state
+    result, state = style.run_frame(ctx, state)
+    return stroke_ends(result), gb, state
 
 
 def measure_strokes(
@@ -299,7 +318,9 @@ def measure_strokes(
         Frame numbers of ``scenes`` (default 0, 1, ...).
     run_kwargs : dict, optional
         Passed to ``style.run`` every frame, e.g. ``{"history": AggregateHistory(3)}`` (the
-        same object for every frame, in order).
+        same object for every frame, in order). Without it the frames run in order through
+        the style's own sequence state (``run_frame``: its ``average_frames``, ``smooth``,
+        hashed aggregation), as in a render of the sequence.
 
     Returns
     -------
@@ -318,8 +339,12 @@ def measure_strokes(
         raise ValueError(f"scenes: need at least two frames to measure a pair, got {len(scenes)}")
     frames = list(range(len(scenes))) if frames is None else list(frames)
     rows, prev = [], None
+    state = strokes.initial_state() if run_kwargs is None else None
     for t, sc in enumerate(scenes):
-        ends, gb = frame_stroke_ends(strokes, sc, width, height, run_kwargs)
+        if run_kwargs is None:  # the style's own state across frames
+            ends, gb, state = frame_stroke_ends_from(strokes, sc, width, height, state)
+        else:
+            ends, gb = frame_stroke_ends(strokes, sc, width, height, run_kwargs)
         if prev is not None:
             rows.append(stroke_pair_metrics(ends, prev[0], prev[1], sc, prev[2], frame=frames[t]))
         prev = (ends, gb, sc)

@@ -114,3 +114,29 @@ def test_measure_with_strokes_reports_and_plots_them(tmp_path):
     assert rep.summary()["jitter_max"]["max"] < 1e-6
     assert len(rep.as_dict()["strokes"]) == 2
     assert rep.plot(tmp_path / "s.png").stat().st_size > 0
+
+
+def test_stroke_metrics_follow_the_styles_state_across_frames():
+    """measure_strokes / measure(strokes=True) thread TAMISS's run_frame state (here the
+    aggregate history of average_frames=3): the same rows as threading it by hand, and not the
+    rows of stateless runs."""
+    from refnpr.coherence import measure
+    from refnpr.coherence.strokes import frame_stroke_ends_from
+    from refnpr.styles import get_style
+
+    anim = load_scene("tamiss_knot_orbit")
+    stills = [anim.at(f) for f in range(3)]
+    w, h = 96, 72
+    style = get_style("tamiss", average_frames=3, directions=["v"], period=4.0)
+    rows = measure_strokes(stills, style, w, h)
+    state, by_hand, prev = style.initial_state(), [], None
+    for t, sc in enumerate(stills):
+        e, gb, state = frame_stroke_ends_from(style, sc, w, h, state)
+        if prev is not None:
+            by_hand.append(stroke_pair_metrics(e, prev[0], prev[1], sc, prev[2], frame=t))
+        prev = (e, gb, sc)
+    assert [r.as_dict() for r in rows] == [r.as_dict() for r in by_hand]
+    stateless = measure_strokes(stills, get_style("tamiss", directions=["v"], period=4.0), w, h)
+    assert [r.as_dict() for r in rows] != [r.as_dict() for r in stateless]
+    report = measure(stills, style, w, h, strokes=True)
+    assert [r.as_dict() for r in report.strokes] == [r.as_dict() for r in rows]
