@@ -420,21 +420,28 @@ def raster_strips(
                     tx1 = min(x1, int(math.floor(max(ax, bx, cx))))
                     ty0 = max(y0, int(math.floor(min(ay, by, cy))))
                     ty1 = min(y1, int(math.floor(max(ay, by, cy))))
+                    # the factors of _edge's two products (same values, computed once)
+                    e0x, e0y = cx - bx, cy - by
+                    e1x, e1y = ax - cx, ay - cy
+                    e2x, e2y = bx - ax, by - ay
                     for y in range(ty0, ty1 + 1):
                         for x in range(tx0, tx1 + 1):
                             idx = (y - y0) * w + (x - x0)
                             bits = mask[idx]
                             for sj in range(aa):
                                 py = y + (sj + 0.5) * inv
+                                r0 = e0x * (py - by)
+                                r1 = e1x * (py - cy)
+                                r2 = e2x * (py - ay)
                                 for si in range(aa):
                                     px = x + (si + 0.5) * inv
-                                    # inside all three edges (tested in turn, same values)
-                                    if not _edge(bx, by, cx, cy, px, py) * sgn >= 0.0:
-                                        continue
-                                    if not _edge(cx, cy, ax, ay, px, py) * sgn >= 0.0:
-                                        continue
-                                    if _edge(ax, ay, bx, by, px, py) * sgn >= 0.0:
-                                        bits |= np.uint64(1) << np.uint64(sj * aa + si)
+                                    # inside all three edges (_edge's values), without branches
+                                    inside = (
+                                        ((r0 - e0y * (px - bx)) * sgn >= 0.0)
+                                        & ((r1 - e1y * (px - cx)) * sgn >= 0.0)
+                                        & ((r2 - e2y * (px - ax)) * sgn >= 0.0)
+                                    )
+                                    bits |= np.uint64(inside) << np.uint64(sj * aa + si)
                             mask[idx] = bits
                             # brush coordinates from the triangle the sample centre is most inside
                             pcx = x + 0.5
