@@ -181,3 +181,24 @@ def assert_passed(results: dict, name: str) -> None:
     log = results["_driver_log"]
     detail = log[log.find(name) :][:600] if name in log else ""
     assert r.passed, f"{name}: {r.status}: {r.message}\n{detail}"
+
+
+def assert_samples_match(
+    got: np.ndarray, ref: np.ndarray, name: str, threshold: float, max_frac_over: float
+) -> None:
+    """A style pass's per-sample RGBA against refnpr's: the same coverage (alpha > 0), and at
+    most ``max_frac_over`` of the samples with a channel more than ``threshold`` apart."""
+    assert got.shape == ref.shape
+    diff = np.abs(got.astype(np.float64) - ref)
+    frac = float(np.mean(np.any(diff > threshold, axis=-1)))
+    assert np.array_equal(got[..., 3] > 0, ref[..., 3] > 0), "coverage differs"
+    assert frac <= max_frac_over, f"{name}: {frac:.4%} of samples over 2/255, max {diff.max():.4g}"
+
+
+def export_cases(tmp_path_factory, style: str, suite: Path, names: list[str]) -> Path:
+    """A style's golden cases exported as a kit (``refnpr kit export --only ...``)."""
+    from refnpr.kit import export_kit
+
+    kit = tmp_path_factory.mktemp(f"kit-{style}") / "kit"
+    export_kit(kit, suite=suite, only=names)
+    return kit

@@ -26,7 +26,14 @@ import pytest
 from refnpr.golden import load_suite
 from refnpr.scenes import load_scene
 
-from ._harness import assert_passed, case_params, isolated, render_and_check
+from ._harness import (
+    assert_passed,
+    assert_samples_match,
+    case_params,
+    export_cases,
+    isolated,
+    render_and_check,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 SUITE = ROOT / "golden" / "suite.toml"
@@ -75,21 +82,13 @@ def test_shade_matches_refnpr_per_sample(gl, tmp_path, name):
     case = CASES[NAMES.index(name)]
     w, h = 80, 60
     got, ref = isolated(gl, case, tmp_path, w, h, 1, tam)
-    assert got.shape == ref.shape
-    diff = np.abs(got.astype(np.float64) - ref)
-    frac = float(np.mean(np.any(diff > THRESHOLD, axis=-1)))
-    assert np.array_equal(got[..., 3] > 0, ref[..., 3] > 0), "coverage differs"
-    assert frac <= MAX_FRAC_OVER, f"{name}: {frac:.4%} of samples over 2/255, max {diff.max():.4g}"
+    assert_samples_match(got, ref, name, THRESHOLD, MAX_FRAC_OVER)
 
 
 @pytest.fixture(scope="module")
 def exported_kit(tmp_path_factory) -> Path:
     """This style's golden cases exported as a kit (``refnpr kit export --only ...``)."""
-    from refnpr.kit import export_kit
-
-    kit = tmp_path_factory.mktemp(f"kit-{STYLE}") / "kit"
-    export_kit(kit, suite=SUITE, only=NAMES)
-    return kit
+    return export_cases(tmp_path_factory, STYLE, SUITE, NAMES)
 
 
 @pytest.fixture(scope="module")
@@ -155,7 +154,4 @@ def test_variant_matches_refnpr_per_sample(gl, tmp_path, name):
     spp = rest[0] if rest else 1
     case = SimpleNamespace(name=name, scene=scene, style=TamStyle(**params))
     got, ref = isolated(gl, case, tmp_path, 80, 60, spp, tam)
-    diff = np.abs(got.astype(np.float64) - ref)
-    frac = float(np.mean(np.any(diff > THRESHOLD, axis=-1)))
-    assert np.array_equal(got[..., 3] > 0, ref[..., 3] > 0), "coverage differs"
-    assert frac <= MAX_FRAC_OVER, f"{name}: {frac:.4%} of samples over 2/255, max {diff.max():.4g}"
+    assert_samples_match(got, ref, name, THRESHOLD, MAX_FRAC_OVER)
