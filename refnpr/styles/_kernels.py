@@ -136,3 +136,51 @@ def ink_over(rgba, cov, ink):
                 premult = ink[k] * c + np.float64(rgba[j, i, k]) * ab * (1.0 - c)
                 rgba[j, i, k] = premult / a if a > 0.0 else 0.0
             rgba[j, i, 3] = a
+
+
+#: ``mode`` codes of :func:`ink_composite`: what the ink is drawn over.
+UNDER_RGBA = 0
+UNDER_PAPER = 1
+UNDER_NONE = 2
+
+
+@pnjit
+def ink_composite(mode, under, mask, paper, ink, ink_rgb, out):
+    """Straight-alpha "over" of ink on top of a base, one pass (``tamiss.compose.composite_ink``).
+
+    mode : UNDER_RGBA (under (nH, nW, 4) float32, a base style's RGBA), UNDER_PAPER (paper (3,)
+    float64, already clipped and rounded to float32, on the samples where mask (nH, nW) bool;
+    transparent elsewhere) or UNDER_NONE (transparent; under and mask unused). ink : (nH, nW)
+    float64 coverage; ink_rgb : (1, 3) one colour or (nH * nW, 3) one per sample, float64.
+    out : (nH, nW, 4) float32. Per sample, in float64 and in the numpy expression's order:
+    a = clip(ink, 0, 1); k = a_b (1 - a); alpha = a + k; rgb = clip((ink_rgb a + rgb_b k) /
+    alpha, 0, 1), 0 where alpha = 0.
+    """
+    nh, nw = ink.shape
+    per_sample = ink_rgb.shape[0] > 1
+    for j in prange(nh):
+        for i in range(nw):
+            a = min(max(ink[j, i], 0.0), 1.0)
+            rb = 0.0
+            gb = 0.0
+            bb = 0.0
+            ab = 0.0
+            if mode == UNDER_RGBA:
+                rb = np.float64(under[j, i, 0])
+                gb = np.float64(under[j, i, 1])
+                bb = np.float64(under[j, i, 2])
+                ab = np.float64(under[j, i, 3])
+            elif mode == UNDER_PAPER and mask[j, i]:
+                rb = paper[0]
+                gb = paper[1]
+                bb = paper[2]
+                ab = 1.0
+            k = ab * (1.0 - a)
+            alpha = a + k
+            s = j * nw + i if per_sample else 0
+            for c in range(3):
+                base = rb if c == 0 else (gb if c == 1 else bb)
+                premult = ink_rgb[s, c] * a + base * k
+                v = premult / alpha if alpha > 0.0 else 0.0
+                out[j, i, c] = min(max(v, 0.0), 1.0)
+            out[j, i, 3] = alpha

@@ -9,7 +9,7 @@ import numpy as np
 from .._common import rgba_from, short_repr
 from ..base import ShadeContext, Style, nested_style
 
-__all__ = ["check_color", "field_channels", "base_style", "composite_ink"]
+__all__ = ["check_color", "field_channels", "base_style", "composite_ink", "composite_ink_numpy"]
 
 
 def check_color(
@@ -64,10 +64,63 @@ def composite_ink(
     """(nH, nW, 4) float32 straight-alpha RGBA: ink (coverage ``ink``) over the base style, or over
     the ``paper`` colour on covered samples, or over nothing (alpha = ink: the scene background
     shows through, also where strokes run past the silhouette). ``ink_color`` is one linear RGB
-    or an (nH, nW, 3) colour per sample (the ``show`` views)."""
+    or an (nH, nW, 3) colour per sample (the ``show`` views).
+
+    One numba pass (``styles._kernels.ink_composite``) for float64 coverage over a float32 base;
+    other dtypes take :func:`composite_ink_numpy`, the same expression in numpy (and the tests'
+    oracle): the two agree bit for bit."""
+    from .._kernels import UNDER_NONE, UNDER_PAPER, UNDER_RGBA, ink_composite
+
+    ink = np.asarray(ink)
+    shape = ink.shape
+    under = None
+    if base is not None:
+        under = np.asarray(base.shade(ctx))
+    colors = np.asarray(ink_color, dtype=np.float64)
+    if (
+        ink.dtype != np.float64
+        or (under is not None and (under.dtype != np.float32 or under.shape != shape + (4,)))
+        or colors.shape not in ((3,), shape + (3,))
+    ):
+        return composite_ink_numpy(ctx, ink, ink_color, base=base, paper=paper, under=under)
+    if under is not None:
+        mode, mask, paper_rgb = UNDER_RGBA, np.zeros((1, 1), dtype=np.bool_), np.zeros(3)
+    elif paper is not None:
+        mode, mask = UNDER_PAPER, np.ascontiguousarray(ctx.mask, dtype=np.bool_)
+        # as rgba_from stores it: clipped, rounded to float32
+        paper_rgb = np.clip(np.asarray(paper, dtype=np.float64), 0.0, 1.0)
+        paper_rgb = paper_rgb.astype(np.float32).astype(np.float64)
+        under = np.zeros((1, 1, 4), dtype=np.float32)
+    else:
+        mode, mask, paper_rgb = UNDER_NONE, np.zeros((1, 1), dtype=np.bool_), np.zeros(3)
+        under = np.zeros((1, 1, 4), dtype=np.float32)
+    out = np.empty(shape + (4,), dtype=np.float32)
+    ink_composite(
+        mode,
+        np.ascontiguousarray(under),
+        mask,
+        paper_rgb,
+        np.ascontiguousarray(ink),
+        np.ascontiguousarray(colors.reshape(-1, 3)),
+        out,
+    )
+    return out
+
+
+def composite_ink_numpy(
+    ctx: ShadeContext,
+    ink: np.ndarray,
+    ink_color: tuple[float, float, float] | np.ndarray,
+    *,
+    base: Style | None,
+    paper: tuple[float, float, float] | None,
+    under: np.ndarray | None = None,
+) -> np.ndarray:
+    """:func:`composite_ink` in numpy over whole images (``under``: the base's RGBA if already
+    shaded)."""
     shape = ink.shape
     if base is not None:
-        under = np.asarray(base.shade(ctx), dtype=np.float64)
+        under = np.asarray(base.shade(ctx) if under is None else under, dtype=np.float64)
     elif paper is not None:
         under = rgba_from(np.asarray(paper), ctx.mask).astype(np.float64)
     else:
