@@ -125,9 +125,10 @@ def _interp_parts(
         parts["depth"] = s * (8 if ndc else f)
     if "bary" in wanted:
         parts["bary"] = 3 * s * f
-    # a slab holding several quantities is cut into contiguous copies
+    # sets with ndc_z, lod or dyadic_scale interpolate into combined slabs, then cut them into
+    # contiguous copies; other sets write each family into its own arrays (no copies)
     copies = (3 * dcols if len(d_groups) > 1 else 0) + (vcols if len(v_groups) > 1 else 0)
-    if copies:
+    if copies and {"ndc_z", "lod", "dyadic_scale"} & wanted:
         parts["channel copies"] = copies * s * f
     # temporaries after the slabs (one at a time): ndc_z's masks and float64 quotients, or the
     # float64 derivative copies and the lod/dyadic_scale chains
@@ -188,8 +189,6 @@ def rasterize_bytes(
     if "coverage" in wanted:
         parts["coverage"] = p * f
     interp = _interp_parts(wanted, dict(attributes or {}), s, f)
-    if "mesh_id" in wanted and not interp:
-        interp["temporaries"] = 8 * s + 4 * s + s  # int64 searchsorted, its int32 cast, a mask
     parts.update(interp)
     return parts
 

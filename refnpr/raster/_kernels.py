@@ -745,6 +745,31 @@ def interp_fused_full(tri_id, lam, faces, dtab, ntab, n, dout, dxout, dyout, nou
 
 
 @pnjit
+def mesh_ids(tri_id, first_tri, mesh_id):
+    """mesh_id (nH, nW) int32: the mesh of each sample's triangle, -1 where empty.
+
+    first_tri (M + 1,) int64: cumulative face counts (0, n_0, n_0 + n_1, ...); the mesh of
+    triangle t is ``searchsorted(first_tri, t, side="right") - 1`` (by bisection: meshes without
+    faces are skipped)."""
+    m = first_tri.shape[0]
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                mesh_id[sy, sx] = -1
+                continue
+            lo = 0
+            hi = m
+            while lo < hi:
+                mid = (lo + hi) >> 1
+                if first_tri[mid] <= t:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            mesh_id[sy, sx] = lo - 1
+
+
+@pnjit
 def resolve_coverage(tri_id, n, coverage):
     """coverage[y, x] = fraction of the n x n samples of pixel (x, y) covered by a triangle."""
     nn = float(n * n)

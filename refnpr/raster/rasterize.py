@@ -121,6 +121,8 @@ def _parse_channels(channels: Iterable[str], attr_names: set[str]) -> set[str]:
 _INT_CHANNELS = frozenset({"tri_id", "mesh_id", "coverage_count"})
 #: Interpolated channels the in-place path cannot write straight into ``out`` (computed, then copied).
 _COPIED = frozenset({"ndc_z", "lod", "dyadic_scale"})
+#: Channels of the visibility pass (not of the interpolation).
+_NOT_INTERPOLATED = frozenset({"tri_id", "mesh_id", "coverage", "coverage_count"})
 
 
 def _layout(wanted, meshes, n, width, height, dtype) -> dict[str, tuple[tuple, np.dtype]]:
@@ -232,12 +234,13 @@ def _interp_into(
     height,
     dtype,
 ) -> bool:
-    """Interpolated channels written straight into ``dest`` (the arrays of ``out``).
+    """Interpolated channels written straight into ``dest`` (the arrays of ``out``, or fresh ones).
 
-    Mirrors :func:`refnpr.raster.channels.interpolated_channels` (same kernels, same tables, so
-    bit-identical values) for channel sets whose outputs are whole kernel buffers: at most one
-    family with derivatives and one without, no ``ndc_z``, ``lod`` or ``dyadic_scale``.
-    Returns False (nothing written) for other sets.
+    Mirrors :func:`refnpr.raster.channels.interpolated_channels` (same kernels, same
+    per-column arithmetic, so bit-identical values) without its combined tables and the copies
+    out of them: the first family with derivatives and the first without go through one fused
+    pass with the normals and depth, every further family through a pass of its own. Returns
+    False (nothing written) for sets with ``ndc_z``, ``lod`` or ``dyadic_scale``.
     """
     if wanted & _COPIED:
         return False
@@ -253,8 +256,6 @@ def _interp_into(
             d_parts.append(name)
         elif name in wanted:
             v_parts.append(name)
-    if len(d_parts) > 1 or len(v_parts) > 1:
-        return False
 
     def values(name):
         if name == "uv":
@@ -278,16 +279,21 @@ def _interp_into(
     none = _NONE
     dtab = vtab = none
     dout = dxout = dyout = vout = np.empty((nh, nw, 0), dtype)
+
+    def d_family(name):
+        tab = values(name)
+        c = tab.shape[1]
+        outs = (target(name, f"dval:{name}", c),)
+        return tab, outs + tuple(target(f"d{name}_d{x}", f"d{x}:{name}", c) for x in "xy")
+
+    def v_family(name):
+        tab = values(name)
+        return tab, target(name, f"vval:{name}", tab.shape[1])
+
     if d_parts:
-        name = d_parts[0]
-        dtab = values(name)
-        c = dtab.shape[1]
-        dout = target(name, "dval", c)
-        dxout = target(f"d{name}_dx", "ddx", c)
-        dyout = target(f"d{name}_dy", "ddy", c)
+        dtab, (dout, dxout, dyout) = d_family(d_parts[0])
     if v_parts:
-        vtab = values(v_parts[0])
-        vout = target(v_parts[0], "vval", vtab.shape[1])
+        vtab, vout = v_family(v_parts[0])
     ntab, nout = none, np.empty((nh, nw, 0), dtype)
     if "normal" in wanted:
         ntab = _concat(meshes, "normals", "normal")
@@ -300,6 +306,13 @@ def _interp_into(
         K.interp_fused(
             tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout
         )
+    zero = np.empty((nh, nw, 0), dtype)
+    for name in d_parts[1:]:  # each column is computed alone: the same values as one table
+        tab, (d, dx, dy) = d_family(name)
+        K.interp_fused(tri_id, lam, faces, tab, none, none, n, d, dx, dy, zero, zero, zero)
+    for name in v_parts[1:]:
+        tab, v = v_family(name)
+        K.interp_fused(tri_id, lam, faces, none, tab, none, n, zero, zero, zero, v, zero, zero)
     return True
 
 
@@ -554,8 +567,8 @@ def rasterize(
         )
         res["coverage_count"] = cc
     if "mesh_id" in wanted:
-        mesh_id = np.searchsorted(first_tri, tri_id, side="right").astype(np.int32) - 1
-        mesh_id[tri_id < 0] = -1
+        mesh_id = dest["mesh_id"] if "mesh_id" in dest else np.empty((nh, nw), dtype=np.int32)
+        K.mesh_ids(tri_id, frozen(first_tri), mesh_id)
         res["mesh_id"] = mesh_id
     if "coverage" in wanted:
         cov = dest["coverage"] if "coverage" in dest else np.empty((height, width), dtype=dtype)
@@ -573,7 +586,14 @@ def rasterize(
         height=height,
         dtype=dtype,
     )
-    if out is not None and _interp_into(wanted, dest, scratch, **interp):
+    if out is None and not wanted & _COPIED:  # fresh arrays, written in place all the same
+        layout = _layout(wanted, meshes, n, width, height, dtype)
+        fresh = {
+            k: np.empty(*layout[k]) for k in wanted if k not in res and k not in _NOT_INTERPOLATED
+        }
+        _interp_into(wanted, fresh, scratch, **interp)
+        res.update(fresh)
+    elif out is not None and _interp_into(wanted, dest, scratch, **interp):
         pass
     else:
         res.update(
