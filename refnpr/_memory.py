@@ -125,17 +125,17 @@ def _interp_parts(
         parts["depth"] = s * (8 if ndc else f)
     if "bary" in wanted:
         parts["bary"] = 3 * s * f
-    # sets with ndc_z, lod or dyadic_scale interpolate into combined slabs, then cut them into
-    # contiguous copies; other sets write each family into its own arrays (no copies)
+    # sets with ndc_z interpolate into combined slabs, then cut them into contiguous copies;
+    # other sets write each family into its own arrays (no copies)
     copies = (3 * dcols if len(d_groups) > 1 else 0) + (vcols if len(v_groups) > 1 else 0)
-    if copies and {"ndc_z", "lod", "dyadic_scale"} & wanted:
+    if copies and ndc:
         parts["channel copies"] = copies * s * f
-    # temporaries after the slabs (one at a time): ndc_z's masks and float64 quotients, or the
-    # float64 derivative copies and the lod/dyadic_scale chains
+    # temporaries after the slabs (one at a time), in sets with ndc_z: its masks and float64
+    # quotients, or the float64 derivative copies and the lod/dyadic_scale chains
     temp = 0
     if ndc:
         temp = 3 * 8 * s + s + s * f
-    if "lod" in wanted or "dyadic_scale" in wanted:
+    if ndc and ("lod" in wanted or "dyadic_scale" in wanted):  # numpy's (else a kernel's)
         temp = max(temp, 2 * 16 * s + 5 * 8 * s + s + s * f)
     if temp:
         parts["temporaries"] = temp

@@ -770,6 +770,35 @@ def mesh_ids(tri_id, first_tri, mesh_id):
 
 
 @pnjit
+def screen_scales(tri_id, duv_dx, duv_dy, tw, th, k, log2_period, floor, lod, dyadic):
+    """lod and dyadic_scale of every sample from its uv derivatives, in float64 (libm's hypot
+    and log2), 0 where empty; as ``channels.screen_scales`` computes them in numpy.
+
+    duv_dx, duv_dy (nH, nW, 2) float; tw, th: texture size in texels; k: the coordinate of
+    eq. 5 (1: v, 0: u); log2_period: log2 of eq. 5's w; floor: the smallest rho / |grad| taken.
+    lod (nH, nW) or (nH, 0); dyadic (nH, nW) or (nH, 0): zero-width ones are not computed.
+    rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels, lod = log2 rho (OpenGL 4.x sec. 8.14);
+    s = clip(-log2 |grad_k| - log2 w, -64, 64) (Veryovka eq. 5, d = 1 / |grad_k|, s = log2(d / w)).
+    """
+    do_lod = lod.shape[1] > 0
+    do_dyadic = dyadic.shape[1] > 0
+    for sy in prange(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            empty = tri_id[sy, sx] < 0
+            ux = np.float64(duv_dx[sy, sx, 0])
+            vx = np.float64(duv_dx[sy, sx, 1])
+            uy = np.float64(duv_dy[sy, sx, 0])
+            vy = np.float64(duv_dy[sy, sx, 1])
+            if do_lod:
+                rho = max(math.hypot(ux * tw, vx * th), math.hypot(uy * tw, vy * th))
+                lod[sy, sx] = 0.0 if empty else math.log2(max(rho, floor))
+            if do_dyadic:
+                grad = math.hypot(vx, vy) if k == 1 else math.hypot(ux, uy)
+                s = -math.log2(max(grad, floor)) - log2_period  # eq. 5
+                dyadic[sy, sx] = 0.0 if empty else min(max(s, -64.0), 64.0)
+
+
+@pnjit
 def resolve_coverage(tri_id, n, coverage):
     """coverage[y, x] = fraction of the n x n samples of pixel (x, y) covered by a triangle."""
     nn = float(n * n)

@@ -16,9 +16,16 @@ from .._memory import INTERPOLATED, needs_interpolation
 from . import _kernels as K
 from .mesh import Mesh
 
-__all__ = ["interpolated_channels", "attribute_names", "check_vertex_data", "INTERPOLATED"]
+__all__ = [
+    "interpolated_channels",
+    "screen_scales",
+    "attribute_names",
+    "check_vertex_data",
+    "INTERPOLATED",
+]
 
-_LOD_FLOOR = 2.0**-64
+#: Smallest footprint / gradient ``lod`` and ``dyadic_scale`` take (finite logarithms).
+LOD_FLOOR = 2.0**-64
 
 
 def attribute_names(meshes: Sequence[Mesh]) -> set[str]:
@@ -193,25 +200,59 @@ def interpolated_channels(
             out[key] = arr.astype(dtype, copy=False)
 
     if need_uv_d and {"lod", "dyadic_scale"} & wanted:
-        duv_dx = internal["duv_dx"].astype(np.float64)
-        duv_dy = internal["duv_dy"].astype(np.float64)
-        empty = tri_id < 0
-        if "lod" in wanted:
-            tw, th = texture_size
-            # OpenGL 4.x sec. 8.14: rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels, lambda = log2 rho
-            rho = np.maximum(
-                np.hypot(duv_dx[..., 0] * tw, duv_dx[..., 1] * th),
-                np.hypot(duv_dy[..., 0] * tw, duv_dy[..., 1] * th),
+        out.update(
+            screen_scales(
+                wanted,
+                internal["duv_dx"],
+                internal["duv_dy"],
+                tri_id,
+                dtype=dtype,
+                texture_size=texture_size,
+                line_period=line_period,
+                dyadic_coord=dyadic_coord,
             )
-            lod = np.log2(np.maximum(rho, _LOD_FLOOR))
-            lod[empty] = 0.0
-            out["lod"] = lod.astype(dtype)
-        if "dyadic_scale" in wanted:
-            k = 1 if dyadic_coord == "v" else 0
-            grad = np.hypot(duv_dx[..., k], duv_dy[..., k])
-            # Veryovka eq. 5: d = 1/|grad v| (pixels between iso-lines v and v + 1), s = log2(d / w)
-            s = -np.log2(np.maximum(grad, _LOD_FLOOR)) - math.log2(line_period)
-            s = np.clip(s, -64.0, 64.0)  # finite even where v is constant on screen
-            s[empty] = 0.0
-            out["dyadic_scale"] = s.astype(dtype)
+        )
+    return out
+
+
+def screen_scales(
+    wanted: set[str],
+    duv_dx: np.ndarray,
+    duv_dy: np.ndarray,
+    tri_id: np.ndarray,
+    *,
+    dtype: np.dtype,
+    texture_size: tuple[int, int] | None,
+    line_period: float,
+    dyadic_coord: str,
+) -> dict[str, np.ndarray]:
+    """``lod`` and ``dyadic_scale`` (those in ``wanted``), (nH, nW) of ``dtype``, from the
+    uv derivatives ``duv_dx, duv_dy (nH, nW, 2)`` as stored (``dtype``); 0 where empty.
+
+    The numpy form, for sets with ``ndc_z`` and as the tests' oracle of the kernel
+    ``_kernels.screen_scales`` the other sets take: the same operations, but numpy's ``log2``
+    may be a SIMD one (AVX-512) within an ulp of libm's, so the two can differ by an ulp in
+    float64 (not, in practice, after rounding to float32)."""
+    out: dict[str, np.ndarray] = {}
+    duv_dx = duv_dx.astype(np.float64)
+    duv_dy = duv_dy.astype(np.float64)
+    empty = tri_id < 0
+    if "lod" in wanted:
+        tw, th = texture_size
+        # OpenGL 4.x sec. 8.14: rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels, lambda = log2 rho
+        rho = np.maximum(
+            np.hypot(duv_dx[..., 0] * tw, duv_dx[..., 1] * th),
+            np.hypot(duv_dy[..., 0] * tw, duv_dy[..., 1] * th),
+        )
+        lod = np.log2(np.maximum(rho, LOD_FLOOR))
+        lod[empty] = 0.0
+        out["lod"] = lod.astype(dtype)
+    if "dyadic_scale" in wanted:
+        k = 1 if dyadic_coord == "v" else 0
+        grad = np.hypot(duv_dx[..., k], duv_dy[..., k])
+        # Veryovka eq. 5: d = 1/|grad v| (pixels between iso-lines v and v + 1), s = log2(d / w)
+        s = -np.log2(np.maximum(grad, LOD_FLOOR)) - math.log2(line_period)
+        s = np.clip(s, -64.0, 64.0)  # finite even where v is constant on screen
+        s[empty] = 0.0
+        out["dyadic_scale"] = s.astype(dtype)
     return out

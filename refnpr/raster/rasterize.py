@@ -13,6 +13,7 @@ from . import _kernels as K
 from .camera import Camera
 from .channels import (
     _NONE,
+    LOD_FLOOR,
     _concat,
     attribute_names,
     check_vertex_data,
@@ -120,7 +121,9 @@ def _parse_channels(channels: Iterable[str], attr_names: set[str]) -> set[str]:
 
 _INT_CHANNELS = frozenset({"tri_id", "mesh_id", "coverage_count"})
 #: Interpolated channels the in-place path cannot write straight into ``out`` (computed, then copied).
-_COPIED = frozenset({"ndc_z", "lod", "dyadic_scale"})
+_COPIED = frozenset({"ndc_z"})
+#: Channels computed from the uv derivatives after the interpolation (``screen_scales``).
+_SCALES = frozenset({"lod", "dyadic_scale"})
 #: Channels of the visibility pass (not of the interpolation).
 _NOT_INTERPOLATED = frozenset({"tri_id", "mesh_id", "coverage", "coverage_count"})
 
@@ -233,14 +236,18 @@ def _interp_into(
     width,
     height,
     dtype,
+    texture_size=None,
+    line_period=1.0,
+    dyadic_coord="v",
 ) -> bool:
     """Interpolated channels written straight into ``dest`` (the arrays of ``out``, or fresh ones).
 
     Mirrors :func:`refnpr.raster.channels.interpolated_channels` (same kernels, same
     per-column arithmetic, so bit-identical values) without its combined tables and the copies
     out of them: the first family with derivatives and the first without go through one fused
-    pass with the normals and depth, every further family through a pass of its own. Returns
-    False (nothing written) for sets with ``ndc_z``, ``lod`` or ``dyadic_scale``.
+    pass with the normals and depth, every further family through a pass of its own; ``lod``
+    and ``dyadic_scale`` from the uv derivatives so written. Returns False (nothing written) for
+    sets with ``ndc_z``.
     """
     if wanted & _COPIED:
         return False
@@ -252,7 +259,7 @@ def _interp_into(
         return True
     d_parts, v_parts = [], []
     for name in ["uv", "position", *sorted(attrs)]:
-        if {f"d{name}_dx", f"d{name}_dy"} & wanted:
+        if {f"d{name}_dx", f"d{name}_dy"} & wanted or (name == "uv" and _SCALES & wanted):
             d_parts.append(name)
         elif name in wanted:
             v_parts.append(name)
@@ -313,6 +320,22 @@ def _interp_into(
     for name in v_parts[1:]:
         tab, v = v_family(name)
         K.interp_fused(tri_id, lam, faces, none, tab, none, n, zero, zero, zero, v, zero, zero)
+    if _SCALES & wanted:  # from the uv derivatives as stored (d_parts[0] is uv)
+        tw, th = texture_size if "lod" in wanted else (1, 1)
+        lod = dest["lod"] if "lod" in wanted else np.empty((nh, 0), dtype)
+        dyadic = dest["dyadic_scale"] if "dyadic_scale" in wanted else np.empty((nh, 0), dtype)
+        K.screen_scales(
+            tri_id,
+            dxout,
+            dyout,
+            float(tw),
+            float(th),
+            1 if dyadic_coord == "v" else 0,
+            math.log2(line_period),
+            LOD_FLOOR,
+            lod,
+            dyadic,
+        )
     return True
 
 
@@ -586,25 +609,18 @@ def rasterize(
         height=height,
         dtype=dtype,
     )
+    scales = dict(texture_size=texture_size, line_period=line_period, dyadic_coord=dyadic_coord)
     if out is None and not wanted & _COPIED:  # fresh arrays, written in place all the same
         layout = _layout(wanted, meshes, n, width, height, dtype)
         fresh = {
             k: np.empty(*layout[k]) for k in wanted if k not in res and k not in _NOT_INTERPOLATED
         }
-        _interp_into(wanted, fresh, scratch, **interp)
+        _interp_into(wanted, fresh, scratch, **interp, **scales)
         res.update(fresh)
-    elif out is not None and _interp_into(wanted, dest, scratch, **interp):
+    elif out is not None and _interp_into(wanted, dest, scratch, **interp, **scales):
         pass
     else:
-        res.update(
-            interpolated_channels(
-                wanted,
-                **interp,
-                texture_size=texture_size,
-                line_period=line_period,
-                dyadic_coord=dyadic_coord,
-            )
-        )
+        res.update(interpolated_channels(wanted, **interp, **scales))
     if out is not None:
         for key, arr in res.items():
             if arr is not dest[key]:
