@@ -612,9 +612,7 @@ def rasterize(
     scales = dict(texture_size=texture_size, line_period=line_period, dyadic_coord=dyadic_coord)
     if out is None and not wanted & _COPIED:  # fresh arrays, written in place all the same
         layout = _layout(wanted, meshes, n, width, height, dtype)
-        fresh = {
-            k: np.empty(*layout[k]) for k in wanted if k not in res and k not in _NOT_INTERPOLATED
-        }
+        fresh = {k: np.empty(*layout[k]) for k in wanted if k not in _NOT_INTERPOLATED}
         _interp_into(wanted, fresh, scratch, **interp, **scales)
         res.update(fresh)
     elif out is not None and _interp_into(wanted, dest, scratch, **interp, **scales):
