@@ -502,12 +502,17 @@ def raster_visibility(
     tile,
     tiles_x,
     tri_id,
+    depth,
 ):
     """Depth-tested visibility, one tile per task: tri_id (nH, nW) int32 gets the nearest parent
     triangle index (-1 where empty). Depth is Q = 1/w of the exact vertices (larger is nearer);
     ties keep the earlier primitive (lists are in increasing triangle order), so the result is
     independent of the thread count and of the tile size. Samples whose exact Q lies outside
-    [q_lo, q_hi] (beyond the far/near plane, with a relative slack) are not covered."""
+    [q_lo, q_hi] (beyond the far/near plane, with a relative slack) are not covered.
+
+    depth (nH, nW) float32, or shape (0, 0): also w = 1 / Q of the winner (+inf where empty),
+    the value ``interp_depth`` computes from the same plane (so bit-identical), without its
+    second pass over the samples."""
     for k in prange(tile_first.shape[0] - 1):
         x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
         qbuf = np.full((y1 - y0, x1 - x0), -np.inf)
@@ -537,6 +542,13 @@ def raster_visibility(
         for sy in range(y0, y1):
             for sx in range(x0, x1):
                 tri_id[sy, sx] = ibuf[sy - y0, sx - x0]
+        if depth.shape[0] > 0:
+            for sy in range(y0, y1):
+                for sx in range(x0, x1):
+                    if ibuf[sy - y0, sx - x0] < 0:
+                        depth[sy, sx] = np.inf
+                    else:
+                        depth[sy, sx] = 1.0 / qbuf[sy - y0, sx - x0]
 
 
 @pnjit

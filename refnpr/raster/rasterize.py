@@ -239,6 +239,7 @@ def _interp_into(
     texture_size=None,
     line_period=1.0,
     dyadic_coord="v",
+    depth_done=False,
 ) -> bool:
     """Interpolated channels written straight into ``dest`` (the arrays of ``out``, or fresh ones).
 
@@ -254,7 +255,7 @@ def _interp_into(
     nh, nw = tri_id.shape
     attrs = attribute_names(meshes)
     if not _memory.needs_interpolation(wanted, attrs):
-        if "depth" in wanted:
+        if "depth" in wanted and not depth_done:  # (else written by the visibility pass)
             K.interp_depth(tri_id, qplane, dest["depth"])
         return True
     d_parts, v_parts = [], []
@@ -538,6 +539,19 @@ def rasterize(
         tri_id = out.channels["tri_id"]
     else:
         tri_id = scratch.get("tri_id", (nh, nw), np.int32)
+    # depth straight from the visibility pass where it is the only interpolated channel of a
+    # float32 G-buffer (else from the interpolation pass: one specialisation of this kernel)
+    depth_here = np.empty((0, 0), dtype=np.float32)
+    if (
+        "depth" in wanted
+        and dtype == np.float32
+        and not _memory.needs_interpolation(wanted, attribute_names(meshes))
+        and not wanted & _COPIED
+    ):
+        if out is not None:
+            depth_here = out.channels["depth"]
+        else:
+            depth_here = np.empty((nh, nw), dtype=np.float32)
     K.raster_visibility(
         coords,
         bbox,
@@ -555,6 +569,7 @@ def rasterize(
         tile,
         tiles_x,
         tri_id,
+        depth_here,
     )
     timings["visibility"] = time.perf_counter() - t0
 
@@ -564,6 +579,9 @@ def rasterize(
     dest = out.channels if out is not None else {}
     if "tri_id" in wanted:
         res["tri_id"] = tri_id
+    depth_done = depth_here.shape[0] > 0
+    if depth_done:
+        res["depth"] = depth_here
     if "coverage_count" in wanted:
         if "coverage_count" in dest:
             cc = dest["coverage_count"]
@@ -612,10 +630,13 @@ def rasterize(
     scales = dict(texture_size=texture_size, line_period=line_period, dyadic_coord=dyadic_coord)
     if out is None and not wanted & _COPIED:  # fresh arrays, written in place all the same
         layout = _layout(wanted, meshes, n, width, height, dtype)
-        fresh = {k: np.empty(*layout[k]) for k in wanted if k not in _NOT_INTERPOLATED}
-        _interp_into(wanted, fresh, scratch, **interp, **scales)
+        fresh = {k: np.empty(*layout[k]) for k in wanted - res.keys() - _NOT_INTERPOLATED}
+        fresh.update(res)  # (depth from the visibility pass)
+        _interp_into(wanted, fresh, scratch, **interp, **scales, depth_done=depth_done)
         res.update(fresh)
-    elif out is not None and _interp_into(wanted, dest, scratch, **interp, **scales):
+    elif out is not None and _interp_into(
+        wanted, dest, scratch, **interp, **scales, depth_done=depth_done
+    ):
         pass
     else:
         res.update(interpolated_channels(wanted, **interp, **scales))

@@ -40,6 +40,9 @@ SETS = [
     ("dyadic_scale", "mesh_id", "normal", "position", "uv"),  # threshold
     ("lod", "dyadic_scale", "duv_dy"),  # from uv derivatives not all asked for
     ("lod", "dposition_dx", "temp"),
+    ("tri_id", "depth"),  # depth from the visibility pass (float32), against interp_depth
+    ("depth",),
+    ("depth", "mesh_id", "coverage"),
 ]
 
 
