@@ -5,11 +5,15 @@
   (``field``) that cover it, then either count/emit TAMISS fragments or accumulate the
   anti-aliased TAM/RPTAM ink.
 * ``raster_strips``: anti-aliased rasterization of image-space triangle strips (supersampled
-  coverage of the union of a strip's triangles), composited in order with "over".
+  coverage of the union of a strip's triangles), composited in order with "over";
+  ``strip_bbox``: the pieces' clipped sample bboxes it takes.
 * ``sample_inputs``: the per-sample field inputs straight from the G-buffer channels (compaction,
   smooth derivatives as ``smooth_duv``, chart orientation, diffuse colour) in one pass.
 * ``field_gather`` / ``finish_fragments``: TAMISS fragments in one pass over sample chunks (the
   COUNT and EMIT passes of ``field_pass`` fused), then copied to their places in chunk order.
+* ``mean_speeds``: the fitted curves' polyline length per unit t (``strokes.mean_speed``);
+  ``centrelines``: points and unit tangents of the drawn curves (``strokes.centreline``).
+* ``strip_sides``: the strip's left / right vertices from the centreline, as numpy's.
 * ``group_keys`` / ``group_sums``: grouping of fragments by stroke id (a stable argsort by
   hashing and a counting pass) and the per-stroke min/max and regressor sums, parallel over
   strokes, each summed in a fixed order (bits do not depend on the thread count).
@@ -341,6 +345,72 @@ def _popcount(x):
     return c
 
 
+@njit
+def strip_bbox(left, right, nh, nw, out):
+    """Per piece the inclusive sample bbox x0, y0, x1, y1 of its vertices, clipped to the
+    (nh, nw) grid, into ``out`` (P, 4) int64; (0, 0, -1, -1) for a piece with a non-finite
+    vertex. left, right : (P, K, 2) float64. The numpy formula: floor of the min / max over
+    both sides, clipped to [-1, n], then the low corner raised to 0 and the high one lowered
+    to n - 1 (min, max, floor and clip round nothing), for any finite vertex."""
+    for pc in range(left.shape[0]):
+        finite = True
+        xl = np.inf
+        xh = -np.inf
+        yl = np.inf
+        yh = -np.inf
+        for side in range(2):
+            a = left if side == 0 else right
+            for j in range(a.shape[1]):
+                vx = a[pc, j, 0]
+                vy = a[pc, j, 1]
+                if not (math.isfinite(vx) and math.isfinite(vy)):
+                    finite = False
+                xl = min(xl, vx)
+                xh = max(xh, vx)
+                yl = min(yl, vy)
+                yh = max(yh, vy)
+        if not finite:
+            out[pc, 0] = 0
+            out[pc, 1] = 0
+            out[pc, 2] = -1
+            out[pc, 3] = -1
+            continue
+        # clipped before the floor (numba's floor is an int64: 1e19 would not fit), the same
+        # as numpy's clip of the float floor
+        out[pc, 0] = max(math.floor(min(max(xl, -1.0), float(nw))), 0)
+        out[pc, 1] = max(math.floor(min(max(yl, -1.0), float(nh))), 0)
+        out[pc, 2] = min(math.floor(min(max(xh, -1.0), float(nw))), nw - 1)
+        out[pc, 3] = min(math.floor(min(max(yh, -1.0), float(nh))), nh - 1)
+
+
+@njit(inline="always")
+def _texel(c, size, wrap):
+    """Texel column c wrapped (c mod size, as Python's %) or clamped to [0, size - 1]; the
+    wrap of a column at most one period off without an integer division."""
+    if not wrap:
+        return min(max(c, 0), size - 1)
+    if 0 <= c < size:
+        return c
+    if -size <= c < 0:
+        return c + size
+    if size <= c < 2 * size:
+        return c - size
+    return c % size
+
+
+@njit(inline="always")
+def _floor_in(v, lo, hi):
+    """floor(v) as an int, v first clamped to [lo - 1, hi + 1] (lo, hi ints)."""
+    return int(math.floor(min(max(v, lo - 1.0), hi + 1.0)))
+
+
+@njit(inline="always")
+def _corner(high, aa, inv):
+    """Offset (j + 0.5) / aa of the last sub-sample row or column of a pixel if ``high``, else
+    of the first (the same expression as the sub-sample positions of ``raster_strips``)."""
+    return ((aa - 1) + 0.5) * inv if high else (0 + 0.5) * inv
+
+
 @pnjit
 def raster_strips(
     left,
@@ -416,33 +486,50 @@ def raster_strips(
                     if abs(area) < 1e-12:
                         continue
                     sgn = 1.0 if area > 0.0 else -1.0
-                    tx0 = max(x0, int(math.floor(min(ax, bx, cx))))
-                    tx1 = min(x1, int(math.floor(max(ax, bx, cx))))
-                    ty0 = max(y0, int(math.floor(min(ay, by, cy))))
-                    ty1 = min(y1, int(math.floor(max(ay, by, cy))))
+                    # bounds clamped in float before the integer conversion (a vertex at 1e300
+                    # would not fit an int64); within [x0 - 1, x1 + 1] the same as unclamped
+                    tx0 = max(x0, _floor_in(min(ax, bx, cx), x0, x1))
+                    tx1 = min(x1, _floor_in(max(ax, bx, cx), x0, x1))
+                    ty0 = max(y0, _floor_in(min(ay, by, cy), y0, y1))
+                    ty1 = min(y1, _floor_in(max(ay, by, cy), y0, y1))
+                    if ty1 < ty0 or tx1 < tx0:
+                        continue  # outside this band (or the piece's clipped bbox)
                     # the factors of _edge's two products (same values, computed once)
                     e0x, e0y = cx - bx, cy - by
                     e1x, e1y = ax - cx, ay - cy
                     e2x, e2y = bx - ax, by - ay
+                    # per edge, the sub-sample of a pixel most inside it: every rounding step of
+                    # the test below (py - by, e0x (.), px - bx, e0y (.), r0 - (.), (.) sgn) is
+                    # monotonic, so the rounded values are monotonic along each axis of the
+                    # aa x aa grid and their maximum is at this corner; where it is outside,
+                    # so are all the pixel's sub-samples (exactly: same values, no margin)
+                    oy0, ox0 = _corner(e0x * sgn > 0.0, aa, inv), _corner(e0y * sgn < 0.0, aa, inv)
+                    oy1, ox1 = _corner(e1x * sgn > 0.0, aa, inv), _corner(e1y * sgn < 0.0, aa, inv)
+                    oy2, ox2 = _corner(e2x * sgn > 0.0, aa, inv), _corner(e2y * sgn < 0.0, aa, inv)
                     for y in range(ty0, ty1 + 1):
                         for x in range(tx0, tx1 + 1):
                             idx = (y - y0) * w + (x - x0)
-                            bits = mask[idx]
-                            for sj in range(aa):
-                                py = y + (sj + 0.5) * inv
-                                r0 = e0x * (py - by)
-                                r1 = e1x * (py - cy)
-                                r2 = e2x * (py - ay)
-                                for si in range(aa):
-                                    px = x + (si + 0.5) * inv
-                                    # inside all three edges (_edge's values), without branches
-                                    inside = (
-                                        ((r0 - e0y * (px - bx)) * sgn >= 0.0)
-                                        & ((r1 - e1y * (px - cx)) * sgn >= 0.0)
-                                        & ((r2 - e2y * (px - ax)) * sgn >= 0.0)
-                                    )
-                                    bits |= np.uint64(inside) << np.uint64(sj * aa + si)
-                            mask[idx] = bits
+                            if not (
+                                (e0x * (y + oy0 - by) - e0y * (x + ox0 - bx)) * sgn < 0.0
+                                or (e1x * (y + oy1 - cy) - e1y * (x + ox1 - cx)) * sgn < 0.0
+                                or (e2x * (y + oy2 - ay) - e2y * (x + ox2 - ax)) * sgn < 0.0
+                            ):
+                                bits = mask[idx]
+                                for sj in range(aa):
+                                    py = y + (sj + 0.5) * inv
+                                    r0 = e0x * (py - by)
+                                    r1 = e1x * (py - cy)
+                                    r2 = e2x * (py - ay)
+                                    for si in range(aa):
+                                        px = x + (si + 0.5) * inv
+                                        # inside all three edges (_edge's values), without branches
+                                        inside = (
+                                            ((r0 - e0y * (px - bx)) * sgn >= 0.0)
+                                            & ((r1 - e1y * (px - cx)) * sgn >= 0.0)
+                                            & ((r2 - e2y * (px - ax)) * sgn >= 0.0)
+                                        )
+                                        bits |= np.uint64(inside) << np.uint64(sj * aa + si)
+                                mask[idx] = bits
                             # brush coordinates from the triangle the sample centre is most inside
                             pcx = x + 0.5
                             pcy = y + 0.5
@@ -471,18 +558,14 @@ def raster_strips(
                     iv = int(math.floor(fv))
                     au = fu - iu
                     av = fv - iv
+                    cc0 = _texel(iu, wb, t_wrap)  # the two columns, once for both rows
+                    cc1 = _texel(iu + 1, wb, t_wrap)
                     val = 0.0
                     for dv in range(2):
                         rr = min(max(iv + dv, 0), hb - 1)
                         wv = av if dv == 1 else 1.0 - av
-                        for du in range(2):
-                            cc = iu + du
-                            if t_wrap:
-                                cc = cc % wb
-                            else:
-                                cc = min(max(cc, 0), wb - 1)
-                            wu = au if du == 1 else 1.0 - au
-                            val += wu * wv * brush[rr, cc]
+                        val += (1.0 - au) * wv * brush[rr, cc0]
+                        val += au * wv * brush[rr, cc1]
                     a = cov * opacity[pc] * val
                     out_alpha[y, x] = out_alpha[y, x] + a * (1.0 - out_alpha[y, x])
                     if colored:
@@ -941,6 +1024,21 @@ def field_gather(
         chunk_count[j] = k
 
 
+@njit(inline="always")
+def _divmod_floor(a, b):
+    """(a // b, a % b) for int64 a, b > 0, |a| < 2^52: the float quotient is within one of the
+    floor, corrected by the remainder (no 64-bit integer division)."""
+    q = np.int64(math.floor(a / b))
+    r = a - q * b
+    if r < 0:
+        q -= 1
+        r += b
+    elif r >= b:
+        q += 1
+        r -= b
+    return q, r
+
+
 @pnjit
 def finish_fragments(src_off, src_len, dst_off, src, sample, width, n_axis, in_id, in_t,
                      in_layer, in_level, out_id, out_t, out_layer, out_level, out_sample,
@@ -951,17 +1049,23 @@ def finish_fragments(src_off, src_len, dst_off, src, sample, width, n_axis, in_i
     for j in prange(src_off.shape[0]):
         a = src_off[j]
         b = dst_off[j]
+        last = -1
+        px = 0.0
+        py = 0.0
         for m in range(src_len[j]):
             sp = sample[src[a + m]]
-            sy = sp // width
-            sx = sp - sy * width
+            if sp != last:  # a sample's fragments are consecutive: its centre once
+                sy, sx = _divmod_floor(sp, width)
+                px = (sx + 0.5) / n_axis
+                py = (sy + 0.5) / n_axis
+                last = sp
             out_id[b + m] = in_id[a + m]
             out_t[b + m] = in_t[a + m]
             out_layer[b + m] = in_layer[a + m]
             out_level[b + m] = in_level[a + m]
             out_sample[b + m] = sp
-            out_x[b + m] = (sx + 0.5) / n_axis
-            out_y[b + m] = (sy + 0.5) / n_axis
+            out_x[b + m] = px
+            out_y[b + m] = py
 
 
 @njit
@@ -1124,3 +1228,164 @@ def group_sums(perm, starts, t, x, y, half_c, lo, hi, origin, moments, rows):
             if b - a > 1:
                 acc += _pairwise(rows, a + 1, b - a - 1, c, zero)
             moments[g, c] = acc
+
+
+@pnjit
+def strip_sides(x, y, nx, ny, h, left, right):
+    """Strip vertices (P, K, 2): left = (x + h nx, y + h ny), right = (x - h nx, y - h ny), from
+    (P, K) float64 centreline points, unit normals and half widths."""
+    for i in prange(x.shape[0]):
+        for j in range(x.shape[1]):
+            ox = h[i, j] * nx[i, j]
+            oy = h[i, j] * ny[i, j]
+            left[i, j, 0] = x[i, j] + ox
+            left[i, j, 1] = y[i, j] + oy
+            right[i, j, 0] = x[i, j] - ox
+            right[i, j, 1] = y[i, j] - oy
+
+
+@njit
+def _pairwise_row(a, i, n):
+    """numpy's pairwise summation (``add.reduce`` along a contiguous axis) of ``a[i, :n]``
+    (float64), n <= 128 (one block: no recursion, which numba's cache does not reload)."""
+    if n < 8:
+        res = 0.0
+        for j in range(n):
+            res += a[i, j]
+        return res
+    r0 = a[i, 0]
+    r1 = a[i, 1]
+    r2 = a[i, 2]
+    r3 = a[i, 3]
+    r4 = a[i, 4]
+    r5 = a[i, 5]
+    r6 = a[i, 6]
+    r7 = a[i, 7]
+    j = 8
+    while j < n - (n % 8):
+        r0 += a[i, j]
+        r1 += a[i, j + 1]
+        r2 += a[i, j + 2]
+        r3 += a[i, j + 3]
+        r4 += a[i, j + 4]
+        r5 += a[i, j + 5]
+        r6 += a[i, j + 6]
+        r7 += a[i, j + 7]
+        j += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while j < n:
+        res += a[i, j]
+        j += 1
+    return res
+
+
+@pnjit
+def mean_speeds(t, c_x, c_y, t_min, t_max, half_c, span, seg, out):
+    """Per fitted stroke i: the length of the polyline through the curve at t[i, :] (S, M),
+    M <= 129, over
+    ``span[i]`` (float64; 0 where span <= 0), into ``out`` (S,) float64.
+
+    As ``strokes.mean_speed`` computes it: the centred fit parameter s = (t - (lo + h)) / h,
+    h = (hi - lo) 0.5 (0 where h <= 0), the cubics ((c3 s + c2) s + c1) s + c0 in the dtype of
+    ``t``, ``c_x``, ``c_y`` (S, 4), ``t_min``, ``t_max`` and ``half_c`` (a 1-array holding 0.5),
+    then in float64 the segment lengths hypot(dx, dy) summed as numpy's pairwise ``sum``;
+    ``seg`` (S, M - 1) float64 is scratch."""
+    hc = half_c[0]
+    zero = hc - hc
+    m = t.shape[1]
+    for i in prange(t.shape[0]):
+        lo = t_min[i]
+        half = (t_max[i] - lo) * hc
+        mid = lo + half
+        ok = half > zero
+        xp = 0.0
+        yp = 0.0
+        for k in range(m):
+            s = (t[i, k] - mid) / half if ok else zero
+            x = ((c_x[i, 3] * s + c_x[i, 2]) * s + c_x[i, 1]) * s + c_x[i, 0]
+            y = ((c_y[i, 3] * s + c_y[i, 2]) * s + c_y[i, 1]) * s + c_y[i, 0]
+            x64 = np.float64(x)
+            y64 = np.float64(y)
+            if k > 0:
+                seg[i, k - 1] = math.hypot(x64 - xp, y64 - yp)
+            xp = x64
+            yp = y64
+        arc = _pairwise_row(seg, i, m - 1)
+        out[i] = arc / span[i] if span[i] > 0.0 else 0.0
+
+
+@njit(inline="always")
+def _cubic(c, i, s):
+    """``StrokeFit._poly``: ((c3 s + c2) s + c1) s + c0 of row i of c (S, 4), in c's dtype."""
+    return ((c[i, 3] * s + c[i, 2]) * s + c[i, 1]) * s + c[i, 0]
+
+
+@njit(inline="always")
+def _cubic_d(c, i, s, two, three, zero):
+    """``StrokeFit.derivative``'s polynomial: the cubic of (c1, 2 c2, 3 c3, 0) at s."""
+    return ((zero * s + three * c[i, 3]) * s + two * c[i, 2]) * s + c[i, 1]
+
+
+@pnjit
+def centrelines(t, c_x, c_y, t_min, t_max, consts, speed, extend, tbuf, x, y, tx, ty):
+    """Points x, y and unit tangents tx, ty (S, K) float64 of the drawn curves at t (S, K)
+    float64 (finite), as ``strokes.centreline`` computes them with ``StrokeFit.evaluate`` and
+    ``derivative`` (centred basis): t clipped to [t_min, t_max], the fit parameter
+    s = (t - (lo + h)) / h, h = (hi - lo) 0.5 (0 where h <= 0), the cubic and its derivative
+    (times ds/dt = 2 / (hi - lo), 0 where hi - lo <= 0) in the dtype of c_x, c_y (S, 4),
+    t_min, t_max (S,) and ``consts`` (0.5, 2, 3, 0), then in float64 the unit tangent (the
+    chord r(hi) - r(lo) where the derivative vanishes, as ``strokes._unit``) and, with
+    ``extend`` (some t outside its row's range), the tangent line past the ends at ``speed``
+    (S,) px per unit t; ``tbuf`` (S, K) in the fit's dtype is scratch."""
+    c05 = consts[0]
+    two = consts[1]
+    three = consts[2]
+    zero = consts[3]
+    for i in prange(t.shape[0]):
+        lo = t_min[i]
+        hi = t_max[i]
+        lo64 = np.float64(lo)
+        hi64 = np.float64(hi)
+        half = (hi - lo) * c05
+        ok = half > zero
+        mid = lo + half
+        width = hi - lo
+        ds = two / width if width > zero else zero
+        s_lo = (lo - mid) / half if ok else zero
+        s_hi = (hi - mid) / half if ok else zero
+        fx = np.float64(_cubic(c_x, i, s_hi)) - np.float64(_cubic(c_x, i, s_lo))
+        fy = np.float64(_cubic(c_y, i, s_hi)) - np.float64(_cubic(c_y, i, s_lo))
+        fn = math.hypot(fx, fy)
+        fok = fn > 1e-12
+        gx = fx / fn if fok else 1.0
+        gy = fy / fn if fok else 0.0
+        for j in range(t.shape[1]):
+            tj = t[i, j]
+            tc = min(max(tj, lo64), hi64)
+            tbuf[i, j] = tc  # t in the fit's dtype (rounded, as astype)
+            tv = tbuf[i, j]
+            s = (tv - mid) / half if ok else zero
+            px = np.float64(_cubic(c_x, i, s))
+            py = np.float64(_cubic(c_y, i, s))
+            dx = np.float64(_cubic_d(c_x, i, s, two, three, zero) * ds)
+            dy = np.float64(_cubic_d(c_y, i, s, two, three, zero) * ds)
+            n = math.hypot(dx, dy)
+            if n > 1e-12:
+                ux = dx / n
+                uy = dy / n
+            else:
+                ux = gx
+                uy = gy
+            if extend:
+                if tj < lo64:
+                    d_out = (tj - lo64) * speed[i]
+                elif tj > hi64:
+                    d_out = (tj - hi64) * speed[i]
+                else:
+                    d_out = 0.0 * speed[i]
+                px = px + d_out * ux
+                py = py + d_out * uy
+            x[i, j] = px
+            y[i, j] = py
+            tx[i, j] = ux
+            ty[i, j] = uy

@@ -92,22 +92,12 @@ def rasterize_strips(
             )
     if len(strips) == 0:
         return (alpha, touched) if colors is None else (alpha, touched, rgb)
-    left = np.ascontiguousarray(strips.strip.left, dtype=np.float64) * n
-    right = np.ascontiguousarray(strips.strip.right, dtype=np.float64) * n
-    allx = np.concatenate([left[..., 0], right[..., 0]], axis=1)
-    ally = np.concatenate([left[..., 1], right[..., 1]], axis=1)
-    finite = np.all(np.isfinite(allx), axis=1) & np.all(np.isfinite(ally), axis=1)
-    bbox = np.zeros((left.shape[0], 4), dtype=np.int64)
-    with np.errstate(invalid="ignore"):
-        bbox[:, 0] = np.clip(np.floor(np.where(finite, allx.min(1), 0)), -1, nw)
-        bbox[:, 1] = np.clip(np.floor(np.where(finite, ally.min(1), 0)), -1, nh)
-        bbox[:, 2] = np.clip(np.floor(np.where(finite, allx.max(1), -1)), -1, nw)
-        bbox[:, 3] = np.clip(np.floor(np.where(finite, ally.max(1), -1)), -1, nh)
-    bbox[:, 0] = np.maximum(bbox[:, 0], 0)
-    bbox[:, 1] = np.maximum(bbox[:, 1], 0)
-    bbox[:, 2] = np.minimum(bbox[:, 2], nw - 1)
-    bbox[:, 3] = np.minimum(bbox[:, 3], nh - 1)
-    bbox[~finite] = (0, 0, -1, -1)
+    left = np.ascontiguousarray(strips.strip.left, dtype=np.float64)
+    right = np.ascontiguousarray(strips.strip.right, dtype=np.float64)
+    if n != 1:  # x * 1 is x: no copies at one sample per pixel
+        left, right = left * n, right * n
+    bbox = np.empty((left.shape[0], 4), dtype=np.int64)
+    K.strip_bbox(left, right, nh, nw, bbox)
     tex, wrap = brush_texture(brush)
     K.raster_strips(
         left,

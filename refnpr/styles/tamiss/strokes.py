@@ -34,6 +34,7 @@ import numpy as np
 
 from refnpr.formulas.tamiss import StrokeFit, StrokeStrip, fit_strokes
 
+from . import _kernels as kernels
 from .aggregate import Aggregates
 from .field import SALT_WIDTH, StrokeField, hash01
 
@@ -106,12 +107,41 @@ def keep_mask(
     return keep
 
 
+def _fast_fit(fit: StrokeFit) -> bool:
+    """Whether the kernels take ``fit``: a batch (S,) of centred-basis cubics with the
+    coefficients and the t range in one float dtype (then they compute what its methods do)."""
+    dt = fit.c_x.dtype
+    return (
+        fit.basis == "centred"
+        and len(fit.batch_shape) == 1
+        and dt in (np.float32, np.float64)
+        and all(np.asarray(a).dtype == dt for a in (fit.c_y, fit.t_min, fit.t_max))
+        and np.shape(fit.t_min) == np.shape(fit.t_max) == fit.batch_shape
+    )
+
+
 def mean_speed(fit: StrokeFit) -> np.ndarray:
     """(S,) float64 pixels per unit t of the fitted curve over [t_min, t_max] (17-point polyline
     length / (t_max - t_min); 0 for a single t)."""
     lo = np.asarray(fit.t_min, dtype=np.float64).reshape(-1, 1)
     hi = np.asarray(fit.t_max, dtype=np.float64).reshape(-1, 1)
     ts = lo + (hi - lo) * np.linspace(0.0, 1.0, 17)
+    dt = fit.c_x.dtype
+    if _fast_fit(fit) and np.all(np.isfinite(ts)):  # else fit.evaluate raises
+        # fit.evaluate, the lengths and their sums in one kernel, the same values
+        out = np.empty(ts.shape[0])
+        kernels.mean_speeds(
+            ts.astype(dt),
+            np.ascontiguousarray(fit.c_x),
+            np.ascontiguousarray(fit.c_y),
+            np.ascontiguousarray(fit.t_min),
+            np.ascontiguousarray(fit.t_max),
+            np.full(1, 0.5, dtype=dt),
+            np.ascontiguousarray((hi - lo)[:, 0]),
+            np.empty((ts.shape[0], 16)),
+            out,
+        )
+        return out
     px, py = (np.asarray(a, dtype=np.float64) for a in fit.evaluate(ts))
     arc = np.sum(np.hypot(np.diff(px, axis=1), np.diff(py, axis=1)), axis=1)
     span = (hi - lo)[:, 0]
@@ -173,6 +203,28 @@ def centreline(fit: StrokeFit, t, *, speed: np.ndarray | None = None) -> tuple[n
     t = np.asarray(t, dtype=np.float64)
     lo = np.asarray(fit.t_min, dtype=np.float64)[:, None]
     hi = np.asarray(fit.t_max, dtype=np.float64)[:, None]
+    if (
+        _fast_fit(fit)
+        and t.ndim == 2
+        and t.shape[0] == lo.shape[0]
+        and all(np.all(np.isfinite(a)) for a in (t, lo, hi))  # else fit.evaluate raises
+    ):
+        speed = mean_speed(fit) if speed is None else np.asarray(speed, dtype=np.float64)
+        dt = fit.c_x.dtype
+        out = tuple(np.empty(t.shape) for _ in range(4))
+        kernels.centrelines(
+            np.ascontiguousarray(t),
+            np.ascontiguousarray(fit.c_x),
+            np.ascontiguousarray(fit.c_y),
+            np.ascontiguousarray(fit.t_min),
+            np.ascontiguousarray(fit.t_max),
+            np.array([0.5, 2.0, 3.0, 0.0], dtype=dt),
+            np.ascontiguousarray(np.broadcast_to(speed, lo.shape[:1])),
+            bool(np.any((t < lo) | (t > hi))),
+            np.empty(t.shape, dtype=dt),
+            *out,
+        )  # the numpy below in one kernel, the same values
+        return out
     tc = np.clip(t, lo, hi)
     x, y = (np.asarray(a, dtype=np.float64) for a in fit.evaluate(tc))
     dx, dy = (np.asarray(a, dtype=np.float64) for a in fit.derivative(tc))
@@ -278,8 +330,12 @@ def extrude(
         off = amp * np.sin(2.0 * np.pi * (wobble_frequency * t + phase))
         x = x + off * nx
         y = y + off * ny
-    left = np.stack([x + h * nx, y + h * ny], axis=-1)
-    right = np.stack([x - h * nx, y - h * ny], axis=-1)
+    left, right = np.empty((P, K, 2)), np.empty((P, K, 2))
+    x, y, nx, ny, h = (
+        np.ascontiguousarray(np.broadcast_to(a, (P, K)), dtype=np.float64)
+        for a in (x, y, nx, ny, h)
+    )
+    kernels.strip_sides(x, y, nx, ny, h, left, right)  # x + h n, x - h n
     return Strips(
         strip=StrokeStrip(left=left, right=right, t=t),
         stroke=stroke.astype(np.int64),
