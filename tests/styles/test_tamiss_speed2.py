@@ -4,12 +4,7 @@ wrap), the mean speed and the centreline of the fits, and the strip sides of the
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +13,8 @@ from refnpr.formulas.tamiss import StrokeFit, StrokeStrip
 from refnpr.styles.tamiss import _kernels as K
 from refnpr.styles.tamiss.raster import brush_texture, rasterize_strips
 from refnpr.styles.tamiss.strokes import Strips, centreline, mean_speed
+
+from ._threads import outputs_per_thread_count
 
 
 def _bbox_numpy(left, right, nh, nw):
@@ -325,6 +322,7 @@ import json, numpy as np
 from refnpr.formulas.tamiss import StrokeFit, StrokeStrip
 from refnpr.styles.tamiss.raster import rasterize_strips
 from refnpr.styles.tamiss.strokes import Strips, centreline, mean_speed
+
 rng = np.random.default_rng(5)
 P, Kv = 300, 8
 mid = rng.uniform(0, 90, (P, 1, 2)) + rng.normal(size=(P, Kv, 2)).cumsum(1)
@@ -347,18 +345,5 @@ print(json.dumps(out))
 
 @pytest.mark.slow
 def test_kernel_bits_do_not_depend_on_the_thread_count():
-    root = Path(__file__).resolve().parents[2]
-    runs = []
-    for threads in ("1", "2"):
-        env = dict(os.environ, NUMBA_NUM_THREADS=threads)
-        proc = subprocess.run(
-            [sys.executable, "-c", _SCRIPT],
-            capture_output=True,
-            text=True,
-            env=env,
-            cwd=root,
-            timeout=600,
-        )
-        assert proc.returncode == 0, proc.stderr[-2000:]
-        runs.append(json.loads(proc.stdout.strip().splitlines()[-1]))
-    assert runs[0] == runs[1]
+    one, two = outputs_per_thread_count(_SCRIPT)
+    assert one == two

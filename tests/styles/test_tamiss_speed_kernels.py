@@ -6,11 +6,6 @@ All comparisons are bitwise unless stated; thread counts 1 and 2 give the same b
 from __future__ import annotations
 
 import dataclasses
-import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,6 +23,8 @@ from refnpr.styles.tamiss.field import SALT_LENGTH, SALT_TONE, SALT_WIDTH, Strok
 from refnpr.styles.tamiss.gather import Fragments, field_inputs, gather_fragments
 from refnpr.styles.tamiss.raster import rasterize_strips
 from refnpr.styles.tamiss.strokes import Strips
+
+from ._threads import outputs_per_thread_count
 
 CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal", "bary", "position",
             "dposition_dx", "dposition_dy"]  # fmt: skip
@@ -282,13 +279,6 @@ print(json.dumps(out))
 
 @pytest.mark.slow
 def test_pipeline_bits_do_not_depend_on_the_thread_count():
-    root = Path(__file__).resolve().parents[2]
-    runs = []
-    for threads in ("1", "2"):
-        env = dict(os.environ, NUMBA_NUM_THREADS=threads)
-        proc = subprocess.run([sys.executable, "-c", _SCRIPT], capture_output=True, text=True,
-                              env=env, cwd=root, timeout=600)  # fmt: skip
-        assert proc.returncode == 0, proc.stderr[-2000:]
-        runs.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+    runs = outputs_per_thread_count(_SCRIPT)
     assert runs[0] == runs[1]
     assert len(runs[0]["ids"]) > 1000

@@ -120,6 +120,11 @@ def _fast_fit(fit: StrokeFit) -> bool:
     )
 
 
+def _fit_arrays(fit: StrokeFit) -> tuple[np.ndarray, ...]:
+    """c_x, c_y, t_min, t_max of a ``_fast_fit`` fit as the kernels take them (contiguous)."""
+    return tuple(np.ascontiguousarray(a) for a in (fit.c_x, fit.c_y, fit.t_min, fit.t_max))
+
+
 def mean_speed(fit: StrokeFit) -> np.ndarray:
     """(S,) float64 pixels per unit t of the fitted curve over [t_min, t_max] (17-point polyline
     length / (t_max - t_min); 0 for a single t)."""
@@ -132,10 +137,7 @@ def mean_speed(fit: StrokeFit) -> np.ndarray:
         out = np.empty(ts.shape[0])
         kernels.mean_speeds(
             ts.astype(dt),
-            np.ascontiguousarray(fit.c_x),
-            np.ascontiguousarray(fit.c_y),
-            np.ascontiguousarray(fit.t_min),
-            np.ascontiguousarray(fit.t_max),
+            *_fit_arrays(fit),
             np.full(1, 0.5, dtype=dt),
             np.ascontiguousarray((hi - lo)[:, 0]),
             np.empty((ts.shape[0], 16)),
@@ -214,10 +216,7 @@ def centreline(fit: StrokeFit, t, *, speed: np.ndarray | None = None) -> tuple[n
         out = tuple(np.empty(t.shape) for _ in range(4))
         kernels.centrelines(
             np.ascontiguousarray(t),
-            np.ascontiguousarray(fit.c_x),
-            np.ascontiguousarray(fit.c_y),
-            np.ascontiguousarray(fit.t_min),
-            np.ascontiguousarray(fit.t_max),
+            *_fit_arrays(fit),
             np.array([0.5, 2.0, 3.0, 0.0], dtype=dt),
             np.ascontiguousarray(np.broadcast_to(speed, lo.shape[:1])),
             bool(np.any((t < lo) | (t > hi))),
