@@ -9,13 +9,12 @@ by one thread, the samples of a pixel are summed in a fixed order).
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
-from ._jit import pnjit
+from ._jit import banded
 
 
-@pnjit
-def composite_resolve(rgba, n, bg, out, bad_rows):
+@banded("out")
+def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
     """Composite per sample over ``bg``, box-resolve n x n samples, unpremultiply.
 
     rgba : (n H, n W, 4) float32, straight alpha per sample, as the style returned it.
@@ -28,14 +27,13 @@ def composite_resolve(rgba, n, bg, out, bad_rows):
     n x n ``over`` values summed sample row by sample row, left to right, then divided by n * n
     (numpy's ``mean(axis=(1, 3))`` order); ``rgb / alpha`` where alpha > 0, else 0.
     """
-    h = out.shape[0]
     w = out.shape[1]
     bg0 = bg[0] * bg[3]
     bg1 = bg[1] * bg[3]
     bg2 = bg[2] * bg[3]
     bg3 = bg[3]
     count = float(n * n)
-    for y in prange(h):
+    for y in range(lo, hi):
         bad = 0
         for x in range(w):
             s0 = 0.0

@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import prange
 
-from refnpr._jit import njit, pnjit
+from refnpr._jit import banded, njit, pnjit
 
 # Clip planes as (a, b, c, d): inside where a x + b y + c z + d w >= 0. Guard band G fills d for x, y.
 # Order: near, far, left, right, bottom, top.
@@ -174,15 +174,15 @@ def _lam_rows(c0, c1, c2, nw, nh):
     )
 
 
-@pnjit
-def transform_vertices(positions, vp, width, height, guard, clip, snapped, outcode):
+@banded("positions")
+def transform_vertices(lo, hi, positions, vp, width, height, guard, clip, snapped, outcode):
     """Vertex stage: clip = VP (p, 1) with a fixed evaluation order (no BLAS, no FMA
     contraction), the clip-plane outcode bits, and for vertices inside every plane the position
     snapped to 1/256 px (the same ``_snap`` the clipper uses, so shared vertices agree bitwise).
     """
     half_w = 0.5 * width
     half_h = 0.5 * height
-    for i in prange(positions.shape[0]):
+    for i in range(lo, hi):
         x = positions[i, 0]
         y = positions[i, 1]
         z = positions[i, 2]
@@ -208,8 +208,10 @@ def _count_tiles(sx0, sx1, sy0, sy1, shift, tiles_x, counts_row):
             counts_row[ty * tiles_x + tx] += 1
 
 
-@pnjit
+@banded("counts")
 def setup_triangles(
+    lo,
+    hi,
     clip,
     snapped,
     outcode,
@@ -240,7 +242,7 @@ def setup_triangles(
     nw = n * width
     nh = n * height
     m = faces.shape[0]
-    for c in prange(counts.shape[0]):
+    for c in range(lo, hi):
         for t in range(c * chunk, min(m, (c + 1) * chunk)):
             i0 = faces[t, 0]
             i1 = faces[t, 1]
@@ -308,12 +310,12 @@ def mark_visible(tri_id, mark):
                 mark[t] = 1
 
 
-@pnjit
-def lam_for_marked(clip, faces, mark, n, width, height, lam):
+@banded("faces")
+def lam_for_marked(lo, hi, clip, faces, mark, n, width, height, lam):
     """lam[t] (3, 3) for every marked triangle (see _lam_rows); others are left untouched."""
     nw = n * width
     nh = n * height
-    for t in prange(faces.shape[0]):
+    for t in range(lo, hi):
         if mark[t] == 0:
             continue
         r = _lam_rows(clip[faces[t, 0]], clip[faces[t, 1]], clip[faces[t, 2]], nw, nh)
@@ -484,6 +486,11 @@ def _prim_in_tile(ref, coords, bbox, sub, sub_bbox, sub_parent, n, x0, y0, x1, y
     return t, sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2
 
 
+def _tiles(coords, bbox, sub, sub_bbox, sub_parent, qplane, q_lo, q_hi, tile_first, *_):
+    """The loop length of the tile kernels: one task per tile."""
+    return tile_first.shape[0] - 1
+
+
 @pnjit
 def raster_visibility(
     coords,
@@ -551,8 +558,10 @@ def raster_visibility(
                         depth[sy, sx] = 1.0 / qbuf[sy - y0, sx - x0]
 
 
-@pnjit
+@banded(_tiles)
 def raster_count(
+    lo,
+    hi,
     coords,
     bbox,
     sub,
@@ -572,7 +581,7 @@ def raster_count(
 ):
     """Debug: count[sy, sx] = how many primitives claim each sample: the coverage rule and the
     per-sample near/far clip of ``raster_visibility``, without the depth test between them."""
-    for k in prange(tile_first.shape[0] - 1):
+    for k in range(lo, hi):
         x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
         for e in range(tile_first[k], tile_first[k + 1]):
             t, sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
@@ -605,10 +614,10 @@ def _lambdas(lam, t, sx, sy):
     )
 
 
-@pnjit
-def interp_depth(tri_id, qplane, depth):
+@banded("tri_id")
+def interp_depth(lo, hi, tri_id, qplane, depth):
     """depth = w = 1 / Q (eye-space distance along the view axis); +inf where empty."""
-    for sy in prange(tri_id.shape[0]):
+    for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
             if t < 0:
@@ -617,10 +626,10 @@ def interp_depth(tri_id, qplane, depth):
                 depth[sy, sx] = 1.0 / (qplane[t, 0] * sx + qplane[t, 1] * sy + qplane[t, 2])
 
 
-@pnjit
-def interp_bary(tri_id, lam, bary):
+@banded("tri_id")
+def interp_bary(lo, hi, tri_id, lam, bary):
     """Perspective-correct barycentrics b_i = lambda'_i / Q; 0 where empty."""
-    for sy in prange(tri_id.shape[0]):
+    for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
             if t < 0:
@@ -635,8 +644,10 @@ def interp_bary(tri_id, lam, bary):
             bary[sy, sx, 2] = l2 * inv_q
 
 
-@pnjit
-def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout):
+@banded("tri_id")
+def interp_fused(
+    lo, hi, tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout
+):
     """All requested per-vertex quantities in one pass over the samples, so each sample gathers
     its triangle's planes and indices once (on dense meshes these gathers dominate).
 
@@ -650,7 +661,7 @@ def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vo
     cv = vtab.shape[1]
     k_n = ntab.shape[1] // 3
     k_w = wout.shape[2]
-    for sy in prange(tri_id.shape[0]):
+    for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
             if t < 0:
@@ -703,15 +714,15 @@ def interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vo
                 nout[sy, sx, 2] = nz * inv_len
 
 
-@pnjit
-def interp_fused_full(tri_id, lam, faces, dtab, ntab, n, dout, dxout, dyout, nout, wout):
+@banded("tri_id")
+def interp_fused_full(lo, hi, tri_id, lam, faces, dtab, ntab, n, dout, dxout, dyout, nout, wout):
     """:func:`interp_fused` specialised to the full G-buffer (one 2-column table with
     derivatives, normals, depth; no plain values): the same operations in the same order, so
     bit-identical results, with the loop counts fixed at compile time (~1.5x faster).
 
     dtab (N, 2); ntab (N, 3); dout, dxout, dyout (nH, nW, 2); nout (nH, nW, 3); wout (nH, nW, 1).
     """
-    for sy in prange(tri_id.shape[0]):
+    for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
             if t < 0:
@@ -756,15 +767,15 @@ def interp_fused_full(tri_id, lam, faces, dtab, ntab, n, dout, dxout, dyout, nou
             nout[sy, sx, 2] = nz * inv_len
 
 
-@pnjit
-def mesh_ids(tri_id, first_tri, mesh_id):
+@banded("tri_id")
+def mesh_ids(lo, hi, tri_id, first_tri, mesh_id):
     """mesh_id (nH, nW) int32: the mesh of each sample's triangle, -1 where empty.
 
     first_tri (M + 1,) int64: cumulative face counts (0, n_0, n_0 + n_1, ...); the mesh of
     triangle t is ``searchsorted(first_tri, t, side="right") - 1`` (by bisection: meshes without
     faces are skipped)."""
     m = first_tri.shape[0]
-    for sy in prange(tri_id.shape[0]):
+    for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
             if t < 0:
@@ -781,8 +792,8 @@ def mesh_ids(tri_id, first_tri, mesh_id):
             mesh_id[sy, sx] = lo - 1
 
 
-@pnjit
-def screen_scales(tri_id, duv_dx, duv_dy, tw, th, k, log2_period, floor, lod, dyadic):
+@banded("tri_id")
+def screen_scales(lo, hi, tri_id, duv_dx, duv_dy, tw, th, k, log2_period, floor, lod, dyadic):
     """lod and dyadic_scale of every sample from its uv derivatives, in float64 (libm's hypot
     and log2), 0 where empty; as ``channels.screen_scales`` computes them in numpy.
 
@@ -794,7 +805,7 @@ def screen_scales(tri_id, duv_dx, duv_dy, tw, th, k, log2_period, floor, lod, dy
     """
     do_lod = lod.shape[1] > 0
     do_dyadic = dyadic.shape[1] > 0
-    for sy in prange(tri_id.shape[0]):
+    for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
             empty = tri_id[sy, sx] < 0
             ux = np.float64(duv_dx[sy, sx, 0])
@@ -810,11 +821,11 @@ def screen_scales(tri_id, duv_dx, duv_dy, tw, th, k, log2_period, floor, lod, dy
                 dyadic[sy, sx] = 0.0 if empty else min(max(s, -64.0), 64.0)
 
 
-@pnjit
-def resolve_coverage(tri_id, n, coverage):
+@banded("coverage")
+def resolve_coverage(lo, hi, tri_id, n, coverage):
     """coverage[y, x] = fraction of the n x n samples of pixel (x, y) covered by a triangle."""
     nn = float(n * n)
-    for y in prange(coverage.shape[0]):
+    for y in range(lo, hi):
         for x in range(coverage.shape[1]):
             k = 0
             for j in range(n):

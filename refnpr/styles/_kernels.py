@@ -5,9 +5,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
-from refnpr._jit import njit, pnjit
+from refnpr._jit import banded, njit
 
 
 @njit
@@ -118,8 +117,8 @@ def draw_edges(clip, edges, depth, nw, nh, radius, rel_tol, step, cov):
                 )
 
 
-@pnjit
-def ink_over(rgba, cov, ink):
+@banded("cov")
+def ink_over(lo, hi, rgba, cov, ink):
     """Straight-alpha "over" of ink with coverage ``cov`` on top of ``rgba``, in place.
 
     rgba : (nH, nW, 4) float32 (read and overwritten); cov : (nH, nW) float64 in [0, 1];
@@ -127,7 +126,7 @@ def ink_over(rgba, cov, ink):
     (1 - c)) / a, 0 where a = 0 -- the numpy expression ``Contoured`` used before, term for term.
     """
     nh, nw = cov.shape
-    for j in prange(nh):
+    for j in range(lo, hi):
         for i in range(nw):
             c = cov[j, i]
             ab = np.float64(rgba[j, i, 3])
@@ -144,8 +143,8 @@ UNDER_PAPER = 1
 UNDER_NONE = 2
 
 
-@pnjit
-def ink_composite(mode, under, mask, paper, ink, ink_rgb, out):
+@banded("ink")
+def ink_composite(lo, hi, mode, under, mask, paper, ink, ink_rgb, out):
     """Straight-alpha "over" of ink on top of a base, one pass (``tamiss.compose.composite_ink``).
 
     mode : UNDER_RGBA (under (nH, nW, 4) float32, a base style's RGBA), UNDER_PAPER (paper (3,)
@@ -158,7 +157,7 @@ def ink_composite(mode, under, mask, paper, ink, ink_rgb, out):
     """
     nh, nw = ink.shape
     per_sample = ink_rgb.shape[0] > 1
-    for j in prange(nh):
+    for j in range(lo, hi):
         for i in range(nw):
             a = min(max(ink[j, i], 0.0), 1.0)
             rb = 0.0

@@ -12,10 +12,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from refnpr._jit import njit, pnjit
+from refnpr._jit import banded, njit
 
 #: ``mode`` codes of :func:`shade_lit`.
 MODE_SMOOTH = 0
@@ -36,8 +35,10 @@ def _step_n(x, t, n):
     return (levels if levels <= top else top) / n  # eq. 4, divided by n
 
 
-@pnjit
+@banded("cover")
 def shade_lit(
+    lo,
+    hi,
     cover,
     mesh_id,
     normal,
@@ -84,7 +85,7 @@ def shade_lit(
     n_lights = light_kind.shape[0]
     k_ramp = ramp.shape[0]
     n_edges = edge_lo.shape[1]
-    for y in numba.prange(nh):
+    for y in range(lo, hi):
         for x in range(nw):
             if cover[y, x] < 0:
                 out[y, x, 0] = 0.0
@@ -224,8 +225,10 @@ def _same_float32(v, e):
     return lo == hi
 
 
-@pnjit
+@banded("cover")
 def shade_smooth(
+    lo,
+    hi,
     cover,
     mesh_id,
     normal,
@@ -258,7 +261,7 @@ def shade_smooth(
     """
     nh, nw = cover.shape
     n_lights = light_kind.shape[0]
-    for y in numba.prange(nh):
+    for y in range(lo, hi):
         for x in range(nw):
             if cover[y, x] < 0:
                 out[y, x, 0] = 0.0

@@ -5,9 +5,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
-from refnpr._jit import njit, pnjit
+from refnpr._jit import banded, njit
 
 
 @njit
@@ -46,11 +45,11 @@ def _bilinear_into(texels, offset, rows, cols, u, v, weight, out_row):
         out_row[c] += weight * s
 
 
-@pnjit
-def sample_level(texels, offsets, shapes, uv, level, out):
+@banded("uv")
+def sample_level(lo, hi, texels, offsets, shapes, uv, level, out):
     """out (P, C) = bilinear sample of integer level[p] (clamped to the pyramid) at uv (P, 2)."""
     top = offsets.shape[0] - 1
-    for p in prange(uv.shape[0]):
+    for p in range(lo, hi):
         for c in range(out.shape[1]):
             out[p, c] = 0.0
         k = min(max(level[p], 0), top)
@@ -59,12 +58,12 @@ def sample_level(texels, offsets, shapes, uv, level, out):
         )
 
 
-@pnjit
-def sample_trilinear(texels, offsets, shapes, uv, lod, out):
+@banded("uv")
+def sample_trilinear(lo, hi, texels, offsets, shapes, uv, lod, out):
     """out (P, C) = GL_LINEAR_MIPMAP_LINEAR sample at uv (P, 2) and LOD lod (P,): lod clamped to
     [0, L - 1], bilinear in the two nearest levels, linear in frac(lod)."""
     top = offsets.shape[0] - 1
-    for p in prange(uv.shape[0]):
+    for p in range(lo, hi):
         for c in range(out.shape[1]):
             out[p, c] = 0.0
         lam = min(max(lod[p], 0.0), float(top))

@@ -12,6 +12,7 @@ import numba
 import numpy as np
 import pytest
 
+from refnpr._jit import Banded
 from refnpr.scenes.scene import Light, Material
 from refnpr.styles import _shade_kernels as K
 from refnpr.styles._common import lit_rgba
@@ -112,7 +113,8 @@ def test_fallback_to_pow_when_in_doubt():
     real = K._POW_REL
     try:  # module constants are frozen into the compiled kernel: rebuild it uncached
         K._POW_REL = real * 1e12
-        inflated = numba.njit(parallel=True, error_model="numpy")(K.shade_smooth.py_func)
+        body = numba.njit(error_model="numpy", nogil=True)(K.shade_smooth.py_func)
+        inflated = Banded(body, K.shade_smooth.count)
         saved, K.shade_smooth = K.shade_smooth, inflated
         same_bits(lit_rgba(ctx, mode="smooth", specular=True), want)
     finally:

@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-from refnpr._jit import njit, pnjit
+from refnpr._jit import banded, njit, pnjit
 
 #: ``threshold`` codes.
 THRESHOLD_BINARY = 0
@@ -484,13 +484,13 @@ def shade_object(
             out[y, x, 3] = 1.0
 
 
-@pnjit
-def prepare(mesh_id, mask, n_objects, rgb, rows, out):
+@banded("mesh_id")
+def prepare(lo, hi, mesh_id, mask, n_objects, rgb, rows, out):
     """One pass before the objects: ``out (nH, nW, 4)`` where ``mesh_id < 0`` gets (rgb, 1) if
     covered (``mask``), else 0; ``rows (nH, n_objects) int64`` counts each object's samples per
     grid row (which objects are in view)."""
     nh, nw = mesh_id.shape
-    for y in numba.prange(nh):
+    for y in range(lo, hi):
         for k in range(n_objects):
             rows[y, k] = 0
         for x in range(nw):

@@ -26,7 +26,7 @@ import math
 import numpy as np
 from numba import prange
 
-from refnpr._jit import njit, pnjit
+from refnpr._jit import banded, njit, pnjit
 
 _M1 = np.uint64(0x9E3779B97F4A7C15)
 _M2 = np.uint64(0xBF58476D1CE4E5B9)
@@ -196,8 +196,10 @@ def _enumerate(
     return n
 
 
-@pnjit
+@banded(lambda mode, uv, *rest: (uv.shape[0] + _CHUNK - 1) // _CHUNK)
 def field_pass(
+    lo,
+    hi,
     mode,
     uv,
     duv_dx,
@@ -236,15 +238,14 @@ def field_pass(
     """
     n_samples = uv.shape[0]
     n_layers = cos_a.shape[0]
-    n_chunks = (n_samples + _CHUNK - 1) // _CHUNK
     tam = mode >= 2
-    for ci in prange(n_chunks):
-        c_id = np.empty(_CAP, dtype=np.int64)
-        c_t = np.empty(_CAP)
-        c_dist = np.empty(_CAP)
-        c_end = np.empty(_CAP)
-        c_gain = np.empty(_CAP)
-        c_level = np.empty(_CAP, dtype=np.int64)
+    c_id = np.empty(_CAP, dtype=np.int64)  # candidates of one sample and layer (scratch)
+    c_t = np.empty(_CAP)
+    c_dist = np.empty(_CAP)
+    c_end = np.empty(_CAP)
+    c_gain = np.empty(_CAP)
+    c_level = np.empty(_CAP, dtype=np.int64)
+    for ci in range(lo, hi):
         for i in range(ci * _CHUNK, min(n_samples, (ci + 1) * _CHUNK)):
             su = uv_scale[i, 0]
             sv = uv_scale[i, 1]
@@ -574,8 +575,10 @@ def raster_strips(
                     out_strokes[y, x] += 1
 
 
-@pnjit
-def smooth_duv(tri, bary, faces, frames, normal, position, dpos_dx, dpos_dy, eye, duv_dx, duv_dy):
+@banded("tri")
+def smooth_duv(
+    lo, hi, tri, bary, faces, frames, normal, position, dpos_dx, dpos_dy, eye, duv_dx, duv_dy
+):
     """Replace ``duv_dx``, ``duv_dy`` (N, 2) in place by the smooth reconstruction.
 
     tri : (N,) global triangle; bary : (N, 3); faces : (T, 3) into ``frames`` (V, 3, 2), the
@@ -585,8 +588,7 @@ def smooth_duv(tri, bary, faces, frames, normal, position, dpos_dx, dpos_dy, eye
     interpolated frame F by least squares, duv = (F^T F)^-1 F^T dP_n. Where the frame is
     degenerate or the view grazes (|n . D| < 0.05 |D|) the flat values are kept.
     """
-    n = tri.shape[0]
-    for i in prange(n):
+    for i in range(lo, hi):
         f = tri[i]
         gu0 = 0.0
         gu1 = 0.0
@@ -641,8 +643,10 @@ def smooth_duv(tri, bary, faces, frames, normal, position, dpos_dx, dpos_dy, eye
                 duv_dy[i, 1] = dv
 
 
-@pnjit
+@banded("chunk_max")
 def sample_inputs(
+    lo,
+    hi,
     sample,
     tri_id,
     mesh_id,
@@ -693,9 +697,8 @@ def sample_inputs(
     (``l_point``), colours). ``chunk_max`` (chunks,) receives max |u' s| over each chunk.
     """
     n_samples = sample.shape[0]
-    n_chunks = chunk_max.shape[0]
     n_lights = l_color.shape[0]
-    for ci in prange(n_chunks):
+    for ci in range(lo, hi):
         cmax = 0.0
         for i in range(ci * _CHUNK, min(n_samples, (ci + 1) * _CHUNK)):
             sp = sample[i]
@@ -948,8 +951,10 @@ def _gather_sample(
     return k
 
 
-@pnjit
+@banded("chunks")
 def field_gather(
+    lo,
+    hi,
     chunks,
     uv,
     duv_dx,
@@ -986,7 +991,7 @@ def field_gather(
     """
     n_samples = uv.shape[0]
     n_layers = cos_a.shape[0]
-    for j in prange(chunks.shape[0]):
+    for j in range(lo, hi):
         ci = chunks[j]
         base = dst_off[j]
         cap = dst_cap[j]
@@ -1039,14 +1044,14 @@ def _divmod_floor(a, b):
     return q, r
 
 
-@pnjit
-def finish_fragments(src_off, src_len, dst_off, src, sample, width, n_axis, in_id, in_t,
+@banded("src_off")
+def finish_fragments(lo, hi, src_off, src_len, dst_off, src, sample, width, n_axis, in_id, in_t,
                      in_layer, in_level, out_id, out_t, out_layer, out_level, out_sample,
                      out_x, out_y):  # fmt: skip
     """Copy runs ``[src_off[j], + src_len[j])`` of gathered fragments to ``dst_off[j]``, with
     each fragment's flat sample index ``sample[src]`` and its centre in pixels
     ((sx + 0.5) / n_axis, (sy + 0.5) / n_axis) on a grid ``width`` samples wide."""
-    for j in prange(src_off.shape[0]):
+    for j in range(lo, hi):
         a = src_off[j]
         b = dst_off[j]
         last = -1
@@ -1161,8 +1166,8 @@ def _pairwise(a, lo, n, c, zero):
     return _pairwise(a, lo, n2, c, zero) + _pairwise(a, lo + n2, n - n2, c, zero)
 
 
-@pnjit
-def group_sums(perm, starts, t, x, y, half_c, lo, hi, origin, moments, rows):
+@banded(lambda perm, starts, *rest: starts.shape[0] - 1)
+def group_sums(i_lo, i_hi, perm, starts, t, x, y, half_c, lo, hi, origin, moments, rows):
     """Per group g (fragments ``perm[starts[g]:starts[g + 1]]``, in that order): min and max of
     t, the centre of the (x, y) bounding box, and the sums of the 15 regressors (s^0..s^6,
     s^0..s^3 (x - o_x), s^0..s^3 (y - o_y)) with s = normalize_t(t, lo, hi), all in the dtype of
@@ -1172,7 +1177,7 @@ def group_sums(perm, starts, t, x, y, half_c, lo, hi, origin, moments, rows):
     hc = half_c[0]
     one = hc + hc
     zero = hc - hc
-    for g in prange(starts.shape[0] - 1):
+    for g in range(i_lo, i_hi):
         a = starts[g]
         b = starts[g + 1]
         i = perm[a]
@@ -1230,11 +1235,11 @@ def group_sums(perm, starts, t, x, y, half_c, lo, hi, origin, moments, rows):
             moments[g, c] = acc
 
 
-@pnjit
-def strip_sides(x, y, nx, ny, h, left, right):
+@banded("x")
+def strip_sides(lo, hi, x, y, nx, ny, h, left, right):
     """Strip vertices (P, K, 2): left = (x + h nx, y + h ny), right = (x - h nx, y - h ny), from
     (P, K) float64 centreline points, unit normals and half widths."""
-    for i in prange(x.shape[0]):
+    for i in range(lo, hi):
         for j in range(x.shape[1]):
             ox = h[i, j] * nx[i, j]
             oy = h[i, j] * ny[i, j]
@@ -1279,8 +1284,8 @@ def _pairwise_row(a, i, n):
     return res
 
 
-@pnjit
-def mean_speeds(t, c_x, c_y, t_min, t_max, half_c, span, seg, out):
+@banded("t")
+def mean_speeds(i_lo, i_hi, t, c_x, c_y, t_min, t_max, half_c, span, seg, out):
     """Per fitted stroke i: the length of the polyline through the curve at t[i, :] (S, M),
     M <= 129, over
     ``span[i]`` (float64; 0 where span <= 0), into ``out`` (S,) float64.
@@ -1293,7 +1298,7 @@ def mean_speeds(t, c_x, c_y, t_min, t_max, half_c, span, seg, out):
     hc = half_c[0]
     zero = hc - hc
     m = t.shape[1]
-    for i in prange(t.shape[0]):
+    for i in range(i_lo, i_hi):
         lo = t_min[i]
         half = (t_max[i] - lo) * hc
         mid = lo + half
@@ -1326,8 +1331,8 @@ def _cubic_d(c, i, s, two, three, zero):
     return ((zero * s + three * c[i, 3]) * s + two * c[i, 2]) * s + c[i, 1]
 
 
-@pnjit
-def centrelines(t, c_x, c_y, t_min, t_max, consts, speed, extend, tbuf, x, y, tx, ty):
+@banded("t")
+def centrelines(i_lo, i_hi, t, c_x, c_y, t_min, t_max, consts, speed, extend, tbuf, x, y, tx, ty):
     """Points x, y and unit tangents tx, ty (S, K) float64 of the drawn curves at t (S, K)
     float64 (finite), as ``strokes.centreline`` computes them with ``StrokeFit.evaluate`` and
     ``derivative`` (centred basis): t clipped to [t_min, t_max], the fit parameter
@@ -1341,7 +1346,7 @@ def centrelines(t, c_x, c_y, t_min, t_max, consts, speed, extend, tbuf, x, y, tx
     two = consts[1]
     three = consts[2]
     zero = consts[3]
-    for i in prange(t.shape[0]):
+    for i in range(i_lo, i_hi):
         lo = t_min[i]
         hi = t_max[i]
         lo64 = np.float64(lo)

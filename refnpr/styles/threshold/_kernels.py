@@ -16,10 +16,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from refnpr._jit import njit, pnjit
+from refnpr._jit import banded, njit
 
 #: ``src`` codes of :func:`shade_threshold`.
 SRC_CONST = 0
@@ -544,14 +543,10 @@ def _unit3(x, y, z):
     return x, y, z
 
 
-#: Rows per band of the parallel loop of :func:`shade_threshold`.
-_BAND = 4
-
-
-@njit
-def _shade_rows(
-    y0,
-    y1,
+@banded("cover")
+def shade_threshold(
+    lo,
+    hi,
     cover,
     mesh_id,
     row_start,
@@ -604,7 +599,36 @@ def _shade_rows(
     cdf,
     out,
 ):
-    """Rows y0 .. y1 - 1 of :func:`shade_threshold` (same arguments), serially."""
+    """Shade every sample of ``out (nH, nW, 4) float32`` (written in full; zero where empty).
+
+    Banded over the rows (``lo``, ``hi``: a band, given by :func:`refnpr._jit.banded`).
+
+    cover, mesh_id (nH, nW) int: covered where ``cover >= 0``; object index (clamped >= 0).
+    row_start (nH,) int64: index of each row's first covered sample in row-major mask order
+    (the order of ``t_tab``, ``w_tab``, ``noise_tab``). normal (nH, nW, 3) float: shading
+    normals (not renormalized for f_s and n.v, as in the numpy path), or ``normal_tab (M, 3)``
+    float64 in mask order where it has rows (bump-mapped normals); position (nH, nW, 3)
+    float, any shape when unused. m_ambient (O, 3) float64 = m_a l_a; m_diffuse, m_specular
+    (O, 3); shininess (O,). light_kind (L,) int64; light_vec (L, 3): d / |d| of directional
+    lights, positions of point lights; light_unit (L, 3): unit_vectors(light_vec) (directional);
+    light_color (L, 3); eye (3,). steps: n of eq. 4; strength, facing_fade, facing_power, dark,
+    bright: sec. 5 (facing_fade 0: no orientation fade). specular: add the specular terms;
+    spec_const: the specular threshold (< 0: the texture's).
+
+    src: SRC_CONST (``t_const`` everywhere), SRC_TABLE (``t_tab (M, K)`` with ``w_tab (M, K)``
+    weights, or ``w_tab`` of shape (1, 0) for none), SRC_LINES (eqs. 5-8 here, one threshold per
+    row of ``offsets (K, 2)`` pixel offsets): uv, duv_dx, duv_dy (nH, nW, 2) float; has_grad:
+    whether duv_* are read (else 0); dyadic (nH, nW): the G-buffer's eq. 5 scale, read for
+    directions with ``dir_zero`` when ``has_channel``, minus log2_sv (O,); uv_scale (O, 2);
+    dir_sin, dir_cos (D,) of the hatching angles; log2_w = log2(period); multiscale, uniform;
+    noise_tab (M,) phase noise in line periods or shape (0,); lam_bp (B,), lev_bp (B, D): the
+    layer schedule composing D > 1 layers (``combine_thresholds``). SRC_ANALYTIC: the same
+    layers box-filtered over the sample's footprint (``AnalyticLines``; the derivatives divided
+    by ``n_sub``, the samples per pixel per axis), ``offsets`` unused. SRC_STIPPLE: the
+    screen-round jittered dots (``stipple_threshold``) at each row of ``offsets`` (pcf) or at
+    uv itself (shape (0, 2): filter "none"), with ``stipple_seed`` (uint64, 32 bits),
+    ``jitter`` and the tone table ``cdf (n_t, n_t, n_y)`` (shape (0, 0, 0) for none).
+    """
     nh, nw = cover.shape
     n_lights = light_kind.shape[0]
     if src == SRC_TABLE:
@@ -620,7 +644,7 @@ def _shade_rows(
     has_w = src == SRC_TABLE and w_tab.shape[1] > 0
     n_dirs = dir_sin.shape[0]
     has_noise = noise_tab.shape[0] > 0
-    for y in range(y0, y1):
+    for y in range(lo, hi):
         tk = np.empty(kk)
         wk = np.empty(kk)
         hits = np.empty(kk)
@@ -845,148 +869,3 @@ def _shade_rows(
             out[y, x, 2] = min(max(b, 0.0), 1.0)
             out[y, x, 3] = 1.0
             idx += 1
-
-
-@pnjit
-def shade_threshold(
-    cover,
-    mesh_id,
-    row_start,
-    normal,
-    normal_tab,
-    position,
-    m_ambient,
-    m_diffuse,
-    m_specular,
-    spec_on,
-    shininess,
-    light_kind,
-    light_vec,
-    light_unit,
-    light_color,
-    eye,
-    steps,
-    strength,
-    facing_fade,
-    facing_power,
-    dark,
-    bright,
-    specular,
-    spec_const,
-    src,
-    t_const,
-    t_tab,
-    w_tab,
-    uv,
-    duv_dx,
-    duv_dy,
-    dyadic,
-    has_grad,
-    has_channel,
-    uv_scale,
-    log2_sv,
-    dir_sin,
-    dir_cos,
-    dir_zero,
-    log2_w,
-    multiscale,
-    uniform,
-    offsets,
-    noise_tab,
-    lam_bp,
-    lev_bp,
-    n_sub,
-    stipple_seed,
-    jitter,
-    cdf,
-    out,
-):
-    """Shade every sample of ``out (nH, nW, 4) float32`` (written in full; zero where empty).
-
-    cover, mesh_id (nH, nW) int: covered where ``cover >= 0``; object index (clamped >= 0).
-    row_start (nH,) int64: index of each row's first covered sample in row-major mask order
-    (the order of ``t_tab``, ``w_tab``, ``noise_tab``). normal (nH, nW, 3) float: shading
-    normals (not renormalized for f_s and n.v, as in the numpy path), or ``normal_tab (M, 3)``
-    float64 in mask order where it has rows (bump-mapped normals); position (nH, nW, 3)
-    float, any shape when unused. m_ambient (O, 3) float64 = m_a l_a; m_diffuse, m_specular
-    (O, 3); shininess (O,). light_kind (L,) int64; light_vec (L, 3): d / |d| of directional
-    lights, positions of point lights; light_unit (L, 3): unit_vectors(light_vec) (directional);
-    light_color (L, 3); eye (3,). steps: n of eq. 4; strength, facing_fade, facing_power, dark,
-    bright: sec. 5 (facing_fade 0: no orientation fade). specular: add the specular terms;
-    spec_const: the specular threshold (< 0: the texture's).
-
-    src: SRC_CONST (``t_const`` everywhere), SRC_TABLE (``t_tab (M, K)`` with ``w_tab (M, K)``
-    weights, or ``w_tab`` of shape (1, 0) for none), SRC_LINES (eqs. 5-8 here, one threshold per
-    row of ``offsets (K, 2)`` pixel offsets): uv, duv_dx, duv_dy (nH, nW, 2) float; has_grad:
-    whether duv_* are read (else 0); dyadic (nH, nW): the G-buffer's eq. 5 scale, read for
-    directions with ``dir_zero`` when ``has_channel``, minus log2_sv (O,); uv_scale (O, 2);
-    dir_sin, dir_cos (D,) of the hatching angles; log2_w = log2(period); multiscale, uniform;
-    noise_tab (M,) phase noise in line periods or shape (0,); lam_bp (B,), lev_bp (B, D): the
-    layer schedule composing D > 1 layers (``combine_thresholds``). SRC_ANALYTIC: the same
-    layers box-filtered over the sample's footprint (``AnalyticLines``; the derivatives divided
-    by ``n_sub``, the samples per pixel per axis), ``offsets`` unused. SRC_STIPPLE: the
-    screen-round jittered dots (``stipple_threshold``) at each row of ``offsets`` (pcf) or at
-    uv itself (shape (0, 2): filter "none"), with ``stipple_seed`` (uint64, 32 bits),
-    ``jitter`` and the tone table ``cdf (n_t, n_t, n_y)`` (shape (0, 0, 0) for none).
-    """
-    # The body is a serial function called per band of rows: numba's parallel lowering of a
-    # body this large costs about twice the compile time of the serial function (cold start,
-    # issue 11 target 4), and each row is independent, so any banding gives the same bits.
-    nh = cover.shape[0]
-    n_bands = (nh + _BAND - 1) // _BAND
-    for b in numba.prange(n_bands):
-        _shade_rows(
-            b * _BAND,
-            min(nh, (b + 1) * _BAND),
-            cover,
-            mesh_id,
-            row_start,
-            normal,
-            normal_tab,
-            position,
-            m_ambient,
-            m_diffuse,
-            m_specular,
-            spec_on,
-            shininess,
-            light_kind,
-            light_vec,
-            light_unit,
-            light_color,
-            eye,
-            steps,
-            strength,
-            facing_fade,
-            facing_power,
-            dark,
-            bright,
-            specular,
-            spec_const,
-            src,
-            t_const,
-            t_tab,
-            w_tab,
-            uv,
-            duv_dx,
-            duv_dy,
-            dyadic,
-            has_grad,
-            has_channel,
-            uv_scale,
-            log2_sv,
-            dir_sin,
-            dir_cos,
-            dir_zero,
-            log2_w,
-            multiscale,
-            uniform,
-            offsets,
-            noise_tab,
-            lam_bp,
-            lev_bp,
-            n_sub,
-            stipple_seed,
-            jitter,
-            cdf,
-            out,
-        )

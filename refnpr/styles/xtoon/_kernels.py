@@ -17,10 +17,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from refnpr._jit import njit, pnjit
+from refnpr._jit import banded, njit
 
 #: ``detail_kind`` codes of :func:`shade_xtoon` (D computed in the kernel).
 DETAIL_DEPTH_AXIS = 0  # sec. 3.1 LOA, z = the G-buffer depth (Fig. 2b)
@@ -52,8 +51,10 @@ def _srgb_to_linear(x):
     return ((x + 0.055) / 1.055) ** 2.4
 
 
-@pnjit
+@banded("mesh_id")
 def shade_xtoon(
+    lo,
+    hi,
     mesh_id,
     normal,
     depth,
@@ -99,7 +100,7 @@ def shade_xtoon(
     cols = texture.shape[1]
     j_top = max(cols - 2, 0)
     i_top = max(rows - 2, 0)
-    for y in numba.prange(nh):
+    for y in range(lo, hi):
         k = offsets[y] if given else 0
         bad_rows[y] = 0
         for x in range(nw):
