@@ -155,11 +155,11 @@ def _floor_fill():
     written once): what writing the G-buffer's bytes costs on this machine, nothing computed."""
     global _FLOOR_KERNEL
     if _FLOOR_KERNEL is None:
+        import numba
         from numba import prange
 
-        from refnpr._jit import pnjit
-
-        @pnjit
+        # numba's own prange (not refnpr's banded kernels): the fastest parallel fill there is
+        @numba.njit(parallel=True, cache=True, nogil=True)
         def fill(depth, tri_id, uv, duv_dx, duv_dy, normal, v):
             for y in prange(depth.shape[0]):
                 for x in range(depth.shape[1]):
