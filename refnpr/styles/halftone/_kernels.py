@@ -123,11 +123,11 @@ def _filtered(texels, offsets, shapes, u, v, lod, probes, ax, ay, c):
 def _level_filtered(texels, offsets, shapes, k, u, v, probes, ax, ay):
     """``screens.sample_screen_levels``' sample of level k (mean of the probes)."""
     if probes == 0:
-        return _level(texels, offsets, shapes, k, u, v, 0)
+        return _level(texels, offsets, shapes, k, u, v, np.int64(0))
     acc = 0.0
     for j in range(probes):
         t = (j + 0.5) / probes - 0.5
-        acc = acc + _level(texels, offsets, shapes, k, u + ax * t, v + ay * t, 0)
+        acc = acc + _level(texels, offsets, shapes, k, u + ax * t, v + ay * t, np.int64(0))
     return acc / probes
 
 
@@ -232,6 +232,11 @@ def shade_object(
     (SHOW_COLOR); raw (nH, nW, 3) float64: the raw value or normal-map RGB otherwise.
     """
     nh, nw = mesh_id.shape
+    # channel indices as int64 values, not literals: the samplers compile once, not once per
+    # literal channel (four specialisations each; cold start, issue 11)
+    ch0 = np.int64(0)
+    ch1 = np.int64(1)
+    ch2 = np.int64(2)
     n_lights = light_kind.shape[0]
     cols = np.float64(shapes[0, 1])
     rows = np.float64(shapes[0, 0])
@@ -302,7 +307,7 @@ def shade_object(
                     axv = cdyv
             lod = lod + lod_offset
             if show == SHOW_SCREEN:
-                s = _filtered(texels, offsets, shapes, cu, cv, lod, probes, axu, axv, 0)
+                s = _filtered(texels, offsets, shapes, cu, cv, lod, probes, axu, axv, ch0)
                 raw[y, x, 0] = s
                 raw[y, x, 1] = s
                 raw[y, x, 2] = s
@@ -366,9 +371,9 @@ def shade_object(
                     btx = bty = btz = 0.0
                 valid = ok and t_len > 1e-30 and b_len > 1e-30
                 if valid:
-                    mx = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, 0)
-                    my = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, 1)
-                    mz = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, 2)
+                    mx = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch0)
+                    my = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch1)
+                    mz = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch2)
                     mx, my, mz = _unit(2.0 * mx - 1.0, 2.0 * my - 1.0, 2.0 * mz - 1.0)
             vx = vy = vz = 0.0
             need_pos = specular
@@ -461,7 +466,7 @@ def shade_object(
                 raw[y, x, 2] = inten
                 continue
             if not per_level:  # sec. 3: threshold the screen sampled at (uv, LOD)
-                s = _filtered(texels, offsets, shapes, cu, cv, lod, probes, axu, axv, 0)
+                s = _filtered(texels, offsets, shapes, cu, cv, lod, probes, axu, axv, ch0)
                 value = _threshold(s, inten, mode, c, top)
             else:  # level_weights, then a threshold per level blended with the weight
                 n_lv = offsets.shape[0]
