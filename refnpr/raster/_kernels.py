@@ -19,9 +19,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
-from refnpr._jit import banded, njit, pnjit
+from refnpr._jit import banded, njit
 
 # Clip planes as (a, b, c, d): inside where a x + b y + c z + d w >= 0. Guard band G fills d for x, y.
 # Order: near, far, left, right, bottom, top.
@@ -54,13 +53,12 @@ def _snap(x, w, half_w, half_h, out, k):
 
 
 @njit
-def _signed_area(c):
-    """Twice the signed area of snapped (X0, Y0, X1, Y1, X2, Y2), screen y down (int64)."""
-    x0 = np.int64(c[0])
-    y0 = np.int64(c[1])
-    return (np.int64(c[2]) - x0) * (np.int64(c[5]) - y0) - (np.int64(c[3]) - y0) * (
-        np.int64(c[4]) - x0
-    )
+def _signed_area(c0, c1, c2, c3, c4, c5):
+    """Twice the signed area of snapped (X0, Y0, X1, Y1, X2, Y2) = (c0, ..., c5), screen y down
+    (int64). Scalars, not a row: see the note above ``bin_fill``."""
+    x0 = np.int64(c0)
+    y0 = np.int64(c1)
+    return (np.int64(c2) - x0) * (np.int64(c5) - y0) - (np.int64(c3) - y0) * (np.int64(c4) - x0)
 
 
 @njit
@@ -134,17 +132,15 @@ def _keep(area, cull):
 
 
 @njit
-def _lam_rows(c0, c1, c2, nw, nh):
+def _lam_rows(x0, y0, w0, x1, y1, w1, x2, y2, w2, nw, nh):
     """M^-1 S for M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]] (clip x, y, w of the exact vertices).
 
     Row i maps sample indices (sx, sy, 1) to lambda'_i = b_i / w. (ndc_x, ndc_y, 1) = S (sx, sy, 1)
     with ndc_x = 2 sx / nW + (1/nW - 1) and ndc_y = -2 sy / nH + (1 - 1/nH) (sample centres, row 0
     at the top). Returns (det, 9 coefficients row-major); det == 0 means the triangle's plane
-    passes through the eye.
+    passes through the eye. Scalars (x, y, w of each vertex), not rows: see the note above
+    ``bin_fill``.
     """
-    x0, x1, x2 = c0[0], c1[0], c2[0]
-    y0, y1, y2 = c0[1], c1[1], c2[1]
-    w0, w1, w2 = c0[3], c1[3], c2[3]
     a00 = y1 * w2 - y2 * w1
     a01 = x2 * w1 - x1 * w2
     a02 = x1 * y2 - x2 * y1
@@ -255,24 +251,43 @@ def setup_triangles(
                 continue  # all three vertices outside one plane
             clipped = (o0 | o1 | o2) != 0
             sx0 = sx1 = sy0 = sy1 = 0
-            if not clipped:
-                row = coords[t]
-                row[0] = snapped[i0, 0]
-                row[1] = snapped[i0, 1]
-                row[2] = snapped[i1, 0]
-                row[3] = snapped[i1, 1]
-                row[4] = snapped[i2, 0]
-                row[5] = snapped[i2, 1]
-                area = _signed_area(row)
+            if not clipped:  # scalars, not row views: see the note above bin_fill
+                c0 = snapped[i0, 0]
+                c1 = snapped[i0, 1]
+                c2 = snapped[i1, 0]
+                c3 = snapped[i1, 1]
+                c4 = snapped[i2, 0]
+                c5 = snapped[i2, 1]
+                coords[t, 0] = c0
+                coords[t, 1] = c1
+                coords[t, 2] = c2
+                coords[t, 3] = c3
+                coords[t, 4] = c4
+                coords[t, 5] = c5
+                area = _signed_area(c0, c1, c2, c3, c4, c5)
                 if not _keep(area, cull):
                     continue
                 if area < 0:  # canonical orientation: interior where all edge functions >= 0
-                    row[2], row[3], row[4], row[5] = row[4], row[5], row[2], row[3]
-                sx0, sx1, sy0, sy1 = _sample_bbox(row, n, nw, nh)
+                    c2, c3, c4, c5 = c4, c5, c2, c3
+                    coords[t, 2] = c2
+                    coords[t, 3] = c3
+                    coords[t, 4] = c4
+                    coords[t, 5] = c5
+                sx0, sx1, sy0, sy1 = _sample_bbox(c0, c1, c2, c3, c4, c5, n, nw, nh)
                 if sx0 > sx1 or sy0 > sy1:
                     continue  # covers no sample centre
             det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(
-                clip[i0], clip[i1], clip[i2], nw, nh
+                clip[i0, 0],
+                clip[i0, 1],
+                clip[i0, 3],
+                clip[i1, 0],
+                clip[i1, 1],
+                clip[i1, 3],
+                clip[i2, 0],
+                clip[i2, 1],
+                clip[i2, 3],
+                nw,
+                nh,
             )
             if det == 0.0 or not math.isfinite(det):
                 continue  # the triangle's plane passes through the eye: it projects to a line
@@ -287,7 +302,9 @@ def setup_triangles(
             bbox[t, 1] = sx1
             bbox[t, 2] = sy0
             bbox[t, 3] = sy1
-            _count_tiles(sx0, sx1, sy0, sy1, shift, tiles_x, counts[c])
+            for ty in range(sy0 >> shift, (sy1 >> shift) + 1):  # as _count_tiles, inline
+                for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
+                    counts[c, ty * tiles_x + tx] += 1
 
 
 @njit
@@ -318,7 +335,22 @@ def lam_for_marked(lo, hi, clip, faces, mark, n, width, height, lam):
     for t in range(lo, hi):
         if mark[t] == 0:
             continue
-        r = _lam_rows(clip[faces[t, 0]], clip[faces[t, 1]], clip[faces[t, 2]], nw, nh)
+        i0 = faces[t, 0]
+        i1 = faces[t, 1]
+        i2 = faces[t, 2]
+        r = _lam_rows(
+            clip[i0, 0],
+            clip[i0, 1],
+            clip[i0, 3],
+            clip[i1, 0],
+            clip[i1, 1],
+            clip[i1, 3],
+            clip[i2, 0],
+            clip[i2, 1],
+            clip[i2, 3],
+            nw,
+            nh,
+        )
         lam[t, 0, 0] = r[1]
         lam[t, 0, 1] = r[2]
         lam[t, 0, 2] = r[3]
@@ -366,12 +398,12 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, n, max_out):
             c[3] = pts[2 * j + 1]
             c[4] = pts[2 * j + 2]
             c[5] = pts[2 * j + 3]
-            area = _signed_area(c)
+            area = _signed_area(c[0], c[1], c[2], c[3], c[4], c[5])
             if not _keep(area, cull):
                 continue
             if area < 0:
                 c[2], c[3], c[4], c[5] = pts[2 * j + 2], pts[2 * j + 3], pts[2 * j], pts[2 * j + 1]
-            sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
+            sx0, sx1, sy0, sy1 = _sample_bbox(c[0], c[1], c[2], c[3], c[4], c[5], n, nw, nh)
             if sx0 > sx1 or sy0 > sy1:
                 continue
             for q in range(6):
@@ -387,16 +419,17 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, n, max_out):
 
 
 @njit
-def _sample_bbox(c, n, nw, nh):
-    """Inclusive sample-index bounding box of snapped coords (1/256 px) on the n-times grid.
+def _sample_bbox(c0, c1, c2, c3, c4, c5, n, nw, nh):
+    """Inclusive sample-index bounding box of snapped coords (c0, ..., c5) = (X0, Y0, ..., Y2)
+    (1/256 px) on the n-times grid.
 
     In units of 1/(512 n) px a snapped coordinate X is 2 n X and sample s has its centre at
     512 s + 256, so the first sample right of xmin is ceil((xmin - 256) / 512) (shifts floor).
     """
-    xmin = np.int64(min(c[0], min(c[2], c[4]))) * 2 * n
-    xmax = np.int64(max(c[0], max(c[2], c[4]))) * 2 * n
-    ymin = np.int64(min(c[1], min(c[3], c[5]))) * 2 * n
-    ymax = np.int64(max(c[1], max(c[3], c[5]))) * 2 * n
+    xmin = np.int64(min(c0, min(c2, c4))) * 2 * n
+    xmax = np.int64(max(c0, max(c2, c4))) * 2 * n
+    ymin = np.int64(min(c1, min(c3, c5))) * 2 * n
+    ymax = np.int64(max(c1, max(c3, c5))) * 2 * n
     sx0 = max(-((256 - xmin) >> 9), 0)
     sx1 = min((xmax - 256) >> 9, nw - 1)
     sy0 = max(-((256 - ymin) >> 9), 0)
@@ -404,21 +437,21 @@ def _sample_bbox(c, n, nw, nh):
     return sx0, sx1, sy0, sy1
 
 
-@njit
-def _prim(ref, coords, sub):
-    """Row of a per-primitive array: ref < M is a whole triangle's row, else a clipped piece's."""
-    m = coords.shape[0]
-    if ref < m:
-        return coords[ref]
-    return sub[ref - m]
+# The per-primitive rows (a whole triangle's row t < M of coords / bbox, else a clipped piece's
+# row t - M of sub / sub_bbox) are read as scalars in the loops themselves: a row view, or an
+# array passed to a helper (inlined or not), updates the array's reference count (atomically, on
+# a cache line the threads share), which in the binning and visibility loops cost 2-4x the loops'
+# own work (benchmarks/README.md, cold start).
 
 
-@pnjit
-def bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, offsets, lists):
+@banded("offsets")
+def bin_fill(
+    c_lo, c_hi, status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, offsets, lists
+):
     """Write primitive references into per-tile lists (same traversal as bin_count), so every
     tile's list is in increasing triangle order whatever the thread count."""
     m = status.shape[0]
-    for c in prange(offsets.shape[0]):
+    for c in range(c_lo, c_hi):
         lo = c * chunk
         hi = min(m, lo + chunk)
         cur = np.searchsorted(todo, lo)
@@ -433,8 +466,12 @@ def bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, off
                 first, last = m + sub_first[cur], m + sub_first[cur + 1]
                 cur += 1
             for ref in range(first, last):
-                b = _prim(ref, bbox, sub_bbox)
-                sx0, sx1, sy0, sy1 = b[0], b[1], b[2], b[3]
+                if ref < m:
+                    sx0, sx1, sy0, sy1 = bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3]
+                else:
+                    r = ref - m
+                    sx0, sx1 = sub_bbox[r, 0], sub_bbox[r, 1]
+                    sy0, sy1 = sub_bbox[r, 2], sub_bbox[r, 3]
                 for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
                     for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
                         k = ty * tiles_x + tx
@@ -443,13 +480,14 @@ def bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, off
 
 
 @njit
-def _edge_setup(c, n, ia, ib):
-    """Edge a->b of the canonical (area > 0) triangle: E(sx, sy) = A sx + B sy + C (int64), with
-    the top-left bias folded into C so that a sample is inside where E >= 0 for all three edges."""
-    ax = np.int64(c[2 * ia]) * 2 * n
-    ay = np.int64(c[2 * ia + 1]) * 2 * n
-    bx = np.int64(c[2 * ib]) * 2 * n
-    by = np.int64(c[2 * ib + 1]) * 2 * n
+def _edge_setup(xa, ya, xb, yb, n):
+    """Edge a->b of the canonical (area > 0) triangle, vertices in 1/256 px: E(sx, sy) = A sx +
+    B sy + C (int64), with the top-left bias folded into C so that a sample is inside where
+    E >= 0 for all three edges."""
+    ax = np.int64(xa) * 2 * n
+    ay = np.int64(ya) * 2 * n
+    bx = np.int64(xb) * 2 * n
+    by = np.int64(yb) * 2 * n
     dx = bx - ax
     dy = by - ay
     # Top-left rule for y-down screens with the interior where E > 0: left edges go up
@@ -469,21 +507,17 @@ def _tile_rect(k, tiles_x, tile, nw, nh):
 
 
 @njit
-def _prim_in_tile(ref, coords, bbox, sub, sub_bbox, sub_parent, n, x0, y0, x1, y1):
-    """Parent triangle, sample range clipped to the tile, and the three edge functions of a
-    primitive reference (whole triangle if ref < M, else a clipped piece)."""
-    m = coords.shape[0]
-    t = ref if ref < m else sub_parent[ref - m]
-    c = _prim(ref, coords, sub)
-    b = _prim(ref, bbox, sub_bbox)
-    sx0 = max(np.int64(b[0]), x0)
-    sx1 = min(np.int64(b[1]), x1 - 1)
-    sy0 = max(np.int64(b[2]), y0)
-    sy1 = min(np.int64(b[3]), y1 - 1)
-    A0, B0, C0 = _edge_setup(c, n, 1, 2)
-    A1, B1, C1 = _edge_setup(c, n, 2, 0)
-    A2, B2, C2 = _edge_setup(c, n, 0, 1)
-    return t, sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2
+def _prim_in_tile(c0, c1, c2, c3, c4, c5, bx0, bx1, by0, by1, n, x0, y0, x1, y1):
+    """Sample range clipped to the tile and the three edge functions of a primitive: vertices
+    (c0, c1), (c2, c3), (c4, c5) in 1/256 px, bbox (bx0, bx1, by0, by1) its sample range."""
+    sx0 = max(np.int64(bx0), x0)
+    sx1 = min(np.int64(bx1), x1 - 1)
+    sy0 = max(np.int64(by0), y0)
+    sy1 = min(np.int64(by1), y1 - 1)
+    A0, B0, C0 = _edge_setup(c2, c3, c4, c5, n)  # edge 1 -> 2
+    A1, B1, C1 = _edge_setup(c4, c5, c0, c1, n)  # edge 2 -> 0
+    A2, B2, C2 = _edge_setup(c0, c1, c2, c3, n)  # edge 0 -> 1
+    return sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2
 
 
 def _tiles(coords, bbox, sub, sub_bbox, sub_parent, qplane, q_lo, q_hi, tile_first, *_):
@@ -491,8 +525,10 @@ def _tiles(coords, bbox, sub, sub_bbox, sub_parent, qplane, q_lo, q_hi, tile_fir
     return tile_first.shape[0] - 1
 
 
-@pnjit
+@banded(_tiles)
 def raster_visibility(
+    lo,
+    hi,
     coords,
     bbox,
     sub,
@@ -520,13 +556,33 @@ def raster_visibility(
     depth (nH, nW) float32, or shape (0, 0): also w = 1 / Q of the winner (+inf where empty),
     the value ``interp_depth`` computes from the same plane (so bit-identical), without its
     second pass over the samples."""
-    for k in prange(tile_first.shape[0] - 1):
+    m = coords.shape[0]
+    for k in range(lo, hi):
         x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
         qbuf = np.full((y1 - y0, x1 - x0), -np.inf)
         ibuf = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
         for e in range(tile_first[k], tile_first[k + 1]):
-            t, sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
-                tile_lists[e], coords, bbox, sub, sub_bbox, sub_parent, n, x0, y0, x1, y1
+            ref = tile_lists[e]
+            if ref < m:  # scalars, not row views (see bin_fill)
+                t = ref
+                c0, c1, c2 = coords[ref, 0], coords[ref, 1], coords[ref, 2]
+                c3, c4, c5 = coords[ref, 3], coords[ref, 4], coords[ref, 5]
+                bx0, bx1, by0, by1 = bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3]
+            else:
+                r = ref - m
+                t = sub_parent[r]
+                c0, c1, c2, c3, c4, c5 = (
+                    sub[r, 0],
+                    sub[r, 1],
+                    sub[r, 2],
+                    sub[r, 3],
+                    sub[r, 4],
+                    sub[r, 5],
+                )
+                bx0, bx1 = sub_bbox[r, 0], sub_bbox[r, 1]
+                by0, by1 = sub_bbox[r, 2], sub_bbox[r, 3]
+            sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
+                c0, c1, c2, c3, c4, c5, bx0, bx1, by0, by1, n, x0, y0, x1, y1
             )
             qa = qplane[t, 0]
             qb = qplane[t, 1]
@@ -581,11 +637,31 @@ def raster_count(
 ):
     """Debug: count[sy, sx] = how many primitives claim each sample: the coverage rule and the
     per-sample near/far clip of ``raster_visibility``, without the depth test between them."""
+    m = coords.shape[0]
     for k in range(lo, hi):
         x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
         for e in range(tile_first[k], tile_first[k + 1]):
-            t, sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
-                tile_lists[e], coords, bbox, sub, sub_bbox, sub_parent, n, x0, y0, x1, y1
+            ref = tile_lists[e]
+            if ref < m:  # scalars, not row views (see bin_fill)
+                t = ref
+                c0, c1, c2 = coords[ref, 0], coords[ref, 1], coords[ref, 2]
+                c3, c4, c5 = coords[ref, 3], coords[ref, 4], coords[ref, 5]
+                bx0, bx1, by0, by1 = bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3]
+            else:
+                r = ref - m
+                t = sub_parent[r]
+                c0, c1, c2, c3, c4, c5 = (
+                    sub[r, 0],
+                    sub[r, 1],
+                    sub[r, 2],
+                    sub[r, 3],
+                    sub[r, 4],
+                    sub[r, 5],
+                )
+                bx0, bx1 = sub_bbox[r, 0], sub_bbox[r, 1]
+                by0, by1 = sub_bbox[r, 2], sub_bbox[r, 3]
+            sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
+                c0, c1, c2, c3, c4, c5, bx0, bx1, by0, by1, n, x0, y0, x1, y1
             )
             for sy in range(sy0, sy1 + 1):
                 for sx in range(sx0, sx1 + 1):
