@@ -1,8 +1,7 @@
 """The one place that owns refnpr's numba flags.
 
-Every numba kernel in refnpr is decorated with :func:`njit`, :func:`banded` or :func:`pnjit` from this
-module, so
-the reference path is compiled the same way everywhere: ``fastmath`` off (IEEE semantics, no
+Every numba kernel in refnpr is decorated with :func:`njit`, :func:`banded` or :func:`pnjit`
+from this module, so the reference path is compiled the same way everywhere: ``fastmath`` off (IEEE semantics, no
 reassociation, so results do not depend on vector width), ``cache=True`` (a warm start does not
 recompile), ``error_model="numpy"`` (division by zero gives inf/nan instead of raising inside a
 kernel; public functions validate their inputs so that this never reaches an image).
@@ -114,12 +113,14 @@ def njit(func=None, **overrides):
 def pnjit(func=None, **overrides):
     """Parallel numba kernel (``prange``) with refnpr's flags.
 
-    For the few kernels whose ``prange`` build runs measurably faster than the :func:`banded`
-    one (numba's parallel lowering generates better code for some loops: raster visibility and
-    tile binning 2-3x, the TAMISS strip raster and halftone shading ~1.3x, all measured in
-    benchmarks/README.md). Everywhere else use :func:`banded`: the parallel lowering compiles a
-    loop about twice over (the function and its gufunc), which doubled refnpr's cold start.
-    ``tests/test_jit_banded.py`` holds the list of kernels allowed to use it.
+    Only for the kernels whose ``prange`` build runs measurably faster than the :func:`banded`
+    one: halftone shading and the TAMISS strip raster, ~1.3x (benchmarks/README.md, cold start).
+    Everywhere else use :func:`banded`: the parallel lowering compiles a loop about twice over
+    (the function and its gufunc), which doubled refnpr's cold start. Before moving a kernel
+    here, look for row views in its loops: the rasterizer's visibility and binning loops were
+    2-3x faster under ``prange`` only because of their views' reference counting, and banded
+    with scalar reads they beat their ``prange`` build. ``tests/test_jit_banded.py`` holds the
+    list of kernels allowed to use it.
     """
     flags = {**JIT_FLAGS, "parallel": True, **overrides}
     if func is None:
@@ -221,8 +222,9 @@ def banded(count, parts=None, **overrides):
     loop runs over (``@banded("out")``); the decorated function takes ``lo, hi`` first and runs
     ``for i in range(lo, hi)`` where a ``prange`` kernel loops over ``range(n)``. ``parts``:
     a fixed number of bands (default: the numba thread count). Compiles in about half the time
-    of the ``prange`` form (no parallel lowering) and runs as fast: numba's default schedule
-    splits a ``prange`` loop into one contiguous band per thread too.
+    of the ``prange`` form (no parallel lowering) and, measured on refnpr's kernels, runs as fast
+    (numba's default schedule splits a ``prange`` loop into one contiguous band per thread too)
+    provided the loop reads no row views: read rows as scalars (``refnpr/raster/_kernels.py``).
 
     Example::
 
