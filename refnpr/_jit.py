@@ -214,17 +214,18 @@ class Banded:
         return f"<banded kernel {self.__module__}.{self.__qualname__}>"
 
 
-def banded(count, parts=None, **overrides):
+def banded(count):
     """Decorator: a parallel kernel as a serial :func:`njit` body over bands of its loop.
 
     ``count(*args) -> int`` gives the length ``n`` of the parallel loop from the kernel's
     arguments (without ``lo, hi``), or is the name of an array argument whose first axis the
     loop runs over (``@banded("out")``); the decorated function takes ``lo, hi`` first and runs
-    ``for i in range(lo, hi)`` where a ``prange`` kernel loops over ``range(n)``. ``parts``:
-    a fixed number of bands (default: the numba thread count). Compiles in about half the time
-    of the ``prange`` form (no parallel lowering) and, measured on refnpr's kernels, runs as fast
-    (numba's default schedule splits a ``prange`` loop into one contiguous band per thread too)
-    provided the loop reads no row views: read rows as scalars (``refnpr/raster/_kernels.py``).
+    ``for i in range(lo, hi)`` where a ``prange`` kernel loops over ``range(n)``, one band per
+    numba thread (``Banded(body, count, parts)`` fixes the number of bands). Compiles in about
+    half the time of the ``prange`` form (no parallel lowering) and, measured on refnpr's
+    kernels, runs as fast (numba's default schedule splits a ``prange`` loop into one contiguous
+    band per thread too) provided the loop reads no row views: read rows as scalars
+    (``refnpr/raster/_kernels.py``).
 
     Example::
 
@@ -235,16 +236,16 @@ def banded(count, parts=None, **overrides):
     """
 
     def deco(func):
+        length = count
         if isinstance(count, str):  # the rows of an array argument
             names = func.__code__.co_varnames[2 : func.__code__.co_argcount]
             if count not in names:
                 raise TypeError(f"banded({count!r}): {func.__qualname__} has no argument {count!r}")
             index = names.index(count)
 
-            def rows(*args, _i=index):
+            def length(*args, _i=index):
                 return args[_i].shape[0]
 
-            return Banded(njit(func, **overrides), rows, parts)
-        return Banded(njit(func, **overrides), count, parts)
+        return Banded(njit(func), length)
 
     return deco
