@@ -16,6 +16,8 @@ import re
 import subprocess
 import sys
 import threading
+import time
+from contextlib import contextmanager
 
 import numba
 import numpy as np
@@ -23,7 +25,18 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from refnpr._jit import Banded, band_bounds, banded, njit, run_bands
+from refnpr._jit import BANDS_PER_THREAD, Banded, band_bounds, banded, njit, run_bands
+
+
+@contextmanager
+def _threads(k):
+    saved = numba.get_num_threads()
+    numba.set_num_threads(k)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(saved)
+
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -94,6 +107,40 @@ def test_bands_run_concurrently_on_threads():
     run_bands(body, 10, (), parts=2)
     assert sorted(s[:2] for s in seen) == [(0, 5), (5, 10)]
     assert len({s[2] for s in seen}) == 2
+
+
+def test_threads_take_bands_in_turn():
+    """Dynamic scheduling: while one thread is held up in a slow band, the other takes all the
+    rest, so a busy part of an image does not leave a thread idle."""
+    ran = []
+
+    def body(lo, hi):
+        if lo == 0:
+            time.sleep(0.3)
+        ran.append((lo, threading.current_thread().name))
+
+    run_bands(body, 80, (), parts=8)
+    assert sorted(lo for lo, _ in ran) == [0, 10, 20, 30, 40, 50, 60, 70]
+    slow = next(name for lo, name in ran if lo == 0)
+    assert [lo for lo, name in ran if name == slow] == [0]
+    assert len({name for _, name in ran}) == 2
+
+
+def test_default_banding_is_several_bands_per_thread():
+    seen = []
+
+    def body(lo, hi):
+        seen.append((lo, hi))
+
+    k = numba.config.NUMBA_NUM_THREADS  # every thread this process may use
+    with _threads(k):
+        run_bands(body, 1000, ())
+    bands = k * BANDS_PER_THREAD if k > 1 else 1
+    assert sorted(seen) == band_bounds(1000, bands)
+    with _threads(1):
+        seen.clear()
+        run_bands(body, 1000, ())
+    assert seen == [(0, 1000)]
 
 
 def test_error_in_a_band_after_all_bands_finish():
