@@ -202,6 +202,8 @@ def run_bands(body, n: int, args: tuple, parts: int | None = None) -> None:
                 return
 
     pool = _pool()
+    # pool threads besides the caller: one per further numba thread, and at least one where
+    # the caller asked for several bands on one thread (``parts``), as before
     helpers = min(len(bounds), max(threads, 2)) - 1
     futures = [pool.submit(work) for _ in range(helpers)]
     work()
