@@ -11,7 +11,9 @@ literature it captures.
 * :func:`measure` -- render a sequence of still scenes and measure every pair
   (:class:`CoherenceReport`: rows, summary, JSON, plot);
 * :func:`stroke_ends`, :func:`stroke_pair_metrics`, :func:`measure_strokes` -- stroke styles
-  (TAMISS): endpoint jitter after removing the true motion, strokes appearing and vanishing.
+  (TAMISS): endpoint jitter after removing the true motion, strokes appearing and vanishing;
+* :func:`ink_floor`, :func:`carry_strips` -- a stroke image's E / D against its floor, the same
+  strokes carried exactly by the surface motion.
 """
 
 from __future__ import annotations
@@ -25,6 +27,10 @@ from typing import Any
 _EXPORTS = {
     "measure": "driver",
     "render_frame": "driver",
+    "InkFloor": "floor",
+    "carry_strips": "floor",
+    "ink_floor": "floor",
+    "ink_image": "floor",
     "INK_THRESHOLD": "metrics",
     "LUMA": "metrics",
     "PairMetrics": "metrics",
@@ -72,11 +78,15 @@ __all__ = [
     "STROKE_CHANNELS",
     "STROKE_METRICS",
     "CoherenceReport",
+    "InkFloor",
     "MotionField",
     "PairMetrics",
     "StrokeEnds",
     "StrokePairMetrics",
     "bilinear_taps",
+    "carry_strips",
+    "ink_floor",
+    "ink_image",
     "luminance",
     "measure",
     "measure_strokes",

@@ -1,0 +1,189 @@
+"""The coherence floor of a stroke image: its strokes carried exactly by the surface motion.
+
+E / D of :func:`~refnpr.coherence.pair_metrics` is not 0 for a perfectly coherent sequence: the
+bilinear warp resamples frame t-1, and how much that costs depends on the image (thin dark strokes
+of a pixel lose more to resampling than soft texture-space hatching does). So a stroke style's
+E / D is judged against the E / D of *the same strokes moving exactly with the surface*:
+
+* :func:`carry_strips` moves frame t-1's extruded strokes (TAMISS ``Strips``) to frame t: every
+  vertex through the surface point under it in frame t-1 (the camera ray cut with the triangle
+  plane of its pixel, as :func:`~refnpr.coherence.stroke_pair_metrics` finds the surface under a
+  stroke end), its object's transforms and frame t's camera. Vertices off the surface (a stroke
+  run on past a silhouette) move with the mean motion of their strip's vertices on it; a strip
+  with none stays where it was.
+* :func:`ink_floor` rasterizes the carried strips as frame t-1 was drawn (same coverage
+  sub-samples, brush and opacity) and measures both pairs on ink alone (luminance 1 - ink
+  coverage, box-resolved to pixels, so bases, paper and contours do not enter): ``actual``, frame
+  t's own ink against t-1's, and ``floor``, the carried ink against t-1's. ``floor.ratio`` is the
+  E / D that no remedy of stroke jitter can go below on this image; ``actual.ratio -
+  floor.ratio`` is the part due to the strokes moving other than the surface (refits, popping,
+  ends).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..styles.tamiss.raster import rasterize_strips
+from .metrics import PairMetrics, pair_metrics
+from .motion import MotionField, _check_gbuffer, _relative_transforms
+from .strokes import STROKE_CHANNELS, _surface_points
+
+__all__ = ["InkFloor", "carry_strips", "ink_floor", "ink_image"]
+
+
+@dataclass(frozen=True)
+class InkFloor:
+    """E / D of a stroke frame pair and of its floor (see the module docstring).
+
+    Attributes
+    ----------
+    frame : int
+        t.
+    actual, floor : PairMetrics
+        Frame t's ink, and frame t-1's strokes carried to t, each against frame t-1's ink.
+    """
+
+    frame: int
+    actual: PairMetrics
+    floor: PairMetrics
+
+    @property
+    def excess(self) -> float:
+        """``actual.ratio - floor.ratio``: E / D due to strokes not moving with the surface."""
+        return self.actual.ratio - self.floor.ratio
+
+    def as_dict(self) -> dict:
+        return {
+            "frame": self.frame,
+            "actual": self.actual.as_dict(),
+            "floor": self.floor.as_dict(),
+            "excess": None if np.isnan(self.excess) else float(self.excess),
+        }
+
+
+def ink_image(ink: np.ndarray, n: int) -> np.ndarray:
+    """(H, W, 4) float64 grey image of ink coverage ``ink`` (nH, nW) at n x n samples per
+    pixel: luminance 1 - coverage, box-resolved, alpha 1."""
+    a = np.asarray(ink, dtype=np.float64)
+    if a.ndim != 2 or a.shape[0] % n or a.shape[1] % n:
+        raise ValueError(
+            f"ink: expected an (nH, nW) coverage grid with {n} x {n} samples per pixel, got "
+            f"shape {a.shape}"
+        )
+    h, w = a.shape[0] // n, a.shape[1] // n
+    y = 1.0 - a.reshape(h, n, w, n).mean(axis=(1, 3))
+    return np.stack([y, y, y, np.ones_like(y)], -1)
+
+
+def _carry(points: np.ndarray, prev_gb: Any, scene: Any, prev_scene: Any) -> np.ndarray:
+    """(P, K, 2) pixel coordinates of frame t-1 moved to frame t (see the module docstring)."""
+    flat = points.reshape(-1, 2)
+    p, ids, ok = _surface_points(prev_gb, flat)
+    rel = np.linalg.inv(_relative_transforms(scene, prev_scene))  # world at t-1 -> world at t
+    m = rel[ids]
+    p_now = np.einsum("kij,kj->ki", m[:, :3, :3], p) + m[:, :3, 3]
+    width, height = prev_gb.width, prev_gb.height
+    cam = scene.camera
+    vp = cam.view_projection(width, height)
+    clip = p_now @ vp[:, :3].T + vp[:, 3]
+    w = clip[:, 3]
+    ok &= (w >= cam.near) & (w <= cam.far)
+    ws = np.where(ok, w, 1.0)
+    now = np.stack([(clip[:, 0] / ws + 1) * 0.5 * width, (1 - clip[:, 1] / ws) * 0.5 * height], -1)
+    d = np.where(ok[:, None], now - flat, np.nan).reshape(points.shape)
+    per_strip = d.reshape(points.shape[0], -1, 2)
+    seen = np.isfinite(per_strip[..., 0])
+    count = seen.sum(axis=1)
+    total = np.where(seen[..., None], per_strip, 0.0).sum(axis=1)
+    mean = total / np.maximum(count, 1)[:, None]  # a strip with no vertex on the surface: 0
+    d = np.where(np.isfinite(d), d, mean[:, None, :])
+    return points + d
+
+
+def carry_strips(strips: Any, prev_gb: Any, scene: Any, prev_scene: Any) -> Any:
+    """Frame t-1's extruded strokes moved to frame t along the exact surface motion.
+
+    Parameters
+    ----------
+    strips : refnpr.styles.tamiss.Strips
+        Frame t-1's (``PipelineResult.strips``), vertices in pixels.
+    prev_gb : GBuffer
+        Frame t-1 at spp 1 with :data:`~refnpr.coherence.STROKE_CHANNELS` (float64
+        recommended); its ``camera`` is frame t-1's.
+    scene, prev_scene : Scene
+        The still scenes of t and t-1.
+
+    Returns
+    -------
+    Strips
+        The same strips (ids, widths, t) with moved vertices.
+    """
+    _check_gbuffer("prev_gb", prev_gb, STROKE_CHANNELS)
+    strip = strips.strip
+    left = np.asarray(strip.left, dtype=np.float64)
+    right = np.asarray(strip.right, dtype=np.float64)
+    if left.size == 0:
+        return strips
+    moved = replace(
+        strip,
+        left=_carry(left, prev_gb, scene, prev_scene),
+        right=_carry(right, prev_gb, scene, prev_scene),
+    )
+    return replace(strips, strip=moved)
+
+
+def ink_floor(
+    prev_result: Any,
+    result: Any,
+    prev_gb: Any,
+    scene: Any,
+    prev_scene: Any,
+    motion: MotionField,
+    *,
+    frame: int = 1,
+) -> InkFloor:
+    """E / D of frame t's ink and of its floor, frame t-1's strokes carried exactly.
+
+    Parameters
+    ----------
+    prev_result, result : refnpr.styles.tamiss.PipelineResult
+        Frames t-1 and t (``TamissStyle.run_frame``), on the same sample grid.
+    prev_gb : GBuffer
+        Frame t-1 at spp 1 with :data:`~refnpr.coherence.STROKE_CHANNELS`.
+    scene, prev_scene : Scene
+        The still scenes of t and t-1.
+    motion : MotionField
+        ``motion_field`` of the pair at the image size.
+    frame : int
+        t, recorded in the result.
+
+    Returns
+    -------
+    InkFloor
+    """
+    for name, r in (("prev_result", prev_result), ("result", result)):
+        if not all(hasattr(r, a) for a in ("ink", "strips", "params", "n")):
+            raise TypeError(
+                f"{name}: expected a TAMISS PipelineResult (TamissStyle.run_frame), got "
+                f"{type(r).__name__}"
+            )
+    if np.shape(prev_result.ink) != np.shape(result.ink) or prev_result.n != result.n:
+        raise ValueError(
+            f"result: its ink grid {np.shape(result.ink)} (n={result.n}) differs from "
+            f"prev_result's {np.shape(prev_result.ink)} (n={prev_result.n}); run both frames "
+            "at the same size and spp"
+        )
+    n = int(result.n)
+    p = prev_result.params
+    carried = carry_strips(prev_result.strips, prev_gb, scene, prev_scene)
+    ink, _ = rasterize_strips(
+        carried, np.shape(prev_result.ink), n, aa=p.aa, brush=p.brush, opacity=p.opacity
+    )
+    before = ink_image(prev_result.ink, n)
+    actual = pair_metrics(ink_image(result.ink, n), before, motion, frame=frame)
+    floor = pair_metrics(ink_image(ink, n), before, motion, frame=frame)
+    return InkFloor(int(frame), actual, floor)
