@@ -95,13 +95,16 @@ def test_stroke_ends_bad_input():
         stroke_pair_metrics(e, e, rasterize(sc, None, W, H, ("depth",), 1), sc, sc)
 
 
-def test_tamiss_still_frames_have_no_jitter_and_no_popping():
+@pytest.mark.parametrize("frames, tol", [(1, 1e-6), (4, 1e-4)])
+def test_tamiss_still_frames_have_no_jitter_and_no_popping(frames, tol):
+    """Per-frame fits: the same frame twice draws the same ends. Averaged (the default 4
+    frames): the same sums carried by a zero motion, to the float32 fit's rounding."""
     sc = load_scene("tamiss_sphere")
-    rows = measure_strokes([sc, sc], "tamiss", 96, 72)
+    rows = measure_strokes([sc, sc], {"name": "tamiss", "average_frames": frames}, 96, 72)
     (r,) = rows
     assert r.n_strokes > 20 and r.n_ends > 20
     assert r.appeared == 0 and r.vanished == 0
-    assert r.jitter_max < 1e-6
+    assert r.jitter_max < tol
 
 
 def test_measure_with_strokes_reports_and_plots_them(tmp_path):
@@ -110,8 +113,9 @@ def test_measure_with_strokes_reports_and_plots_them(tmp_path):
     sc = load_scene("tamiss_sphere")
     rep = measure([sc, sc, sc], "tamiss", 64, 48, strokes=True)
     assert [r.frame for r in rep.strokes] == [1, 2]
-    assert all(r.jitter_max < 1e-6 and r.appeared == r.vanished == 0 for r in rep.strokes)
-    assert rep.summary()["jitter_max"]["max"] < 1e-6
+    # the default averages 4 frames: still frames carried by a zero motion, to float32 rounding
+    assert all(r.jitter_max < 1e-4 and r.appeared == r.vanished == 0 for r in rep.strokes)
+    assert rep.summary()["jitter_max"]["max"] < 1e-4
     assert len(rep.as_dict()["strokes"]) == 2
     assert rep.plot(tmp_path / "s.png").stat().st_size > 0
 
@@ -136,7 +140,9 @@ def test_stroke_metrics_follow_the_styles_state_across_frames():
             by_hand.append(stroke_pair_metrics(e, prev[0], prev[1], sc, prev[2], frame=t))
         prev = (e, gb, sc)
     assert [r.as_dict() for r in rows] == [r.as_dict() for r in by_hand]
-    stateless = measure_strokes(stills, get_style("tamiss", directions=["v"], period=4.0), w, h)
+    stateless = measure_strokes(
+        stills, get_style("tamiss", directions=["v"], period=4.0, average_frames=1), w, h
+    )
     assert [r.as_dict() for r in rows] != [r.as_dict() for r in stateless]
     report = measure(stills, style, w, h, strokes=True)
     assert [r.as_dict() for r in report.strokes] == [r.as_dict() for r in rows]

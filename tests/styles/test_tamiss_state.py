@@ -30,6 +30,7 @@ from refnpr.styles.tamiss import (
     run_pipeline,
 )
 from refnpr.styles.tamiss.gather import field_inputs, gather_fragments
+from refnpr.styles.tamiss.motion import stroke_anchors
 from refnpr.styles.tamiss.state import StrokeCoefficients, TamissState, reexpress, smooth_fit
 
 W, H = 96, 72
@@ -86,8 +87,9 @@ def test_a_still_is_frame_0(anim, extra):
     np.testing.assert_array_equal(still, frame0)
 
 
-def test_stateless_defaults_carry_no_state_but_remedies_do():
-    assert TamissStyle().initial_state() is None
+def test_only_remedies_carry_state():
+    assert TamissStyle(average_frames=1).initial_state() is None
+    assert isinstance(TamissStyle().initial_state(), TamissState)  # average_frames=4 default
     for extra in ({"aggregation": "hashed"}, {"smooth": 0.2}, {"average_frames": 2}):
         assert isinstance(TamissStyle(**extra).initial_state(), TamissState)
     assert is_stateful(TamissStyle(smooth=0.2))
@@ -108,7 +110,9 @@ def test_smoothing_averaging_and_hashing_leave_frame_0_as_today(anim):
 
 
 def test_hashed_sequence_equals_a_table_kept_by_hand(anim):
-    style = TamissStyle(**PEN, aggregation="hashed", table_size=4096, warmup_frames=2)
+    style = TamissStyle(
+        **PEN, aggregation="hashed", table_size=4096, warmup_frames=2, average_frames=1
+    )
     p = style.pipeline_params
     got = _frames(style, anim, 3)
     table = StrokeHashTable(p.table_size, max_probes=p.max_probes)
@@ -125,13 +129,16 @@ def test_hashed_sequence_equals_a_table_kept_by_hand(anim):
         assert got[f].aggregates.hash_stats.as_dict() == ref.aggregates.hash_stats.as_dict()
 
 
+@pytest.mark.parametrize("motion", ["none", "exact"])
 @pytest.mark.parametrize("aggregation", ["exact", "hashed"])
-def test_average_frames_equals_a_history_kept_by_hand(anim, aggregation):
-    style = TamissStyle(**PEN, average_frames=3, aggregation=aggregation, table_size=4096)
+def test_average_frames_equals_a_history_kept_by_hand(anim, aggregation, motion):
+    style = TamissStyle(
+        **PEN, average_frames=3, average_motion=motion, aggregation=aggregation, table_size=4096
+    )
     got = _frames(style, anim, 4)
     p = style.pipeline_params
     plain = TamissStyle(**PEN, aggregation=aggregation, table_size=4096).pipeline_params
-    history = AggregateHistory(3)
+    window, anchors = [], []
     table = None
     for f in range(4):
         scene = anim.at(f)
@@ -147,10 +154,15 @@ def test_average_frames_equals_a_history_kept_by_hand(anim, aggregation):
                     agg0 = aggregate_hashed(frags, again, dtype=np.float64)
             else:
                 agg0 = aggregate_exact(ref.fragments, dtype=np.float64)
-            history.push(agg0)
+            window.append(agg0)
+            anchors.append(stroke_anchors(agg0, gb, scene))
             continue
+        moving = {"anchors": anchors, "scene": scene, "size": (W, H)} if motion == "exact" else {}
+        history = AggregateHistory(3, window=window, **moving)
         ref = run_pipeline(gb, scene, p, history=history, table=table)
         np.testing.assert_array_equal(got[f].ink, ref.ink)
+        window = list(history.window[-2:])
+        anchors = (anchors + [stroke_anchors(history.window[-1], gb, scene)])[-2:]
 
 
 @pytest.mark.parametrize(
@@ -327,6 +339,7 @@ def test_gather_scale_views_are_on_the_output_grid(anim, show):
         ({"gather_scale": 64}, ValueError, "gather_scale"),
         ({"average_frames": 0}, ValueError, "average_frames"),
         ({"average_frames": True}, (TypeError, ValueError), "average_frames"),
+        ({"average_motion": "flow"}, ValueError, "average_motion"),
     ],
 )
 def test_remedy_parameter_errors(kwargs, err, match):
@@ -345,7 +358,7 @@ def test_state_errors(anim):
 
 
 def test_remedies_round_trip_through_params():
-    style = TamissStyle(gather_scale=3, average_frames=2, smooth=0.25)
+    style = TamissStyle(gather_scale=3, average_frames=2, average_motion="none", smooth=0.25)
     again = get_style("tamiss", **{k: v for k, v in style.params().items() if k != "base"})
     assert again.pipeline_params == style.pipeline_params
 

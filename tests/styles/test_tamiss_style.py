@@ -26,14 +26,17 @@ def test_requires_only_what_the_field_needs():
     smooth = {"bary", "normal", "position", "dposition_dx", "dposition_dy"}
     assert required_channels(sc, {"name": "tamiss"}) == base | smooth
     flat = {"derivatives": "flat"}
-    assert required_channels(sc, {"name": "tamiss", **flat}) == base | {"normal"}
+    motion = {"position", "dposition_dx", "dposition_dy"}  # average_frames (default 4) carries
+    assert required_channels(sc, {"name": "tamiss", **flat}) == base | {"normal"} | motion
+    one = {"average_frames": 1}
+    assert required_channels(sc, {"name": "tamiss", **flat, **one}) == base | {"normal"}
     assert required_channels(sc, {"name": "tam", "constant_tone": 0.5, **flat}) == base
     assert required_channels(sc, {"name": "tam", "constant_tone": 0.5}) == base | smooth
     point = type(sc)(
         objects=sc.objects, camera=sc.camera, lights=(Light(kind="point", position=(0, 3, 3)),)
     )
     assert "position" in get_style("tamiss", **flat).requires(point)
-    with_base = get_style("tamiss", base={"name": "toon"}, constant_tone=0.3, **flat)
+    with_base = get_style("tamiss", base={"name": "toon"}, constant_tone=0.3, **flat, **one)
     assert with_base.requires(sc) == frozenset(base | get_style("toon").requires(sc))
     assert get_style("tam").raster_options(sc)["dtype"] == np.float64
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass, replace
 from math import comb
+from typing import Any
 
 import numpy as np
 
@@ -35,6 +36,7 @@ from refnpr.formulas.tamiss import N_REGRESSORS, StrokeHashTable, aggregate
 from . import _kernels as K
 from .field import key32
 from .gather import Fragments
+from .motion import transport
 
 __all__ = [
     "Aggregates",
@@ -271,10 +273,25 @@ class AggregateHistory:
     :meth:`push` takes a frame's :class:`Aggregates` and returns the averaged aggregates of the
     strokes of *that* frame (float64): t range and origin are averaged over the frames in the
     window in which the stroke appeared, each frame's sums are :func:`recentre`-d to that averaged
-    normalization and averaged. Averaging lags true motion by about (frames - 1) / 2 frames.
+    normalization and averaged. Averaged as they are (the paper's), the sums lag true motion by
+    about (frames - 1) / 2 frames.
+
+    ``anchors`` (one :class:`~refnpr.styles.tamiss.motion.StrokeAnchors` per window entry) with
+    ``scene`` and ``size`` (the current frame's Scene and (width, height)): before averaging,
+    each earlier frame's sums are moved along the exact surface motion to the current frame
+    (:func:`~refnpr.styles.tamiss.motion.transport`, refnpr's motion compensation); a stroke
+    that cannot be moved from a frame leaves that frame out of its average.
     """
 
-    def __init__(self, frames: int = 4, window: tuple = ()):
+    def __init__(
+        self,
+        frames: int = 4,
+        window: tuple = (),
+        *,
+        anchors: tuple | None = None,
+        scene: Any = None,
+        size: tuple[int, int] | None = None,
+    ):
         if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or frames < 1:
             raise ValueError(f"frames: expected an integer >= 1, got {frames!r}")
         self.frames = int(frames)
@@ -283,6 +300,18 @@ class AggregateHistory:
             if not isinstance(past, Aggregates):
                 raise TypeError(f"window: expected Aggregates, got {type(past).__name__}")
             self._window.append(past.astype(np.float64))
+        self._anchors = None
+        if anchors is not None:
+            anchors = tuple(anchors)
+            if len(anchors) != len(self._window):
+                raise ValueError(
+                    f"anchors: expected one per window entry ({len(self._window)}), got "
+                    f"{len(anchors)}"
+                )
+            if scene is None or size is None:
+                raise ValueError("anchors: give the current frame's scene and size with them")
+            self._anchors = deque(anchors, maxlen=self.frames)
+            self._scene, self._size = scene, (int(size[0]), int(size[1]))
 
     @property
     def window(self) -> tuple:
@@ -291,7 +320,17 @@ class AggregateHistory:
 
     def push(self, agg: Aggregates) -> Aggregates:
         agg = agg.astype(np.float64)
+        past_entries = list(self._window)
+        if self._anchors is not None:
+            moved = []
+            for past, anchor in zip(past_entries, self._anchors, strict=True):
+                m, ok = transport(past, anchor, self._scene, *self._size)
+                moved.append((m, ok))
+        else:
+            moved = [(past, None) for past in past_entries]
         self._window.append(agg)
+        if self._anchors is not None:
+            self._anchors.append(None)  # this frame's anchors: made by the caller, unused here
         ids = agg.stroke_ids
         n = ids.size
         hits = np.zeros(n)
@@ -299,11 +338,14 @@ class AggregateHistory:
         acc_hi = np.zeros(n)
         acc_o = np.zeros((n, 2))
         found = []
-        for past in self._window:
+        entries = moved[max(0, len(moved) - self.frames + 1) :] + [(agg, None)]
+        for past, ok in entries:
             if past.stroke_ids.size == 0:
                 continue
             pos = np.minimum(np.searchsorted(past.stroke_ids, ids), past.stroke_ids.size - 1)
             hit = past.stroke_ids[pos] == ids
+            if ok is not None:
+                hit &= ok[pos]
             acc_lo[hit] += past.t_min[pos[hit]]
             acc_hi[hit] += past.t_max[pos[hit]]
             acc_o[hit] += past.origin[pos[hit]]

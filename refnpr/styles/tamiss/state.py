@@ -151,10 +151,13 @@ class TamissState:
     frame : int, frames shaded before the one this state is for (0: a still / frame 0)
     table : StrokeHashTable or None (hashed aggregation after frame 0)
     window : tuple of Aggregates (float64), the last ``average_frames - 1`` frames' sums
+    anchors : tuple of StrokeAnchors, one per ``window`` entry (``average_motion="exact"``):
+        where that frame's strokes lay on the surface, to move its sums to a later frame
     coefficients : StrokeCoefficients or None (``smooth`` > 0 after frame 0)
     """
 
     frame: int = 0
     table: StrokeHashTable | None = None
     window: tuple = ()
+    anchors: tuple = ()
     coefficients: StrokeCoefficients | None = None

@@ -16,6 +16,7 @@ from refnpr.raster import rasterize
 from ..base import ShadeContext, Style, register
 from .aggregate import AggregateHistory, aggregate_exact
 from .compose import base_style, check_color, composite_ink, field_channels
+from .motion import MOTION_CHANNELS, stroke_anchors
 from .pipeline import PipelineResult, TamissParams, run_pipeline
 from .show import show_layers
 from .state import StrokeCoefficients, TamissState
@@ -58,7 +59,9 @@ class TamissStyle(Style):
     gather_scale : int or None, gather fragments on a grid of gather_scale x gather_scale samples
     per pixel (its own rasterization), independent of spp (None: the G-buffer's samples)
     average_frames : int, average aggregates over this many frames in a sequence (1: off;
-    sec. 4.1's proposal); smooth : float in [0, 1), exponential smoothing of the fitted curves
+    sec. 4.1's proposal); average_motion : 'exact' (default: earlier frames' sums moved along
+    the exact surface motion first, no lag; refnpr's) | 'none' (averaged where they were, the
+    paper's proposal as written: lags (k - 1) / 2 frames); smooth : float in [0, 1), exponential smoothing of the fitted curves
     by stroke id in a sequence (0: off; refnpr's remedy, not the paper's)
 
     Sequences: :meth:`initial_state` / :meth:`shade_frame` carry a
@@ -96,10 +99,17 @@ class TamissStyle(Style):
 
     def requires(self, scene: Any) -> frozenset[str]:
         p = self.pipeline_params
-        req = field_channels(scene, p.constant_tone, p.derivatives)
+        req = field_channels(scene, p.constant_tone, p.derivatives) | self._motion_channels()
         if self.base is not None:
             req |= set(self.base.requires(scene))
         return frozenset(req)
+
+    def _motion_channels(self) -> frozenset[str]:
+        """What motion-compensated averaging reads (none for a still or plain averaging)."""
+        p = self.pipeline_params
+        if p.average_frames > 1 and p.average_motion == "exact":
+            return MOTION_CHANNELS
+        return frozenset()
 
     def raster_options(self, scene: Any) -> dict[str, Any]:
         opts = dict(self.base.raster_options(scene)) if self.base is not None else {}
@@ -115,7 +125,9 @@ class TamissStyle(Style):
         if g is None or g == gb.n:
             return gb
         p = self.pipeline_params
-        channels = sorted(field_channels(ctx.scene, p.constant_tone, p.derivatives))
+        channels = sorted(
+            field_channels(ctx.scene, p.constant_tone, p.derivatives) | self._motion_channels()
+        )
         return rasterize(
             ctx.scene, gb.camera, gb.width, gb.height, channels, g * g, dtype=np.float64
         )
@@ -134,9 +146,12 @@ class TamissStyle(Style):
             return None
         return TamissState()
 
-    def run_frame(self, ctx: ShadeContext, state: TamissState | None) -> tuple[PipelineResult, Any]:
+    def run_frame(
+        self, ctx: ShadeContext, state: TamissState | None, *, next_state: bool = True
+    ) -> tuple[PipelineResult, Any]:
         """The pipeline on one frame of a sequence from ``state`` (not modified) and the state
-        of the next frame (a new object; None when the style carries nothing)."""
+        of the next frame (a new object; None when the style carries nothing, or when
+        ``next_state`` is false: a still, whose next frame never comes, skips making it)."""
         if state is None:
             state = self.initial_state()
             if state is None:
@@ -158,11 +173,27 @@ class TamissStyle(Style):
                     f"max_probes={p.max_probes}; start the sequence from initial_state()"
                 )
             table = copy.deepcopy(state.table)  # routed in place below; the state stays as is
+        gather_gb = self.gather_gbuffer(ctx)
+        moving = p.average_motion == "exact"
+        anchors = tuple(state.anchors) if moving else ()
+        past = tuple(state.window)
+        if moving and len(anchors) != len(past):
+            past, anchors = (), ()  # a window without anchors (plain averaging before): restart
         history = None
-        if p.average_frames > 1 and state.window:
-            history = AggregateHistory(p.average_frames, window=state.window)
+        if p.average_frames > 1 and past:
+            history = AggregateHistory(
+                p.average_frames,
+                window=past,
+                **(
+                    {"anchors": anchors, "scene": ctx.scene, "size": (ctx.gb.width, ctx.gb.height)}
+                    if moving
+                    else {}
+                ),
+            )
         previous = state.coefficients if p.smooth > 0.0 else None
-        result = self.run(ctx, table=table, history=history, previous=previous)
+        result = self.run(ctx, table=table, history=history, previous=previous, gather_gb=gather_gb)
+        if not next_state:
+            return result, None
         window: tuple = ()
         if history is not None:
             window = history.window[1 - p.average_frames :]
@@ -173,10 +204,15 @@ class TamissStyle(Style):
             # fragments, summed in the same order)
             exact = aggregate_exact(result.fragments, dtype=np.float64)
             window = (exact.take(np.isin(exact.stroke_ids, result.stroke_ids)),)
+        new_anchors: tuple = ()
+        if window and moving:
+            here = stroke_anchors(window[-1], gather_gb, ctx.scene)  # this frame's sums
+            new_anchors = (*anchors, here)[-len(window) :]
         new = TamissState(
             frame=state.frame + 1,
             table=result.table if p.aggregation == "hashed" else None,
             window=window,
+            anchors=new_anchors,
             coefficients=StrokeCoefficients.from_fit(result.stroke_ids, result.fit)
             if p.smooth > 0.0
             else None,
@@ -188,7 +224,7 @@ class TamissStyle(Style):
         return self._composite(ctx, result), new
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        return self._composite(ctx, self.run_frame(ctx, self.initial_state())[0])
+        return self._composite(ctx, self.run_frame(ctx, self.initial_state(), next_state=False)[0])
 
     def _composite(self, ctx: ShadeContext, result: PipelineResult) -> np.ndarray:
         if self.pipeline_params.show == "color":
