@@ -25,7 +25,9 @@ done:
 * a **stateful** style (TAMISS hash tables, aggregate history) re-runs from frame 0 of the
   animation up to the last frame still to render, since the state of frame f depends on all
   frames before it; frames before ``A`` are shaded for their state only, and frames already
-  done are not rewritten (a range that is all done is not shaded at all).
+  done are not rewritten (a range that is all done is not shaded at all). A style whose state
+  reaches only K frames back (``Style.state_frames()``, e.g. TAMISS averaging k frames with
+  exact aggregation: K = k) re-runs from K frames before the first frame still to render.
 
 Either way the frames on disk after any number of kills and restarts are byte-identical to an
 uninterrupted run. One run per directory at a time. :mod:`refnpr.distributed` renders the same
@@ -511,13 +513,22 @@ def render_sequence(
             for i, f in enumerate(todo):
                 progress(i + 1, len(todo), f, "skipped")
         return result
-    first = 0 if stateful else todo.start
+    first = todo.start
+    count = 0
+    if stateful:  # from frame 0, or state_frames() before the first frame still to render
+        back = plan.base_style.state_frames()
+        need = min(f for f in todo if not done_flags[f])
+        first = 0 if back is None else max(0, need - back)
+        for f in range(todo.start, min(first, todo.stop)):  # done, and before the state's reach
+            result.skipped.append(f)
+            count += 1
+            if progress is not None:
+                progress(count, len(todo), f, "skipped")
     # a stateful style runs up to the last frame still to render; done frames after it are kept
     stop = max(f for f in todo if not done_flags[f]) + 1 if stateful else todo.stop
     run = range(first, todo.stop)
 
     shader = _Shader(plan, first)
-    count = 0
     for f in run:
         in_range = f in todo
         done = in_range and done_flags[f]

@@ -79,6 +79,13 @@ class Style:
         """The state carried into the first frame of a sequence (None: stateless)."""
         return None
 
+    def state_frames(self) -> int | None:
+        """For a stateful style, how many frames back its state reaches: K when the state at
+        frame f, built by shading frames f - K .. f - 1 from :meth:`initial_state`, equals the
+        state carried from frame 0 (a sequence driver resumes K frames before the first frame
+        it must render); None (the default): the whole history, resume from frame 0."""
+        return None
+
     def shade_frame(self, ctx: ShadeContext, state: Any) -> tuple[np.ndarray, Any]:
         """Shade one frame of a sequence from the previous frame's ``state``.
 

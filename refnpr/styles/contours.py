@@ -266,6 +266,9 @@ class Contoured(Style):
     def initial_state(self) -> Any:
         return self.base.initial_state()
 
+    def state_frames(self) -> int | None:
+        return self.base.state_frames()
+
     def shade_frame(self, ctx: ShadeContext, state: Any) -> tuple[np.ndarray, Any]:
         rgba, state = self.base.shade_frame(ctx, state)
         return self._over(ctx, rgba), state

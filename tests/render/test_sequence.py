@@ -198,6 +198,68 @@ def test_a_stateful_style_runs_from_frame_zero(tmp_path):
     ]
 
 
+class WindowToon(ToonStyle):
+    """A stateful style whose state is the mean red of the last two frames (unshaded by the
+    state), darkening each frame by it, and which says so: ``state_frames() == 2``."""
+
+    def initial_state(self):
+        return ()
+
+    def state_frames(self):
+        return 2
+
+    def shade_frame(self, ctx, state):
+        rgba = np.asarray(self.shade(ctx), dtype=np.float32).copy()
+        mean = float(np.mean(rgba[..., 0]))
+        rgba[..., :3] *= np.float32(1.0 / (1.0 + 4.0 * sum(state)))
+        return rgba, (*state, mean)[-2:]
+
+
+def test_a_style_with_a_short_memory_resumes_that_many_frames_back(tmp_path):
+    path = write_scene(tmp_path)
+    plain = load_scene(path)
+    anim = plain.animation.__class__(
+        plain.animation.frames, plain.animation.fps, plain.animation.tracks[:2]
+    )
+    scene = plain.__class__(**{**plain.__dict__, "animation": anim})
+    style = WindowToon(n=2)
+    out = tmp_path / "frames"
+    render_sequence(scene, style, W, H, 1, out_dir=out)
+    before = {f: (out / f"frame_{f:05d}.png").read_bytes() for f in range(6)}
+    (out / "frame_00004.json").unlink()
+    calls = []
+    again = render_sequence(scene, style, W, H, 1, out_dir=out, progress=lambda *a: calls.append(a))
+    assert again.rendered == [4] and again.skipped == [0, 1, 2, 3, 5]
+    # 0 and 1 are not shaded (before the state's reach), 2 and 3 are, for their state
+    assert [c[2:] for c in calls] == [(f, "skipped") for f in (0, 1, 2, 3)] + [
+        (4, "rendered"),
+        (5, "skipped"),
+    ]
+    assert {f: (out / f"frame_{f:05d}.png").read_bytes() for f in range(6)} == before
+
+
+def test_tamiss_default_resumes_from_its_averaging_window(tmp_path):
+    """The default TAMISS (4 frames averaged, exact aggregation) has state_frames() == 4: a
+    resumed run re-shades the 4 frames before and writes the same bytes as a whole run."""
+    scene = load_scene("tamiss_knot_orbit")
+    style = get_style("tamiss", directions=["v"])
+    assert is_stateful(style) and style.state_frames() == 4
+    assert get_style("tamiss", aggregation="hashed").state_frames() is None
+    assert get_style("tamiss", smooth=0.5, average_frames=1).state_frames() is None
+    out = tmp_path / "knot"
+    render_sequence(scene, style, 64, 48, 1, out_dir=out, frames="0:7")
+    before = (out / "frame_00006.png").read_bytes()
+    (out / "frame_00006.json").unlink()
+    calls = []
+    again = render_sequence(
+        scene, style, 64, 48, 1, out_dir=out, frames="0:7", progress=lambda *a: calls.append(a)
+    )
+    assert again.rendered == [6]
+    assert (out / "frame_00006.png").read_bytes() == before
+    # frames 0 and 1 untouched, 2..5 shaded for the state
+    assert [c[2] for c in calls] == list(range(7))
+
+
 def test_a_style_track_the_chosen_style_lacks_is_an_error_naming_both(tmp_path):
     path = write_scene(tmp_path)
     with pytest.raises(

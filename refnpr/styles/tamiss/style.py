@@ -146,6 +146,16 @@ class TamissStyle(Style):
             return None
         return TamissState()
 
+    def state_frames(self) -> int | None:
+        """``average_frames`` k with exact aggregation and no smoothing: the state at frame f is
+        the sums of frames f - k + 1 .. f - 1, made alike from any start at least k frames
+        before (the first frame of a run starts its window from its drawn strokes only, so
+        one more). None otherwise: the hash table and the smoothed curves carry all history."""
+        p = self.pipeline_params
+        if p.aggregation == "exact" and p.smooth == 0.0 and p.average_frames > 1:
+            return p.average_frames
+        return None
+
     def run_frame(
         self, ctx: ShadeContext, state: TamissState | None, *, next_state: bool = True
     ) -> tuple[PipelineResult, Any]:
