@@ -44,11 +44,15 @@ def test_quick_options_section_writes_every_variant(tmp_path):
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     opts = json.loads(out.read_text())["options"]
-    assert set(opts["sequences"]) == {"tamiss_knot_orbit", "knot_1deg"}
+    assert set(opts["sequences"]) == {"tamiss_knot_orbit", "knot_4deg"}
     for res in opts["sequences"].values():
-        assert {"tam", "default", "smooth=0.5"} <= set(res)
-        assert res["default"]["time_ratio"] == 1.0
+        assert {"tam", "default", "per-frame fits (paper)", "average_frames=4 plain"} <= set(res)
+        assert res["per-frame fits (paper)"]["time_ratio"] == 1.0
         for label, v in res.items():
             assert v["E"] > 0 and v["E_over_D"] > 0 and v["frame_s_interleaved"] > 0
             assert ("jitter_mean_px" in v) == (label != "tam")
+            if label != "tam":  # the ink and its floor of exactly carried strokes
+                assert v["floor_E_over_D"] > 0 and v["ink_E_over_D"] > 0
+        # plain averaging lags the surface, averaging along the motion does not
+        assert res["average_frames=4 plain"]["lag_px"] > 2 * abs(res["default"]["lag_px"])
     assert "TAMISS jitter options" in proc.stdout
