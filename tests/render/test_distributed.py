@@ -23,7 +23,7 @@ from refnpr.scenes import load_scene  # noqa: E402
 from refnpr.sequence import render_sequence  # noqa: E402
 from refnpr.styles.toon import ToonStyle  # noqa: E402
 
-from .test_sequence import SCENE_TOML, CountingToon  # noqa: E402
+from .test_sequence import SCENE_TOML, CountingToon, WindowToon  # noqa: E402
 
 W, H = 40, 30
 
@@ -112,20 +112,6 @@ def test_mixed_serial_and_distributed_resume(client, tmp_path):
     assert files(out) == files(tmp_path / "full")
     again = render_sequence(path, None, W, H, 1, out_dir=out)  # serial accepts them all
     assert again.rendered == [] and again.skipped == list(range(8))
-
-
-class WindowToon(ToonStyle):
-    """A stateful style whose state is the mean red of the last two frames (unshaded by the
-    state), and which darkens each frame by it: its state depends on the last 2 frames only."""
-
-    def initial_state(self):
-        return ()
-
-    def shade_frame(self, ctx, state):
-        rgba = np.asarray(self.shade(ctx), dtype=np.float32).copy()
-        mean = float(np.mean(rgba[..., 0]))
-        rgba[..., :3] *= np.float32(1.0 / (1.0 + 4.0 * sum(state)))
-        return rgba, (*state, mean)[-2:]
 
 
 def no_style_track_scene(tmp_path):

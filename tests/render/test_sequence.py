@@ -167,13 +167,17 @@ class CountingToon(ToonStyle):
         return rgba, state + 1
 
 
-def test_a_stateful_style_runs_from_frame_zero(tmp_path):
-    path = write_scene(tmp_path)
-    plain = load_scene(path)
+def camera_only_scene(tmp_path):
+    """The test scene with only its first two tracks (no style track)."""
+    plain = load_scene(write_scene(tmp_path))
     anim = plain.animation.__class__(
         plain.animation.frames, plain.animation.fps, plain.animation.tracks[:2]
     )
-    scene = plain.__class__(**{**plain.__dict__, "animation": anim})
+    return plain.__class__(**{**plain.__dict__, "animation": anim})
+
+
+def test_a_stateful_style_runs_from_frame_zero(tmp_path):
+    scene = camera_only_scene(tmp_path)
     style = CountingToon(n=2)
     assert is_stateful(style) and not is_stateful(get_style("toon"))
     out = tmp_path / "frames"
@@ -216,12 +220,7 @@ class WindowToon(ToonStyle):
 
 
 def test_a_style_with_a_short_memory_resumes_that_many_frames_back(tmp_path):
-    path = write_scene(tmp_path)
-    plain = load_scene(path)
-    anim = plain.animation.__class__(
-        plain.animation.frames, plain.animation.fps, plain.animation.tracks[:2]
-    )
-    scene = plain.__class__(**{**plain.__dict__, "animation": anim})
+    scene = camera_only_scene(tmp_path)
     style = WindowToon(n=2)
     out = tmp_path / "frames"
     render_sequence(scene, style, W, H, 1, out_dir=out)
