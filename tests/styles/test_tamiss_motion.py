@@ -226,3 +226,29 @@ def test_anchor_errors(anim):
     other = replace(agg.astype(np.float64), stroke_ids=agg.stroke_ids + 1)
     with pytest.raises(ValueError, match="stroke ids differ"):
         transport(other, anchors, scene, W, H)
+
+
+def test_history_keeps_the_last_frames_and_their_anchors_aligned(anim):
+    """A window longer than ``frames`` (average_frames lowered mid-sequence) keeps the last
+    entries with their anchors; a mismatched count is refused."""
+    from refnpr.styles.tamiss import AggregateHistory
+
+    scene, now = anim.at(0), anim.at(4)
+    gb = _gb(scene)
+    entries = []
+    for c in [(60.5, 50.5), (70.5, 55.5), (80.5, 60.5)]:
+        agg = aggregate_exact(_patch_fragments(gb, [c])[0], dtype=np.float64)
+        entries.append((agg, stroke_anchors(agg, gb, scene)))
+    window = [a for a, _ in entries]
+    anchors = [b for _, b in entries]
+    current = aggregate_exact(_patch_fragments(_gb(now), [(75.5, 58.5)])[0], dtype=np.float64)
+    long = AggregateHistory(2, window=window, anchors=anchors, scene=now, size=(W, H))
+    short = AggregateHistory(2, window=window[-1:], anchors=anchors[-1:], scene=now, size=(W, H))
+    assert len(long.window) == 2
+    a, b = long.push(current), short.push(current)
+    np.testing.assert_array_equal(a.moments, b.moments)
+    np.testing.assert_array_equal(a.origin, b.origin)
+    with pytest.raises(ValueError, match="anchors: expected one per window entry"):
+        AggregateHistory(2, window=window, anchors=anchors[:2], scene=now, size=(W, H))
+    with pytest.raises(ValueError, match="give the current frame's scene and size"):
+        AggregateHistory(2, window=window, anchors=anchors)

@@ -296,6 +296,7 @@ class AggregateHistory:
             raise ValueError(f"frames: expected an integer >= 1, got {frames!r}")
         self.frames = int(frames)
         self._window: deque = deque(maxlen=self.frames)
+        window = tuple(window)
         for past in window:  # a sequence state's window (the last frames' float64 sums)
             if not isinstance(past, Aggregates):
                 raise TypeError(f"window: expected Aggregates, got {type(past).__name__}")
@@ -303,10 +304,9 @@ class AggregateHistory:
         self._anchors = None
         if anchors is not None:
             anchors = tuple(anchors)
-            if len(anchors) != len(self._window):
+            if len(anchors) != len(window):
                 raise ValueError(
-                    f"anchors: expected one per window entry ({len(self._window)}), got "
-                    f"{len(anchors)}"
+                    f"anchors: expected one per window entry ({len(window)}), got {len(anchors)}"
                 )
             if scene is None or size is None:
                 raise ValueError("anchors: give the current frame's scene and size with them")

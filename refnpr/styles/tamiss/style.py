@@ -58,11 +58,12 @@ class TamissStyle(Style):
     (None: the background shows); base : a style drawn under the strokes (overrides paper)
     gather_scale : int or None, gather fragments on a grid of gather_scale x gather_scale samples
     per pixel (its own rasterization), independent of spp (None: the G-buffer's samples)
-    average_frames : int, average aggregates over this many frames in a sequence (1: off;
+    average_frames : int, average aggregates over this many frames in a sequence (4; 1: off;
     sec. 4.1's proposal); average_motion : 'exact' (default: earlier frames' sums moved along
     the exact surface motion first, no lag; refnpr's) | 'none' (averaged where they were, the
-    paper's proposal as written: lags (k - 1) / 2 frames); smooth : float in [0, 1), exponential smoothing of the fitted curves
-    by stroke id in a sequence (0: off; refnpr's remedy, not the paper's)
+    paper's proposal as written: lags (k - 1) / 2 frames); smooth : float in [0, 1),
+    exponential smoothing of the fitted curves by stroke id in a sequence (0: off; refnpr's
+    remedy, not the paper's)
 
     Sequences: :meth:`initial_state` / :meth:`shade_frame` carry a
     :class:`~refnpr.styles.tamiss.state.TamissState` (hash table, aggregate window, previous
