@@ -29,8 +29,8 @@ import numpy as np
 
 from ..styles.tamiss.raster import rasterize_strips
 from .metrics import PairMetrics, pair_metrics
-from .motion import MotionField, _check_gbuffer, _relative_transforms
-from .strokes import STROKE_CHANNELS, _surface_points
+from .motion import MotionField, _check_gbuffer
+from .strokes import STROKE_CHANNELS, carried_points
 
 __all__ = ["InkFloor", "carry_strips", "ink_floor", "ink_image"]
 
@@ -82,18 +82,7 @@ def ink_image(ink: np.ndarray, n: int) -> np.ndarray:
 def _carry(points: np.ndarray, prev_gb: Any, scene: Any, prev_scene: Any) -> np.ndarray:
     """(P, K, 2) pixel coordinates of frame t-1 moved to frame t (see the module docstring)."""
     flat = points.reshape(-1, 2)
-    p, ids, ok = _surface_points(prev_gb, flat)
-    rel = np.linalg.inv(_relative_transforms(scene, prev_scene))  # world at t-1 -> world at t
-    m = rel[ids]
-    p_now = np.einsum("kij,kj->ki", m[:, :3, :3], p) + m[:, :3, 3]
-    width, height = prev_gb.width, prev_gb.height
-    cam = scene.camera
-    vp = cam.view_projection(width, height)
-    clip = p_now @ vp[:, :3].T + vp[:, 3]
-    w = clip[:, 3]
-    ok &= (w >= cam.near) & (w <= cam.far)
-    ws = np.where(ok, w, 1.0)
-    now = np.stack([(clip[:, 0] / ws + 1) * 0.5 * width, (1 - clip[:, 1] / ws) * 0.5 * height], -1)
+    now, ok = carried_points(prev_gb, flat, scene, prev_scene)
     d = np.where(ok[:, None], now - flat, np.nan).reshape(points.shape)
     per_strip = d.reshape(points.shape[0], -1, 2)
     seen = np.isfinite(per_strip[..., 0])

@@ -187,6 +187,31 @@ def _surface_points(prev_gb: Any, xy: np.ndarray):
     return eye + np.where(ok, lam, 0.0)[:, None] * d, np.where(ok, ids, 0), ok
 
 
+def carried_points(
+    prev_gb: Any, xy: np.ndarray, scene: Any, prev_scene: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel coordinates ``xy`` (K, 2) of frame t-1 carried to frame t by the true motion.
+
+    The surface point under each (:func:`_surface_points`) goes through its object's transforms
+    (``T_i(t) T_i(t-1)^-1``) and frame t's camera. Returns the points at t (K, 2) and which
+    could be carried (on a one-object neighbourhood at t-1, inside frame t's depth range); the
+    others hold meaningless finite values.
+    """
+    p, ids, ok = _surface_points(prev_gb, xy)
+    rel = np.linalg.inv(_relative_transforms(scene, prev_scene))  # world at t-1 -> world at t
+    m = rel[ids]
+    p_now = np.einsum("kij,kj->ki", m[:, :3, :3], p) + m[:, :3, 3]
+    cam = scene.camera
+    width, height = prev_gb.width, prev_gb.height
+    vp = cam.view_projection(width, height)
+    clip = p_now @ vp[:, :3].T + vp[:, 3]  # (K, 4)
+    w = clip[:, 3]
+    ok &= (w >= cam.near) & (w <= cam.far)
+    ws = np.where(ok, w, 1.0)
+    now = np.stack([(clip[:, 0] / ws + 1) * 0.5 * width, (1 - clip[:, 1] / ws) * 0.5 * height], -1)
+    return now, ok
+
+
 def stroke_pair_metrics(
     ends: StrokeEnds,
     prev_ends: StrokeEnds,
@@ -220,25 +245,12 @@ def stroke_pair_metrics(
                 f"{name}: expected StrokeEnds (stroke_ends(...)), got {type(e).__name__}"
             )
     _check_gbuffer("prev_gb", prev_gb, STROKE_CHANNELS)
-    rel = np.linalg.inv(_relative_transforms(scene, prev_scene))  # world at t-1 -> world at t
     common, i_now, i_prev = np.intersect1d(ends.ids, prev_ends.ids, return_indices=True)
     appeared = int(ends.ids.size - common.size)
     vanished = int(prev_ends.ids.size - common.size)
     e_prev = np.concatenate([prev_ends.start[i_prev], prev_ends.end[i_prev]])
     e_now = np.concatenate([ends.start[i_now], ends.end[i_now]])
-    p, ids, ok = _surface_points(prev_gb, e_prev)
-    m = rel[ids]
-    p_now = np.einsum("kij,kj->ki", m[:, :3, :3], p) + m[:, :3, 3]
-    cam = scene.camera
-    width, height = prev_gb.width, prev_gb.height
-    vp = cam.view_projection(width, height)
-    clip = p_now @ vp[:, :3].T + vp[:, 3]  # (K, 4)
-    w = clip[:, 3]
-    ok &= (w >= cam.near) & (w <= cam.far)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        true_now = np.stack(
-            [(clip[:, 0] / w + 1) * 0.5 * width, (1 - clip[:, 1] / w) * 0.5 * height], -1
-        )
+    true_now, ok = carried_points(prev_gb, e_prev, scene, prev_scene)
     jitter = np.hypot(*(e_now - true_now)[ok].T) if ok.any() else np.zeros(0)
     nan = float("nan")
     return StrokePairMetrics(
