@@ -252,3 +252,5 @@ def test_history_keeps_the_last_frames_and_their_anchors_aligned(anim):
         AggregateHistory(2, window=window, anchors=anchors[:2], scene=now, size=(W, H))
     with pytest.raises(ValueError, match="give the current frame's scene and size"):
         AggregateHistory(2, window=window, anchors=anchors)
+    with pytest.raises(ValueError, match="make a new AggregateHistory for each frame"):
+        long.push(current)  # its window was moved to `now` once; a second frame needs its own

@@ -280,7 +280,8 @@ class AggregateHistory:
     ``scene`` and ``size`` (the current frame's Scene and (width, height)): before averaging,
     each earlier frame's sums are moved along the exact surface motion to the current frame
     (:func:`~refnpr.styles.tamiss.motion.transport`, refnpr's motion compensation); a stroke
-    that cannot be moved from a frame leaves that frame out of its average.
+    that cannot be moved from a frame leaves that frame out of its average. Such a history
+    serves one :meth:`push` (the frame of ``scene``).
     """
 
     def __init__(
@@ -302,6 +303,7 @@ class AggregateHistory:
                 raise TypeError(f"window: expected Aggregates, got {type(past).__name__}")
             self._window.append(past.astype(np.float64))
         self._anchors = None
+        self._pushed = False
         if anchors is not None:
             anchors = tuple(anchors)
             if len(anchors) != len(window):
@@ -310,7 +312,7 @@ class AggregateHistory:
                 )
             if scene is None or size is None:
                 raise ValueError("anchors: give the current frame's scene and size with them")
-            self._anchors = deque(anchors, maxlen=self.frames)
+            self._anchors = anchors[len(anchors) - len(self._window) :]  # the kept entries
             self._scene, self._size = scene, (int(size[0]), int(size[1]))
 
     @property
@@ -320,17 +322,20 @@ class AggregateHistory:
 
     def push(self, agg: Aggregates) -> Aggregates:
         agg = agg.astype(np.float64)
-        past_entries = list(self._window)
         if self._anchors is not None:
-            moved = []
-            for past, anchor in zip(past_entries, self._anchors, strict=True):
-                m, ok = transport(past, anchor, self._scene, *self._size)
-                moved.append((m, ok))
+            if self._pushed:
+                raise ValueError(
+                    "push: a history with anchors moves its window to one frame (its scene); "
+                    "make a new AggregateHistory for each frame, as TamissStyle.run_frame does"
+                )
+            moved = [
+                transport(past, anchor, self._scene, *self._size)
+                for past, anchor in zip(self._window, self._anchors, strict=True)
+            ]
         else:
-            moved = [(past, None) for past in past_entries]
+            moved = [(past, None) for past in self._window]
+        self._pushed = True
         self._window.append(agg)
-        if self._anchors is not None:
-            self._anchors.append(None)  # this frame's anchors: made by the caller, unused here
         ids = agg.stroke_ids
         n = ids.size
         hits = np.zeros(n)
