@@ -4,6 +4,8 @@
 import numba
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from refnpr.raster import Camera
 from refnpr.raster.gbuffer import box_resolve
@@ -41,6 +43,34 @@ def test_fused_kernel_equals_numpy_bit_for_bit(n, background):
     want = numpy_composite_resolve(rgba, n, background)
     got = composite_resolve(rgba, n, background)
     assert got.dtype == np.float32 and got.shape == want.shape
+    assert np.array_equal(got.view(np.uint32), want.view(np.uint32))
+
+
+#: float32 values where the kernel's shortcuts could part from the division: 0, 1, subnormals,
+#: the largest and smallest normals, values just around 1 (alpha 1 - ulp, 1 + ulp).
+_EDGE = np.array(
+    [0.0, 1.0, 0.5, 1e-45, 1e-40, 1.1754944e-38, 3.4028235e38, 0.99999994, 1.0000001, 0.1, 0.3],
+    dtype=np.float32,
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    n=st.sampled_from([1, 2, 3, 4, 5, 8]),
+    seed=st.integers(0, 2**32 - 1),
+    bg=st.tuples(
+        *[st.sampled_from([0.0, 1.0, 0.5, 1e-300, 0.7, 1.0 - 2**-53])] * 3,
+        st.sampled_from([0.0, 1.0, 0.5, 1.0 - 2**-53, 1e-300]),
+    ),
+)
+def test_fused_kernel_shortcuts_equal_the_divisions(n, seed, bg):
+    """The mean by a power-of-two reciprocal and ``rgb / 1 == rgb`` agree with numpy's
+    divisions bit for bit on edge values (subnormal, huge, alpha a ulp off 1)."""
+    rng = np.random.default_rng(seed)
+    rgba = rng.choice(_EDGE, size=(3 * n, 4 * n, 4))
+    with np.errstate(over="ignore"):  # huge samples give inf pixels, in both
+        want = numpy_composite_resolve(rgba, n, bg)
+    got = composite_resolve(rgba, n, bg)
     assert np.array_equal(got.view(np.uint32), want.view(np.uint32))
 
 
