@@ -37,6 +37,8 @@ _S31 = np.uint64(31)
 _S11 = np.uint64(11)
 _INV53 = 1.0 / 9007199254740992.0
 _KX = np.array([0, 6, 5, 1, 3, 4, 2], dtype=np.int64)
+#: kx / 7.0 per row residue, divided once here (the same float64 values the loops divided).
+_KX7 = _KX / 7.0
 _CELL_OFF = 1 << 21
 
 #: Fragment pass modes.
@@ -153,15 +155,19 @@ def _enumerate(
     top = big_l + 1 if f > 0.0 else big_l
     alpha = math.pow(2.0, f) - 1.0  # ink-preserving fade-in of level L + 1
     n = 0
+    # divisions hoisted or made exact products (double division is slow): the same values
+    hw_q = hw_px / d_q
+    end_cells = end_px / d_p
     for lev in range(top + 1):
         gain = thin if lev <= big_l else alpha
         if gain * rho <= 0.0:
             continue
         scale = float(1 << lev)
+        inv_scale = 1.0 / scale  # a power of two: x * inv_scale == x / scale, bit for bit
         rows = 7.0 * scale
-        hw_q = hw_px / d_q
         ry0 = int(math.floor((q - hw_q) * rows))
         ry1 = int(math.floor((q + hw_q) * rows)) + 1
+        half_cells = 0.5 * lam * (1.0 + len_jit) + end_cells * scale
         for ry in range(ry0, ry1 + 1):
             q_row = ry / rows
             dist = abs(q - q_row) * d_q
@@ -170,8 +176,8 @@ def _enumerate(
             gy = ry // 7
             r = ry - 7 * gy
             kx = _KX[r]
-            half_cells = 0.5 * lam * (1.0 + len_jit) + end_px / d_p * scale
-            ps = p * scale - kx / 7.0
+            kx7 = _KX7[r]
+            ps = p * scale - kx7
             gx0 = int(math.floor(ps - half_cells))
             gx1 = int(math.floor(ps + half_cells)) + 1
             for gx in range(gx0, gx1 + 1):
@@ -179,8 +185,8 @@ def _enumerate(
                     continue  # inherited: enumerated at its birth level
                 sid = _pack(chart, layer, lev, gx, gy, r)
                 h = _hash01(sid, salt_len)
-                length = lam * (1.0 + len_jit * (2.0 * h - 1.0)) / scale
-                p_start = (gx + kx / 7.0) / scale - 0.5 * length
+                length = lam * (1.0 + len_jit * (2.0 * h - 1.0)) * inv_scale
+                p_start = (gx + kx7) * inv_scale - 0.5 * length
                 t = (p - p_start) / length
                 beyond = max(-t, t - 1.0) * length * d_p  # signed: < 0 inside the stroke
                 if beyond > end_px:
@@ -900,16 +906,20 @@ def _gather_sample(
     top = big_l + 1 if f > 0.0 else big_l
     alpha = math.pow(2.0, f) - 1.0
     n = 0
+    # divisions hoisted or made exact products (double division is slow): the same values
+    hw_q = hw_px / d_q
+    end_cells = 0.0 / d_p
     for lev in range(top + 1):
         gain = thin if lev <= big_l else alpha
         if gain * rho <= 0.0:
             continue
         limit = rho * gain
         scale = float(1 << lev)
+        inv_scale = 1.0 / scale  # a power of two: x * inv_scale == x / scale, bit for bit
         rows = 7.0 * scale
-        hw_q = hw_px / d_q
         ry0 = int(math.floor((q - hw_q) * rows))
         ry1 = int(math.floor((q + hw_q) * rows)) + 1
+        half_cells = 0.5 * lam * (1.0 + len_jit) + end_cells * scale
         for ry in range(ry0, ry1 + 1):
             q_row = ry / rows
             dist = abs(q - q_row) * d_q
@@ -918,8 +928,8 @@ def _gather_sample(
             gy = ry // 7
             r = ry - 7 * gy
             kx = _KX[r]
-            half_cells = 0.5 * lam * (1.0 + len_jit) + 0.0 / d_p * scale
-            ps = p * scale - kx / 7.0
+            kx7 = _KX7[r]
+            ps = p * scale - kx7
             gx0 = int(math.floor(ps - half_cells))
             gx1 = int(math.floor(ps + half_cells)) + 1
             reach = 0.5 * lam * (1.0 + abs(len_jit)) + 1e-6 + 1e-9 * abs(ps)
@@ -930,8 +940,8 @@ def _gather_sample(
                     continue  # inherited: enumerated at its birth level
                 sid = _pack(chart, layer, lev, gx, gy, r)
                 h = _hash01(sid, salt_len)
-                length = lam * (1.0 + len_jit * (2.0 * h - 1.0)) / scale
-                p_start = (gx + kx / 7.0) / scale - 0.5 * length
+                length = lam * (1.0 + len_jit * (2.0 * h - 1.0)) * inv_scale
+                p_start = (gx + kx7) * inv_scale - 0.5 * length
                 t = (p - p_start) / length
                 beyond = max(-t, t - 1.0) * length * d_p
                 if beyond > 0.0:
