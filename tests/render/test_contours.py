@@ -115,3 +115,23 @@ def test_more_bad_layer_parameters(kwargs, exc, match):
 def test_unknown_contour_key_lists_valid_keys():
     with pytest.raises(ValueError, match=r"contours: unknown keys \['colour'\]; valid keys are \["):
         get_style("contoured", base="toon", contours={"colour": (0, 0, 0)})
+
+
+def test_edge_tables_are_built_once_per_mesh(monkeypatch):
+    """A still scene's frames reuse the mesh's edge table (no per-frame welding and sorting);
+    the coverage equals the one from a table built by hand, and another mesh gets its own."""
+    import refnpr.styles.contours as C
+
+    built = []
+    real = C.edge_table
+    monkeypatch.setattr(C, "edge_table", lambda p, f: built.append(1) or real(p, f))
+    scene = _scene(_cube(), eye=(2.0, 3.0, 5.0))
+    layer = ContourLayer(width=1.5, crease_angle=45.0)
+    first, gb = _coverage(scene, layer)
+    again = layer.coverage(ShadeContext(gb, scene))
+    assert len(built) == 1
+    mesh = scene.world_meshes()[0]
+    by_hand = layer.coverage(ShadeContext(gb, scene), [real(mesh.positions, mesh.faces)])
+    assert np.array_equal(first, again) and np.array_equal(first, by_hand)
+    _coverage(_scene(_cube(), eye=(2.0, 3.0, 5.0)), layer)
+    assert len(built) == 2
