@@ -85,6 +85,40 @@ def _bilinear(texels, offset, rows, cols, u, v, c):
 
 
 @njit
+def _taps(offset, rows, cols, u, v):
+    """Texel indices and weights of a GL_LINEAR / GL_REPEAT sample of one level (rows, cols,
+    at ``offset`` in the packed texels), in ``_bilinear``'s arithmetic. Scalars only, so that
+    it inlines into the hot loop (a helper taking arrays is a call with NRT reference counts).
+    GL_REPEAT by compare and subtract where the index is at most one period out (always, for a
+    finite uv), the modulo otherwise."""
+    x = (u - np.floor(u)) * cols - 0.5
+    y = (v - np.floor(v)) * rows - 0.5
+    x0 = math.floor(x)
+    y0 = math.floor(y)
+    fx = x - x0
+    fy = y - y0
+    ix = np.int64(x0)
+    iy = np.int64(y0)
+    if -1 <= ix and ix < cols and -1 <= iy and iy < rows:
+        i0 = ix if ix >= 0 else cols - 1
+        i1 = ix + 1 if ix + 1 < cols else ix + 1 - cols
+        j0 = iy if iy >= 0 else rows - 1
+        j1 = iy + 1 if iy + 1 < rows else iy + 1 - rows
+    else:
+        i0 = _wrap(ix, cols)
+        i1 = _wrap(ix + 1, cols)
+        j0 = _wrap(iy, rows)
+        j1 = _wrap(iy + 1, rows)
+    w00 = (1.0 - fx) * (1.0 - fy)
+    w10 = fx * (1.0 - fy)
+    w01 = (1.0 - fx) * fy
+    w11 = fx * fy
+    r0 = offset + j0 * cols
+    r1 = offset + j1 * cols
+    return r0 + i0, r0 + i1, r1 + i0, r1 + i1, w00, w10, w01, w11
+
+
+@njit
 def _level(texels, offsets, shapes, k, u, v, c):
     """Bilinear sample of integer level k (clamped to the pyramid), as ``sample_level``."""
     top = offsets.shape[0] - 1
@@ -466,7 +500,35 @@ def shade_object(
                 raw[y, x, 2] = inten
                 continue
             if not per_level:  # sec. 3: threshold the screen sampled at (uv, LOD)
-                s = _filtered(texels, offsets, shapes, cu, cv, lod, probes, axu, axv, ch0)
+                # _filtered(texels, ..., ch0) written out (the hot lookup; see _taps)
+                n_lv = offsets.shape[0]
+                lam = min(max(lod, 0.0), n_lv - 1.0)
+                k0 = np.int64(math.floor(lam))
+                k1 = min(k0 + 1, n_lv - 1)
+                f = lam - k0
+                acc = 0.0
+                for j in range(max(probes, 1)):
+                    su_ = cu
+                    sv_ = cv
+                    if probes > 0:
+                        t = (j + 0.5) / probes - 0.5
+                        su_ = cu + axu * t
+                        sv_ = cv + axv * t
+                    r = 0.0
+                    for q in range(2 if f > 0.0 else 1):
+                        k = k0 if q == 0 else k1
+                        w = 1.0 - f if q == 0 else f
+                        i00, i10, i01, i11, w00, w10, w01, w11 = _taps(
+                            offsets[k], shapes[k, 0], shapes[k, 1], su_, sv_
+                        )
+                        r = r + w * (
+                            w00 * texels[i00, 0]
+                            + w10 * texels[i10, 0]
+                            + w01 * texels[i01, 0]
+                            + w11 * texels[i11, 0]
+                        )
+                    acc = acc + r if probes > 0 else r
+                s = acc / probes if probes > 0 else acc
                 value = _threshold(s, inten, mode, c, top)
             else:  # level_weights, then a threshold per level blended with the weight
                 n_lv = offsets.shape[0]
