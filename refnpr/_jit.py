@@ -115,12 +115,14 @@ def pnjit(func=None, **overrides):
     """Parallel numba kernel (``prange``) with refnpr's flags.
 
     Only for the kernels whose ``prange`` build runs measurably faster than the :func:`banded`
-    one: halftone shading and the TAMISS strip raster, ~1.3x (benchmarks/README.md, cold start).
-    Everywhere else use :func:`banded`: the parallel lowering compiles a loop about twice over
-    (the function and its gufunc), which doubled refnpr's cold start. Before moving a kernel
-    here, look for row views in its loops: the rasterizer's visibility and binning loops were
-    2-3x faster under ``prange`` only because of their views' reference counting, and banded
-    with scalar reads they beat their ``prange`` build. ``tests/test_jit_banded.py`` holds the
+    one: the TAMISS strip raster, ~1.3x (benchmarks/README.md, cold start). Everywhere else use
+    :func:`banded`: the parallel lowering compiles a loop about twice over (the function and
+    its gufunc), which doubled refnpr's cold start. Before moving a kernel here, look for row
+    views and array-taking helpers in its loops: the rasterizer's visibility and binning loops
+    were 2-3x faster under ``prange`` only because of their views' reference counting, and
+    banded with scalar reads they beat their ``prange`` build; halftone shading was here until
+    its per-sample screen lookup stopped calling samplers that take arrays (a call with NRT
+    reference counts each; banded it is now as fast, and compiles in 6 s instead of 14). ``tests/test_jit_banded.py`` holds the
     list of kernels allowed to use it.
     """
     flags = {**JIT_FLAGS, "parallel": True, **overrides}

@@ -193,7 +193,6 @@ def test_forked_child_has_its_own_pool():
 #: The kernels left on numba's ``prange`` lowering, because it runs them measurably faster than
 #: the banded build of the same loop (single thread, 1920x1080; benchmarks/README.md, cold start).
 PRANGE_KERNELS = {
-    "refnpr/styles/halftone/_kernels.py": {"shade_object"},
     "refnpr/styles/tamiss/_kernels.py": {"raster_strips"},
 }
 

@@ -1,7 +1,7 @@
 """numba kernels of the ``halftone`` style (private; inputs validated by :mod:`.fused`).
 
-One parallel pass over the samples of one object (a row of the sample grid per task, no
-reductions, so the result does not depend on the thread count): target intensity (Veryovka
+One banded pass over the samples of one object (bands of sample-grid rows, no reductions, so
+the result does not depend on the thread count): target intensity (Veryovka
 eq. 1 as luminance, DOT3 stroke lighting of Freudenberg sec. 5.2, indication of sec. 5.1), the
 screen lookup at the sample's uv and LOD (sec. 3; GL's isotropic LOD or the anisotropic probes
 of ``screens.screen_footprint``), the binary (sec. 3.1, mux form) or smooth (sec. 3.2)
@@ -15,10 +15,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from refnpr._jit import banded, njit, pnjit
+from refnpr._jit import banded, njit
 
 #: ``threshold`` codes.
 THRESHOLD_BINARY = 0
@@ -201,8 +200,10 @@ def _threshold(s, x, mode, c, top):
     return min(max(top - tmp, 0.0), 1.0)  # sec. 3.2: 1 - tmp, clamped
 
 
-@pnjit
+@banded("mesh_id")
 def shade_object(
+    lo,
+    hi,
     obj,
     mesh_id,
     mask,
@@ -265,7 +266,7 @@ def shade_object(
     SHOW_*. ink, paper (3,). out (nH, nW, 4) float32: RGBA written where mesh_id == obj
     (SHOW_COLOR); raw (nH, nW, 3) float64: the raw value or normal-map RGB otherwise.
     """
-    nh, nw = mesh_id.shape
+    nw = mesh_id.shape[1]
     # channel indices as int64 values, not literals: the samplers compile once, not once per
     # literal channel (four specialisations each; cold start, issue 11)
     ch0 = np.int64(0)
@@ -279,7 +280,7 @@ def shade_object(
         unit_l[i, 0], unit_l[i, 1], unit_l[i, 2] = _unit(
             light_vec[i, 0], light_vec[i, 1], light_vec[i, 2]
         )
-    for y in numba.prange(nh):
+    for y in range(lo, hi):
         for x in range(nw):
             if mesh_id[y, x] != obj:
                 continue
