@@ -84,6 +84,36 @@ def test_supersampled_room_matches_numpy(spp):
     _assert_same(*_both(style, "halftone_room", 40, 30, spp))
 
 
+@pytest.mark.parametrize("spp", [1, 4])
+def test_mixed_lights_with_specular_match_numpy(spp):
+    """Directional lights take the row pass (unit N, V, H and N.H per row span), point lights
+    the per-sample path: both, with specular, in one multi-object scene."""
+    import dataclasses
+
+    from refnpr.scenes import Light
+
+    scene = load_scene("halftone_room")
+    lights = (
+        Light("directional", direction=(0.3, 1.0, 0.6), color=(0.7, 0.6, 0.5)),
+        Light("point", position=(0.5, 1.5, 2.0), color=(0.4, 0.4, 0.5)),
+        Light("directional", direction=(-1.0, 0.2, 0.4), color=(0.2, 0.3, 0.2)),
+    )
+    objects = tuple(
+        dataclasses.replace(
+            o, material=dataclasses.replace(o.material, specular=(0.6, 0.5, 0.4), shininess=12.0)
+        )
+        for o in scene.objects
+    )  # the room's materials have no specular term
+    scene = dataclasses.replace(scene, lights=lights, objects=objects)
+    style = get_style("halftone", specular=True, screen="hatching")
+    gb = rasterize(scene, scene.camera, 48, 36, sorted(style.requires(scene)), spp)
+    ctx = ShadeContext(gb, scene)
+    fast = style.shade(ctx)
+    assert style.uses_kernels()
+    _assert_same(fast, style.shade_numpy(ctx))
+    assert np.count_nonzero(fast[..., 3]) > 0
+
+
 # -- random option combinations ---------------------------------------------------------------
 OPTIONS = st.fixed_dictionaries(
     {

@@ -200,6 +200,78 @@ def _threshold(s, x, mode, c, top):
     return min(max(top - tmp, 0.0), 1.0)  # sec. 3.2: 1 - tmp, clamped
 
 
+@njit
+def _unit_rows(ax, ay, az):
+    """``_unit`` of the vectors (ax[x], ay[x], az[x]) in place (three (n,) float64 views): the
+    same operations as selects, in two passes that compile to SIMD divisions and roots (loops
+    from 0 over whole views: a loop from an offset, or over a 2D array, stays scalar)."""
+    for x in range(ax.shape[0]):
+        m = max(abs(ax[x]), abs(ay[x]), abs(az[x]))
+        ok = m > 0.0
+        ax[x] = ax[x] / m if ok else ax[x]
+        ay[x] = ay[x] / m if ok else ay[x]
+        az[x] = az[x] / m if ok else az[x]
+    for x in range(ax.shape[0]):
+        length = math.sqrt((ax[x] * ax[x] + ay[x] * ay[x]) + az[x] * az[x])
+        ok = length > 0.0
+        ax[x] = ax[x] / length if ok else ax[x]
+        ay[x] = ay[x] / length if ok else ay[x]
+        az[x] = az[x] / length if ok else az[x]
+
+
+@njit
+def _row_units(nrm, pos, eye, specular, light_kind, unit_l, scr, x0, x1):
+    """The per-sample unit vectors of one row's span, branch-free over contiguous scratch
+    (the per-sample loop waited on their divisions and roots): ``un`` = unit(N), and where
+    ``specular`` ``v`` = unit(normalize(eye - p)) (ShadeContext.view_dir) and, per directional
+    light i, ``base[i]`` = clip(N . unit(L + V), 0, 1) (``h`` scratch). The operations and
+    their order are the per-sample formulas', so every value has the same bits; samples of
+    other objects in the span get values nobody reads.
+
+    nrm, pos (n * 3,) float: the span's normals and positions (n = x1 - x0). scr (9 + L, nW)
+    float64 scratch, columns [x0, x1) written: un (scr 0-2), v (3-5), h (6-8), base (9 + i).
+    Its rows are taken as 1D contiguous views, which LLVM vectorizes (2D or strided views
+    stay scalar).
+    """
+    n = x1 - x0
+    un0, un1, un2 = scr[0, x0:x1], scr[1, x0:x1], scr[2, x0:x1]
+    for x in range(n):
+        un0[x] = np.float64(nrm[3 * x])
+        un1[x] = np.float64(nrm[3 * x + 1])
+        un2[x] = np.float64(nrm[3 * x + 2])
+    _unit_rows(un0, un1, un2)
+    if not specular:
+        return
+    v0, v1, v2 = scr[3, x0:x1], scr[4, x0:x1], scr[5, x0:x1]
+    for x in range(n):
+        v0[x] = eye[0] - np.float64(pos[3 * x])
+        v1[x] = eye[1] - np.float64(pos[3 * x + 1])
+        v2[x] = eye[2] - np.float64(pos[3 * x + 2])
+    for x in range(n):
+        length = math.sqrt((v0[x] * v0[x] + v1[x] * v1[x]) + v2[x] * v2[x])
+        ok = length > 0.0
+        v0[x] = v0[x] / length if ok else 0.0
+        v1[x] = v1[x] / length if ok else 0.0
+        v2[x] = v2[x] / length if ok else 0.0
+    _unit_rows(v0, v1, v2)
+    h0, h1, h2 = scr[6, x0:x1], scr[7, x0:x1], scr[8, x0:x1]
+    for i in range(light_kind.shape[0]):
+        if light_kind[i] != LIGHT_DIRECTIONAL:
+            continue
+        lx = unit_l[i, 0]
+        ly = unit_l[i, 1]
+        lz = unit_l[i, 2]
+        for x in range(n):  # Blinn-Phong: H = unit(L + V)
+            h0[x] = lx + v0[x]
+            h1[x] = ly + v1[x]
+            h2[x] = lz + v2[x]
+        _unit_rows(h0, h1, h2)
+        b_i = scr[9 + i, x0:x1]
+        for x in range(n):  # base = N . H, clipped
+            b = (un0[x] * h0[x] + un1[x] * h1[x]) + un2[x] * h2[x]
+            b_i[x] = min(max(b, 0.0), 1.0)
+
+
 @banded("mesh_id")
 def shade_object(
     lo,
@@ -280,8 +352,32 @@ def shade_object(
         unit_l[i, 0], unit_l[i, 1], unit_l[i, 2] = _unit(
             light_vec[i, 0], light_vec[i, 1], light_vec[i, 2]
         )
+    lit = show == SHOW_COLOR or show == SHOW_INTENSITY
+    nrm = normal.reshape(normal.shape[0], nw * 3)
+    pos = position.reshape(position.shape[0], position.shape[1] * 3)
+    scr = np.zeros((9 + n_lights, nw))  # _row_units' scratch: un, v, h, base per light
     for y in range(lo, hi):
-        for x in range(nw):
+        x0 = 0  # the row's span of the object's samples
+        while x0 < nw and mesh_id[y, x0] != obj:
+            x0 += 1
+        x1 = nw
+        while x1 > x0 and mesh_id[y, x1 - 1] != obj:
+            x1 -= 1
+        if x0 == x1:
+            continue
+        if lit:
+            _row_units(
+                nrm[y, 3 * x0 : 3 * x1],
+                pos[y, 3 * x0 : 3 * x1] if specular else pos[0, :0],
+                eye,
+                specular,
+                light_kind,
+                unit_l,
+                scr,
+                x0,
+                x1,
+            )
+        for x in range(x0, x1):
             if mesh_id[y, x] != obj:
                 continue
             if show == SHOW_COLOR and not mask[y, x]:
@@ -360,7 +456,9 @@ def shade_object(
             nx = np.float64(normal[y, x, 0])
             ny = np.float64(normal[y, x, 1])
             nz = np.float64(normal[y, x, 2])
-            unx, uny, unz = _unit(nx, ny, nz)
+            unx = scr[0, x]  # _unit(N), from _row_units
+            uny = scr[1, x]
+            unz = scr[2, x]
             valid = False
             tx = ty = tz = 0.0
             btx = bty = btz = 0.0
@@ -421,18 +519,10 @@ def shade_object(
                 ppz = np.float64(position[y, x, 2])
             else:
                 ppx = ppy = ppz = 0.0
-            if specular:  # ShadeContext.view_dir, then unit_vectors
-                vx = eye[0] - ppx
-                vy = eye[1] - ppy
-                vz = eye[2] - ppz
-                length = math.sqrt((vx * vx + vy * vy) + vz * vz)
-                if length > 0.0:
-                    vx = vx / length
-                    vy = vy / length
-                    vz = vz / length
-                else:
-                    vx = vy = vz = 0.0
-                vx, vy, vz = _unit(vx, vy, vz)
+            if specular:  # ShadeContext.view_dir, then unit_vectors: from _row_units
+                vx = scr[3, x]
+                vy = scr[4, x]
+                vz = scr[5, x]
             r = ambient[0]  # eq. 1: m_a l_a
             g = ambient[1]
             b = ambient[2]
@@ -471,9 +561,12 @@ def shade_object(
                 if specular:
                     f_s = 0.0
                     if shininess > 0.0:  # Blinn-Phong: H = unit(L + V), base = N.H
-                        hx, hy, hz = _unit(ulx + vx, uly + vy, ulz + vz)
-                        base = (unx * hx + uny * hy) + unz * hz
-                        base = min(max(base, 0.0), 1.0)
+                        if light_kind[i] == LIGHT_DIRECTIONAL:
+                            base = scr[9 + i, x]  # from _row_units
+                        else:
+                            hx, hy, hz = _unit(ulx + vx, uly + vy, ulz + vz)
+                            base = (unx * hx + uny * hy) + unz * hz
+                            base = min(max(base, 0.0), 1.0)
                         f_s = base**shininess if n_dot_l > 0.0 else 0.0  # eq. 1: f_s
                     r = r + m_specular[0] * f_s * light_color[i, 0]  # eq. 1: specular sum
                     g = g + m_specular[1] * f_s * light_color[i, 1]
