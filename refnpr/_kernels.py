@@ -21,7 +21,9 @@ def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
     n : int, samples per pixel along each axis.
     bg : (4,) float64, straight-alpha background.
     out : (H, W, 4) float32, written: straight-alpha pixels.
-    bad_rows : (H,) uint8, written: 1 where a sample of that output row is NaN or inf.
+    bad_rows : (H,) uint8, written: 1 where a sample or a pixel of that output row is NaN or
+        inf (a pixel overflows float32 where finite samples are out of range), so a row of 0s
+        means every pixel written is finite.
 
     Per sample (float64): ``over = (rgb * a, a) + (bg_rgb * bg_a, bg_a) * (1 - a)``; per pixel the
     n x n ``over`` values summed sample row by sample row, left to right, then divided by n * n
@@ -31,7 +33,7 @@ def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
     power-of-two n * n the mean is a multiplication by its exact reciprocal, and where alpha is
     exactly 1 (every pixel over an opaque background) ``rgb / alpha`` is ``rgb``. Both give the
     same bits as the division. A sample is NaN or inf exactly where ``(r + g + b + a) * 0`` is
-    not 0 (the float64 sum of four float32 values cannot overflow).
+    not 0 (the float64 sum of four float32 values cannot overflow), and so is a stored pixel.
     """
     w = out.shape[1]
     bg0 = bg[0] * bg[3]
@@ -95,16 +97,22 @@ def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
                     s2 = s2 / count
                     s3 = s3 / count
             if s3 == 1.0:  # x / 1 == x
-                out[y, x, 0] = np.float32(s0)
-                out[y, x, 1] = np.float32(s1)
-                out[y, x, 2] = np.float32(s2)
+                p0 = np.float32(s0)
+                p1 = np.float32(s1)
+                p2 = np.float32(s2)
             elif s3 > 0.0:
-                out[y, x, 0] = np.float32(s0 / s3)
-                out[y, x, 1] = np.float32(s1 / s3)
-                out[y, x, 2] = np.float32(s2 / s3)
+                p0 = np.float32(s0 / s3)
+                p1 = np.float32(s1 / s3)
+                p2 = np.float32(s2 / s3)
             else:
-                out[y, x, 0] = np.float32(0.0)
-                out[y, x, 1] = np.float32(0.0)
-                out[y, x, 2] = np.float32(0.0)
-            out[y, x, 3] = np.float32(s3)
+                p0 = np.float32(0.0)
+                p1 = np.float32(0.0)
+                p2 = np.float32(0.0)
+            p3 = np.float32(s3)
+            # and the pixel as stored: float32 overflows where a finite sample is out of range
+            probe += ((np.float64(p0) + np.float64(p1)) + (np.float64(p2) + np.float64(p3))) * 0.0
+            out[y, x, 0] = p0
+            out[y, x, 1] = p1
+            out[y, x, 2] = p2
+            out[y, x, 3] = p3
         bad_rows[y] = 0 if probe == 0.0 else 1

@@ -126,7 +126,8 @@ def composite_resolve(
     Raises
     ------
     ValueError
-        A wrong shape or dtype, or NaN / inf among the samples (a bug in the style).
+        A wrong shape or dtype, or NaN / inf among the samples or the pixels (out-of-range
+        samples can overflow float32: a bug in the style). The pixels returned are finite.
     """
     n = check_int("n", n, minimum=1)
     rgba = np.asarray(rgba)
@@ -251,7 +252,8 @@ def render(
     out, timings, gb = _frame(
         scene, style, cam, width, height, spp, channels, options, progress, t0, None, None
     )
-    image = Image(out, timings)
+    image = Image._of_finite(out, timings)  # composite_resolve checked every pixel
+    timings["total"] = time.perf_counter() - t0  # the whole call, as the caller waits for it
     return (image, gb) if return_gbuffer else image
 
 
@@ -355,7 +357,8 @@ class RenderContext:
             self._out,
         )
         self._gb, self._out = gb, out
-        image = Image(out.copy() if copy else out, timings)
+        image = Image._of_finite(out.copy() if copy else out, timings)
+        timings["total"] = time.perf_counter() - t0  # with the copy: what the caller waits for
         return (image, gb) if return_gbuffer else image
 
     def render_frame(
@@ -428,5 +431,6 @@ class RenderContext:
             shader,
         )
         self._gb, self._out = gb, out
-        image = Image(out.copy() if copy else out, timings)
+        image = Image._of_finite(out.copy() if copy else out, timings)
+        timings["total"] = time.perf_counter() - t0  # with the copy: what the caller waits for
         return (image, gb, box[0]) if return_gbuffer else (image, box[0])
