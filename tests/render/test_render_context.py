@@ -129,6 +129,7 @@ def test_fused_kernel_refuses_a_pixel_that_overflows_float32():
     rgba[0, 0, 0] = 1.0  # the same samples in range of float32: accepted
     assert np.isfinite(composite_resolve(rgba, 2, (0, 0, 0, 0))).all()
 
+
 def _bits(img):
     return img.rgba.view(np.uint32)
 
