@@ -171,11 +171,26 @@ def required_channels(scene: Any, style: Any = None) -> frozenset[str]:
 
 
 def _frame(
-    scene, style, cam, width, height, spp, channels, options, progress, t0, gb_out, out, shader=None
+    scene,
+    style,
+    cam,
+    width,
+    height,
+    spp,
+    channels,
+    options,
+    progress,
+    t0,
+    gb_out,
+    out,
+    shader=None,
+    samples=None,
 ):
     """One frame: rasterize (into ``gb_out`` if given), shade, composite + resolve (into ``out``).
 
-    ``shader(ctx) -> rgba`` replaces ``style.shade`` (a sequence frame's ``shade_frame``)."""
+    ``shader(ctx) -> rgba`` replaces ``style.shade`` (a sequence frame's ``shade_frame``).
+    ``samples``: a list holding the caller's per-sample RGBA buffer (one is made if it is empty
+    or of another shape), lent to the style through ``ShadeContext.rgba_out``."""
     if progress is not None:
         progress("rasterize", 0.0)
     gb = rasterize(scene, cam, width, height, channels, spp, out=gb_out, **options)
@@ -183,7 +198,13 @@ def _frame(
     if progress is not None:
         progress("shade", 0.4)
     shade = style.shade if shader is None else shader
-    rgba = np.asarray(shade(ShadeContext(gb, scene.with_camera(cam))), dtype=np.float32)
+    spare = []
+    if samples is not None:
+        shape = gb.sample_shape + (4,)
+        if not samples or samples[0].shape != shape:
+            samples[:] = [np.empty(shape, dtype=np.float32)]
+        spare = [samples[0]]
+    rgba = np.asarray(shade(ShadeContext(gb, scene.with_camera(cam), spare)), dtype=np.float32)
     if rgba.shape != gb.sample_shape + (4,):
         raise ValueError(
             f"style {style.name!r} returned shape {rgba.shape}; expected {gb.sample_shape + (4,)}"
@@ -271,8 +292,9 @@ class RenderContext:
 
     The scene and style are resolved, the channel set and rasterizer options computed and the
     memory check done once, here; each :meth:`render` rasterizes into the G-buffer of the
-    previous frame (``rasterize(..., out=gb)``) and composites into the same output buffer, so
-    a steady state pays no page faults for them. Every frame is bit-identical to
+    previous frame (``rasterize(..., out=gb)``), lends the style the per-sample RGBA buffer of
+    the previous frame (``ShadeContext.rgba_out``) and composites into the same output buffer,
+    so a steady state pays no page faults for them. Every frame is bit-identical to
     ``render(scene, style, width, height, spp, camera=camera)``.
 
     Parameters
@@ -304,6 +326,7 @@ class RenderContext:
         self._options = self.style.raster_options(self.scene)
         self._gb = None
         self._out = None
+        self._samples: list[np.ndarray] = []  # the styles' sample buffer (ShadeContext.rgba_out)
 
     def __repr__(self) -> str:
         return (
@@ -355,6 +378,7 @@ class RenderContext:
             t0,
             self._gb,
             self._out,
+            samples=self._samples,
         )
         self._gb, self._out = gb, out
         image = Image._of_finite(out.copy() if copy else out, timings)
@@ -429,6 +453,7 @@ class RenderContext:
             gb_out,
             self._out,
             shader,
+            self._samples,
         )
         self._gb, self._out = gb, out
         image = Image._of_finite(out.copy() if copy else out, timings)

@@ -10,6 +10,17 @@ from refnpr.formulas import lighting
 
 from ._names import warn_caller
 
+
+def rgba_out(ctx: Any, shape: tuple[int, int]) -> np.ndarray:
+    """``ctx.rgba_out(shape)`` (``ShadeContext``: a render context's buffer, lent for the
+    frame), or a new ``shape + (4,)`` float32 array for a context object without it (a
+    stand-in in a test or a user's own code). To be written in full."""
+    lend = getattr(ctx, "rgba_out", None)
+    if lend is None:
+        return np.empty(tuple(shape) + (4,), dtype=np.float32)
+    return lend(shape)
+
+
 __all__ = [
     "lit_rgba",
     "scatter_rgba",
@@ -115,7 +126,7 @@ def lit_rgba(
     edges = _step_edges(shininess, n, t) if mode == "step" and specular else None
     edge_lo, edge_hi, tones = edges or (np.zeros((1, 0)), np.zeros((1, 0)), np.zeros(1))
     if out is None:
-        out = np.empty(shape + (4,), dtype=np.float32)
+        out = rgba_out(ctx, shape)  # written in full by the kernel
     elif (
         not isinstance(out, np.ndarray)
         or out.shape != shape + (4,)

@@ -170,3 +170,41 @@ def test_context_checks_its_arguments(plane_scene):
     with pytest.raises(TypeError, match="copy: expected a bool"):
         ctx.render(copy=1)
     assert "toon" in repr(ctx) and "8x8" in repr(ctx)
+
+
+@pytest.mark.parametrize(
+    "scene, style",
+    [
+        ("teapot", "toon"),
+        ("teapot", "smooth"),
+        ("xtoon_teapot", "xtoon"),
+        ("veryovka_plane", "threshold"),
+        ("halftone_teapot", "halftone"),
+        ("tamiss_teapot", "tam"),
+        ("tamiss_teapot", "tamiss"),
+    ],
+)
+@pytest.mark.parametrize("spp", [1, 4])
+def test_lent_sample_buffer_is_written_in_full(scene, style, spp):
+    """Each style writes every sample of the buffer a context lends it (``rgba_out``): frames
+    over a buffer poisoned with NaN still equal ``render``, and the buffer is reused."""
+    ctx = RenderContext(scene, style, 48, 36, spp)
+    ctx.render()
+    (buf,) = ctx._samples
+    buf[...] = np.nan
+    got = ctx.render(copy=True)
+    assert ctx._samples[0] is buf
+    assert np.array_equal(_bits(got), _bits(render(scene, style, 48, 36, spp)))
+
+
+def test_rgba_out_lends_a_matching_spare_once():
+    from refnpr.styles import ShadeContext
+
+    spare = np.empty((6, 8, 4), np.float32)
+    ctx = ShadeContext(None, None, [np.empty((6, 8, 4), np.float64), spare])
+    assert ctx.rgba_out((6, 8)) is spare
+    again = ctx.rgba_out((6, 8))
+    assert again is not spare and again.shape == (6, 8, 4) and again.dtype == np.float32
+    other = ShadeContext(None, None, [np.empty((6, 8, 4), np.float32)])
+    assert other.rgba_out((5, 8)).shape == (5, 8, 4)  # wrong shape: a new array
+    assert ShadeContext(None, None).rgba_out((2, 3)).shape == (2, 3, 4)

@@ -20,6 +20,7 @@ from .._common import (
     check_uv_scale,
     needs_position,
     rgba_from,
+    rgba_out,
     warn_unused,
 )
 from ..base import ShadeContext, Style, register
@@ -316,7 +317,7 @@ class HalftoneStyle(Style):
         mask = np.asarray(ctx.mask)
         shape = mesh_id.shape
         specs = self._object_specs(scene)
-        out = np.empty(shape + (4,), dtype=np.float32)
+        out = rgba_out(ctx, shape)  # written in full: prepare_into, then every object in view
         raw = None if self.show == "color" else np.ones(shape + (3,))
         one = (1.0, 1.0, 1.0) if self.show != "color" else self.paper  # value 1 off objects
         present = prepare_into(out, mesh_id, mask, one, len(scene.objects))

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from .._common import rgba_from, short_repr
+from .._common import rgba_from, rgba_out, short_repr
 from ..base import ShadeContext, Style, nested_style
 
 __all__ = ["check_color", "field_channels", "base_style", "composite_ink", "composite_ink_numpy"]
@@ -94,7 +94,7 @@ def composite_ink(
     else:
         mode, mask, paper_rgb = UNDER_NONE, np.zeros((1, 1), dtype=np.bool_), np.zeros(3)
         under = np.zeros((1, 1, 4), dtype=np.float32)
-    out = np.empty(shape + (4,), dtype=np.float32)
+    out = rgba_out(ctx, shape)  # written in full by the kernel
     ink_composite(
         mode,
         np.ascontiguousarray(under),

@@ -17,6 +17,7 @@ import numpy as np
 
 from refnpr.formulas import threshold
 
+from .._common import rgba_out
 from .sources import _noise, grid_offsets
 
 __all__ = ["shade_fast"]
@@ -193,7 +194,7 @@ def shade_fast(style: Any, ctx: Any) -> np.ndarray:
             w_tab = np.ascontiguousarray(thr.weights, dtype=np.float64)
     sin = np.array([math.sin(a) for a in dirs], dtype=np.float64)  # as hatch_coordinate
     cos = np.array([math.cos(a) for a in dirs], dtype=np.float64)
-    out = np.empty(shape + (4,), dtype=np.float32)
+    out = rgba_out(ctx, shape)  # written in full by the kernel
     shade_threshold(
         cover,
         mesh_id,

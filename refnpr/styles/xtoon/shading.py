@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._common import rgba_out
 from . import _kernels as K
 from .detail import resolve_frame
 from .evaluation import Config, _light_of, evaluate
@@ -146,7 +147,7 @@ def shade_rgba(cfg: Config, ctx: Any, show: str = "color") -> np.ndarray:
             [np.asarray(o.material.diffuse, dtype=np.float64) for o in objs], dtype=np.float64
         ).reshape(len(objs), 3)
     tex = np.ascontiguousarray(cfg.texture, dtype=np.float32)
-    out = np.empty(shape + (4,), dtype=np.float32)
+    out = rgba_out(ctx, shape)  # written in full by the kernel
     bad = np.zeros(nh, dtype=np.uint8)
     K.shade_xtoon(
         mesh_id,
