@@ -109,7 +109,7 @@ def _pack(chart, layer, level, gx, gy, r):
     return v * 8 + r
 
 
-@njit
+@njit(inline="always")  # one call site; as a call, its six arrays cost NRT refcounts per sample
 def _enumerate(
     p,
     q,
