@@ -9,6 +9,12 @@ threshold, per-level thresholding with tone LUTs, and ink/paper compositing into
 straight-alpha RGBA. float64 arithmetic in the order of the numpy path
 (``refnpr.styles.halftone.shading`` / ``screens`` and ``refnpr.formulas``); ``log2`` and ``pow``
 are libm's, where numpy may use its SIMD versions (an ulp apart at most).
+
+Speed (issue 11; same bits throughout): each row's span of the object first goes through
+``_row_units``, branch-free SIMD passes for unit(N), V and each directional light's N.H (their
+dependent divisions and roots were most of the per-sample time), and the screen lookup of the
+colour path is written out in the loop body with the scalar ``_taps`` (a sampler that takes
+arrays is a call paying NRT reference counts per sample). 1920x1080 spp 4 teapot: 218 -> 94 ms.
 """
 
 from __future__ import annotations
