@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from refnpr.raster import Camera
 from refnpr.raster.gbuffer import box_resolve
 from refnpr.render import RenderContext, composite_resolve, render
+from refnpr.warmup import WARM_ROWS
 
 
 def numpy_composite_resolve(rgba, n, background):
@@ -172,18 +173,7 @@ def test_context_checks_its_arguments(plane_scene):
     assert "toon" in repr(ctx) and "8x8" in repr(ctx)
 
 
-@pytest.mark.parametrize(
-    "scene, style",
-    [
-        ("teapot", "toon"),
-        ("teapot", "smooth"),
-        ("xtoon_teapot", "xtoon"),
-        ("veryovka_plane", "threshold"),
-        ("halftone_teapot", "halftone"),
-        ("tamiss_teapot", "tam"),
-        ("tamiss_teapot", "tamiss"),
-    ],
-)
+@pytest.mark.parametrize("scene, style", WARM_ROWS)  # every style, on its benchmark scene
 @pytest.mark.parametrize("spp", [1, 4])
 def test_lent_sample_buffer_is_written_in_full(scene, style, spp):
     """Each style writes every sample of the buffer a context lends it (``rgba_out``): frames

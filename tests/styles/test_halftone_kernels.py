@@ -212,6 +212,10 @@ def test_samplers_equal_the_texture_kernels():
     pyr = build_pyramid(rng.random((37, 64, 3)).astype(np.float32))
     texels, offsets, shapes = pyr.packed()
     uv = rng.uniform(-3, 3, (500, 2))
+    # edges of the GL_REPEAT wrap (_taps' compare-and-subtract path and its modulo fallback):
+    # texel centres and borders, a period, just below 1, -0.0, huge coordinates
+    edge = [0.0, -0.0, 0.5 / 64, 1.0 / 64, 1.0, 1.0 - 2**-53, -1.0 + 2**-53, 2.0**60, -1e300]
+    uv[: len(edge) ** 2] = np.array([(a, b) for a in edge for b in edge])
     lod = rng.uniform(-1, 8, 500)
     level = rng.integers(-1, 9, 500)
     tri = sample_trilinear(pyr, uv, lod, dtype=np.float64)

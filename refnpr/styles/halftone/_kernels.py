@@ -65,35 +65,11 @@ def _unit(x, y, z):
 
 
 @njit
-def _bilinear(texels, offset, rows, cols, u, v, c):
-    """GL_LINEAR / GL_REPEAT sample of channel c of one level (``texture._kernels``' order)."""
-    x = (u - np.floor(u)) * cols - 0.5
-    y = (v - np.floor(v)) * rows - 0.5
-    x0 = math.floor(x)
-    y0 = math.floor(y)
-    fx = x - x0
-    fy = y - y0
-    i0 = _wrap(np.int64(x0), cols)
-    i1 = _wrap(np.int64(x0) + 1, cols)
-    j0 = _wrap(np.int64(y0), rows)
-    j1 = _wrap(np.int64(y0) + 1, rows)
-    w00 = (1.0 - fx) * (1.0 - fy)
-    w10 = fx * (1.0 - fy)
-    w01 = (1.0 - fx) * fy
-    w11 = fx * fy
-    return (
-        w00 * texels[offset + j0 * cols + i0, c]
-        + w10 * texels[offset + j0 * cols + i1, c]
-        + w01 * texels[offset + j1 * cols + i0, c]
-        + w11 * texels[offset + j1 * cols + i1, c]
-    )
-
-
-@njit
 def _taps(offset, rows, cols, u, v):
     """Texel indices and weights of a GL_LINEAR / GL_REPEAT sample of one level (rows, cols,
-    at ``offset`` in the packed texels), in ``_bilinear``'s arithmetic. Scalars only, so that
-    it inlines into the hot loop (a helper taking arrays is a call with NRT reference counts).
+    at ``offset`` in the packed texels), in ``texture._kernels``' arithmetic. Scalars only, so
+    that it inlines into the hot loop (a helper taking arrays is a call with NRT reference
+    counts).
     GL_REPEAT by compare and subtract where the index is at most one period out (always, for a
     finite uv), the modulo otherwise."""
     x = (u - np.floor(u)) * cols - 0.5
@@ -121,6 +97,13 @@ def _taps(offset, rows, cols, u, v):
     r0 = offset + j0 * cols
     r1 = offset + j1 * cols
     return r0 + i0, r0 + i1, r1 + i0, r1 + i1, w00, w10, w01, w11
+
+
+@njit
+def _bilinear(texels, offset, rows, cols, u, v, c):
+    """GL_LINEAR / GL_REPEAT sample of channel c of one level (``texture._kernels``' order)."""
+    i00, i10, i01, i11, w00, w10, w01, w11 = _taps(offset, rows, cols, u, v)
+    return w00 * texels[i00, c] + w10 * texels[i10, c] + w01 * texels[i01, c] + w11 * texels[i11, c]
 
 
 @njit
