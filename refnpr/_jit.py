@@ -122,8 +122,8 @@ def pnjit(func=None, **overrides):
     were 2-3x faster under ``prange`` only because of their views' reference counting, and
     banded with scalar reads they beat their ``prange`` build; halftone shading was here until
     its per-sample screen lookup stopped calling samplers that take arrays (a call with NRT
-    reference counts each; banded it is now as fast, and compiles in 6 s instead of 14). ``tests/test_jit_banded.py`` holds the
-    list of kernels allowed to use it.
+    reference counts each; banded it is now as fast, and compiles in 6 s instead of 14).
+    ``tests/test_jit_banded.py`` holds the list of kernels allowed to use it.
     """
     flags = {**JIT_FLAGS, "parallel": True, **overrides}
     if func is None:
