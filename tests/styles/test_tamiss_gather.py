@@ -216,3 +216,93 @@ def test_level_scale_is_the_dyadic_scale_of_q():
     ref_u = gu["dyadic_scale"][gu["tri_id"] >= 0]
     ok = np.isfinite(ref_u)
     np.testing.assert_allclose(s[ok, 1], ref_u[ok], rtol=0, atol=1e-9)
+
+
+def _capped_ink(inp: FieldInputs, i: int, field: StrokeField, width: float, fade: float, cap: int):
+    """TAM ink of sample i as docs/kit.md's ``tam-field`` spells it: the candidates in the
+    enumeration order (level, row, cell), at most ``cap`` kept per layer. Also returns the most
+    candidates any layer had before the cap."""
+    su, sv = inp.uv_scale[i]
+    u, v = inp.uv[i, 0] * su, inp.uv[i, 1] * sv
+    ux, vx = inp.duv_dx[i, 0] * su, inp.duv_dx[i, 1] * sv
+    uy, vy = inp.duv_dy[i, 0] * su, inp.duv_dy[i, 1] * sv
+    hw_px, end_px = width * (1 + field.width_jitter) / 2 + 0.5, 0.5
+    ink, most = 0.0, 0
+    for layer, (deg, tone) in enumerate(zip(field.directions, field.layer_tones, strict=True)):
+        ca, sa = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+        rho = min(max((inp.darkness[i] - tone) / (1 - tone) * field.density, 0.0), 1.0)
+        if rho <= 0:
+            continue
+        p, q = ca * u + sa * v, -sa * u + ca * v
+        d_p = 1 / math.hypot(ca * ux + sa * vx, ca * uy + sa * vy)
+        d_q = 1 / math.hypot(-sa * ux + ca * vx, -sa * uy + ca * vy)
+        s = math.log2(d_q / (7 * field.period))
+        big_l, f, thin = math.floor(s), s - math.floor(s), 1.0
+        if big_l < 0:
+            big_l, f, thin = 0, 0.0, 2.0**s
+        if big_l >= field.max_level:
+            big_l, f = field.max_level, 0.0
+        cands = []
+        for lev in range(big_l + (2 if f > 0 else 1)):
+            gain = thin if lev <= big_l else 2.0**f - 1
+            if gain * rho <= 0:
+                continue
+            rows = 7 * 2**lev
+            for ry in range(
+                math.floor((q - hw_px / d_q) * rows), math.floor((q + hw_px / d_q) * rows) + 2
+            ):
+                dist = abs(q - ry / rows) * d_q
+                if dist > hw_px:
+                    continue
+                gy, r = ry // 7, ry % 7
+                kx = int(KX[r])
+                ps = p * 2**lev - kx / 7
+                h = field.length * (1 + field.length_jitter) / 2 + end_px / d_p * 2**lev
+                for gx in range(math.floor(ps - h), math.floor(ps + h) + 2):
+                    if lev > 0 and gx % 2 == kx % 2 and gy % 2 == r % 2:
+                        continue
+                    sid = int(pack_id(inp.chart[i], layer, lev, gx, gy, r))
+                    lam = (
+                        field.length
+                        * (1 + field.length_jitter * (2 * hash01(sid, SALT_LENGTH)[0] - 1))
+                        / 2**lev
+                    )
+                    t = (p - ((gx + kx / 7) / 2**lev - lam / 2)) / lam
+                    beyond = max(-t, t - 1) * lam * d_p
+                    if beyond <= end_px:
+                        cands.append((sid, dist, beyond, rho * gain))
+        most = max(most, len(cands))
+        for sid, dist, beyond, limit in cands[:cap]:
+            opacity = min(max((limit - hash01(sid, SALT_TONE)[0]) / fade, 0.0), 1.0)
+            if opacity <= 0:
+                continue
+            wf = 1 + field.width_jitter * (2 * hash01(sid, SALT_WIDTH)[0] - 1)
+            a = min(max(width * wf / 2 - dist + 0.5, 0.0), 1.0) * min(max(0.5 - beyond, 0.0), 1.0)
+            ink = ink + a * opacity * (1 - ink)
+    return ink, most
+
+
+def test_tam_ink_keeps_the_candidate_cap_for_wide_strokes():
+    """Strokes 48 px wide over 1 px rows, faint (opacity at most ~0.1, so the ink does not
+    saturate): some samples have more candidates than the kernel's cap, and there the capped
+    enumeration's ink differs from the uncapped one. The kernel must give the capped ink there
+    (the fused fast path hands those samples over to it) and the same ink elsewhere (fast path),
+    both against the spec's loop."""
+    from dataclasses import replace
+
+    from refnpr.styles.tamiss._kernels import _CAP
+
+    n = 120
+    inp = replace(random_inputs(n, 3), darkness=np.full(n, 0.1))
+    field = StrokeField.from_params(
+        directions=["u", 60.0], period=1.0, length=2.0, width_jitter=0.3
+    )
+    got = tam_ink(inp, field, width=48.0, density_mode="fade", fade=1.0)[0]
+    most, differs = [], 0
+    for i in range(n):
+        want, m = _capped_ink(inp, i, field, 48.0, 1.0, _CAP)
+        most.append(m)
+        assert abs(got[i] - want) <= 1e-12, f"sample {i}: {got[i]} vs {want} ({m} candidates)"
+        differs += abs(want - _capped_ink(inp, i, field, 48.0, 1.0, 10**9)[0]) > 1e-9
+    assert max(most) > _CAP and min(most) <= _CAP  # both paths were taken
+    assert differs >= 10  # and the cap changes the ink there

@@ -3,7 +3,8 @@
 * ``chart_labels``: connected components of a mesh's faces through shared vertex indices.
 * ``field_pass``: per G-buffer sample, enumerate the strokes of the RPTAM field
   (``field``) that cover it, then either count/emit TAMISS fragments or accumulate the
-  anti-aliased TAM/RPTAM ink.
+  anti-aliased TAM/RPTAM ink (the TAM modes through ``_tam_layer``, the enumeration fused with
+  the accumulation, same bits).
 * ``raster_strips``: anti-aliased rasterization of image-space triangle strips (supersampled
   coverage of the union of a strip's triangles), composited in order with "over";
   ``strip_bbox``: the pieces' clipped sample bboxes it takes.
@@ -202,6 +203,115 @@ def _enumerate(
     return n
 
 
+@njit(inline="always")  # one call site (field_pass, TAM modes)
+def _tam_layer(
+    p,
+    q,
+    d_p,
+    d_q,
+    s,
+    rho,
+    chart,
+    layer,
+    max_level,
+    lam,
+    len_jit,
+    wid_jit,
+    width_px,
+    fade,
+    clip,
+    salt_len,
+    salt_tone,
+    salt_wid,
+    ink,
+):
+    """``ink`` over the TAM strokes of one sample and layer: :func:`_enumerate` (hw_px as
+    ``field_pass`` sets it, end_px = 0.5) fused with ``field_pass``'s TAM accumulation, cheapest
+    test first. Returns the new ink, or -1.0 when more than ``_CAP`` strokes could have been
+    candidates: then ``_enumerate``'s cap may drop some, and the caller takes that path instead.
+
+    Same strokes in the same order, each tested on the same values as there: a stroke is passed
+    over before its length is hashed when its cell centre is farther from p than any length
+    reaches (half the longest length plus end_px, with a margin far above rounding) or when its
+    density test fails (tau < rho gain is both modes' opacity > 0), so the ink is the same bits.
+    """
+    if not (s == s):  # NaN scale
+        return ink
+    hw_px = 0.5 * width_px * (1.0 + wid_jit) + 0.5
+    end_px = 0.5
+    big_l = math.floor(s)
+    f = s - big_l
+    thin = 1.0
+    if big_l < 0:
+        thin = math.pow(2.0, s)
+        big_l = 0
+        f = 0.0
+    if big_l >= max_level:
+        big_l = max_level
+        f = 0.0
+    top = big_l + 1 if f > 0.0 else big_l
+    alpha = math.pow(2.0, f) - 1.0
+    seen = 0  # strokes that _enumerate could have kept (an upper bound of its count)
+    hw_q = hw_px / d_q
+    end_cells = end_px / d_p
+    for lev in range(top + 1):
+        gain = thin if lev <= big_l else alpha
+        if gain * rho <= 0.0:
+            continue
+        limit = rho * gain
+        scale = float(1 << lev)
+        inv_scale = 1.0 / scale
+        rows = 7.0 * scale
+        ry0 = int(math.floor((q - hw_q) * rows))
+        ry1 = int(math.floor((q + hw_q) * rows)) + 1
+        half_cells = 0.5 * lam * (1.0 + len_jit) + end_cells * scale
+        for ry in range(ry0, ry1 + 1):
+            q_row = ry / rows
+            dist = abs(q - q_row) * d_q
+            if dist > hw_px:
+                continue
+            gy = ry // 7
+            r = ry - 7 * gy
+            kx = _KX[r]
+            kx7 = _KX7[r]
+            ps = p * scale - kx7
+            gx0 = int(math.floor(ps - half_cells))
+            gx1 = int(math.floor(ps + half_cells)) + 1
+            reach = 0.5 * lam * (1.0 + abs(len_jit)) + end_cells * scale
+            reach = reach + 1e-6 + 1e-9 * (abs(ps) + reach)
+            for gx in range(gx0, gx1 + 1):
+                if lev > 0 and (gx & 1) == (kx & 1) and (gy & 1) == (r & 1):
+                    continue  # inherited: enumerated at its birth level
+                seen += 1
+                if seen > _CAP:
+                    return -1.0
+                if abs(ps - gx) > reach:
+                    continue  # beyond > end_px for every length
+                sid = _pack(chart, layer, lev, gx, gy, r)
+                tau = _hash01(sid, salt_tone)
+                if not (tau < limit):
+                    continue  # opacity 0 in both modes
+                h = _hash01(sid, salt_len)
+                length = lam * (1.0 + len_jit * (2.0 * h - 1.0)) * inv_scale
+                p_start = (gx + kx7) * inv_scale - 0.5 * length
+                t = (p - p_start) / length
+                beyond = max(-t, t - 1.0) * length * d_p
+                if beyond > end_px:
+                    continue
+                if clip:
+                    opacity = 1.0
+                else:
+                    opacity = min(max((limit - tau) / fade, 0.0), 1.0)
+                if opacity <= 0.0:
+                    continue
+                wf = 1.0 + wid_jit * (2.0 * _hash01(sid, salt_wid) - 1.0)
+                cov_q = min(max(0.5 * width_px * wf - dist + 0.5, 0.0), 1.0)
+                cov_p = min(max(0.5 - beyond, 0.0), 1.0)
+                a = cov_q * cov_p * opacity
+                ink = ink + a * (1.0 - ink)
+    return ink
+
+
 @banded(lambda mode, uv, *rest: (uv.shape[0] + _CHUNK - 1) // _CHUNK)
 def field_pass(
     lo,
@@ -280,7 +390,14 @@ def field_pass(
                 d_q = 1.0 / gq
                 s = math.log2(d_q / (7.0 * period))
                 if tam:
-                    hw = 0.5 * width_px * (1.0 + wid_jit) + 0.5
+                    fused = _tam_layer(
+                        p, q, d_p, d_q, s, rho, chart[i], lay, max_level, lam, len_jit,
+                        wid_jit, width_px, fade, mode == 2, salt_len, salt_tone, salt_wid, ink,
+                    )  # fmt: skip
+                    if fused >= 0.0:
+                        ink = fused
+                        continue
+                    hw = 0.5 * width_px * (1.0 + wid_jit) + 0.5  # more than _CAP candidates
                     end = 0.5
                 else:
                     hw = 0.5 * width_px
