@@ -9,13 +9,13 @@ import numpy as np
 from refnpr._jit import banded, njit
 
 
-@njit
+@njit(inline="always")
 def _wrap(i, n):
     r = i % n
     return r + n if r < 0 else r
 
 
-@njit
+@njit(inline="always")  # a call passing texels and a row view pays NRT refcounts per sample
 def _bilinear_into(texels, offset, rows, cols, u, v, weight, out_row):
     """out_row[c] += weight * GL_LINEAR/GL_REPEAT sample of one level at (u, v).
 
