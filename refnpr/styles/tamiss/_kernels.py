@@ -203,7 +203,7 @@ def _enumerate(
     return n
 
 
-@njit(inline="always")  # one call site (field_pass, TAM modes)
+@njit  # scalars only, so a call costs no reference counts; compiled once, not into field_pass
 def _tam_layer(
     p,
     q,
