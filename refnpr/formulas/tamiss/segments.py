@@ -74,15 +74,19 @@ def visible_segments(c_v, *, threshold: float = 0.25, lo=-1.0, hi=1.0):
     a, b = knots[..., :-1], knots[..., 1:]
     fa, fb = _cubic(c[..., None, :], a), _cubic(c[..., None, :], b)
     cross = (fa < 0) != (fb < 0)  # v - threshold changes sign on a monotone piece
-    left, right, fleft = a.copy(), b.copy(), fa.copy()
+    # bisection on the crossing pieces only (the others' roots are hi): elementwise, the same
+    # values as over every piece
+    c_x = np.broadcast_to(c[..., None, :], a.shape + (4,))[cross]
+    left, right, fleft = a[cross], b[cross], fa[cross]
     for _ in range(64):
         mid = 0.5 * (left + right)
-        fm = _cubic(c[..., None, :], mid)
+        fm = _cubic(c_x, mid)
         same = (fm < 0) == (fleft < 0)
         left = np.where(same, mid, left)
         fleft = np.where(same, fm, fleft)
         right = np.where(same, right, mid)
-    roots = np.where(cross, 0.5 * (left + right), hi_[..., None])
+    roots = np.broadcast_to(hi_[..., None], a.shape).copy()
+    roots[cross] = 0.5 * (left + right)
     bps = np.concatenate([lo_[..., None], np.sort(roots, axis=-1), hi_[..., None]], axis=-1)
     starts, ends = bps[..., :-1], bps[..., 1:]
     positive = _cubic(c[..., None, :], 0.5 * (starts + ends)) >= 0
