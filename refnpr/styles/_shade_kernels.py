@@ -44,22 +44,6 @@ def _step_n(x, t, n):
 
 
 @njit
-def _unit_towards(px, py, pz, pos, y, nw, ox, oy, oz):
-    """``o[x] = unit(p - position[y, x])`` over one sample row (0 where p is the position), as
-    ``ShadeContext.view_dir`` / ``light_dirs`` compute it: pos (nH, nW * 3) float, o* (nW,)."""
-    for x in range(nw):
-        ox[x] = px - np.float64(pos[y, 3 * x])
-        oy[x] = py - np.float64(pos[y, 3 * x + 1])
-        oz[x] = pz - np.float64(pos[y, 3 * x + 2])
-    for x in range(nw):
-        length = math.sqrt(ox[x] * ox[x] + oy[x] * oy[x] + oz[x] * oz[x])
-        ok = length > 0.0
-        ox[x] = ox[x] / length if ok else 0.0
-        oy[x] = oy[x] / length if ok else 0.0
-        oz[x] = oz[x] / length if ok else 0.0
-
-
-@njit
 def _row_terms(y, nw, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_l, base):
     """N.L and the specular base of every light over one sample row, in branch-free passes
     over contiguous rows (they compile to SIMD divisions and square roots: double division is
@@ -69,66 +53,90 @@ def _row_terms(y, nw, nrm, pos, eye, light_kind, light_vec, specular, phong, v, 
     nrm, pos (nH, nW * 3) float: normals, positions (pos unread unless ``specular`` or a point
     light); v, lt (3, nW) float64 scratch: V and the current light's L; n_dot_l, base (L, nW)
     float64, written: N.L, and max(R.V, 0) (``phong``) or max(N.H, 0) with H = unit_vectors(L +
-    V) (where ``specular``).
-    """
+    V) (where ``specular``). The passes take 1D row views (``_unit_towards_row``,
+    ``_row_light``): LLVM vectorized only some of the same loops over 2D indexing (``v[0, x]``;
+    6 of 9 divisions as ``vdivpd ymm``, all 9 now)."""
+    nrow = nrm[y]
+    prow = pos[y] if pos.shape[0] > y else pos[0]
     if specular:  # V: unit vector towards the eye (ShadeContext.view_dir)
-        _unit_towards(eye[0], eye[1], eye[2], pos, y, nw, v[0], v[1], v[2])
+        _unit_towards_row(eye[0], eye[1], eye[2], prow, nw, v[0], v[1], v[2])
     for i in range(light_kind.shape[0]):
         point = light_kind[i] == LIGHT_POINT
         if point:  # ShadeContext.light_dirs
-            _unit_towards(
-                light_vec[i, 0], light_vec[i, 1], light_vec[i, 2], pos, y, nw, lt[0], lt[1], lt[2]
+            _unit_towards_row(
+                light_vec[i, 0], light_vec[i, 1], light_vec[i, 2], prow, nw, lt[0], lt[1], lt[2]
             )
-        cx = light_vec[i, 0]
-        cy = light_vec[i, 1]
-        cz = light_vec[i, 2]
+        _row_light(
+            nw, nrow, point, light_vec[i, 0], light_vec[i, 1], light_vec[i, 2], specular, phong,
+            v[0], v[1], v[2], lt[0], lt[1], lt[2], n_dot_l[i], base[i],
+        )  # fmt: skip
+
+
+@njit
+def _unit_towards_row(px, py, pz, prow, nw, ox, oy, oz):
+    """``o[x] = unit(p - position[x])`` over one row (1D views: prow (nW * 3,), o* (nW,))."""
+    for x in range(nw):
+        ox[x] = px - np.float64(prow[3 * x])
+        oy[x] = py - np.float64(prow[3 * x + 1])
+        oz[x] = pz - np.float64(prow[3 * x + 2])
+    for x in range(nw):
+        length = math.sqrt(ox[x] * ox[x] + oy[x] * oy[x] + oz[x] * oz[x])
+        ok = length > 0.0
+        ox[x] = ox[x] / length if ok else 0.0
+        oy[x] = oy[x] / length if ok else 0.0
+        oz[x] = oz[x] / length if ok else 0.0
+
+
+@njit
+def _row_light(nw, nrow, point, cx, cy, cz, specular, phong, v0, v1, v2, l0, l1, l2, ndl, bs):
+    """One light's N.L and specular base over one row, on 1D views (they vectorize)."""
+    for x in range(nw):
+        lx = l0[x] if point else cx
+        ly = l1[x] if point else cy
+        lz = l2[x] if point else cz
+        ndl[x] = (
+            np.float64(nrow[3 * x]) * lx
+            + np.float64(nrow[3 * x + 1]) * ly
+            + np.float64(nrow[3 * x + 2]) * lz
+        )
+    if not specular:
+        return
+    if phong:  # R = 2 (N.L) N - L; base = R.V
         for x in range(nw):
-            lx = lt[0, x] if point else cx
-            ly = lt[1, x] if point else cy
-            lz = lt[2, x] if point else cz
-            n_dot_l[i, x] = (
-                np.float64(nrm[y, 3 * x]) * lx
-                + np.float64(nrm[y, 3 * x + 1]) * ly
-                + np.float64(nrm[y, 3 * x + 2]) * lz
-            )
-        if not specular:
-            continue
-        if phong:  # R = 2 (N.L) N - L; base = R.V
-            for x in range(nw):
-                lx = lt[0, x] if point else cx
-                ly = lt[1, x] if point else cy
-                lz = lt[2, x] if point else cz
-                two = 2.0 * n_dot_l[i, x]
-                rx = two * np.float64(nrm[y, 3 * x]) - lx
-                ry = two * np.float64(nrm[y, 3 * x + 1]) - ly
-                rz = two * np.float64(nrm[y, 3 * x + 2]) - lz
-                b = rx * v[0, x] + ry * v[1, x] + rz * v[2, x]
-                base[i, x] = b if b >= 0.0 else 0.0
-            continue
-        for x in range(nw):  # H = unit_vectors(L + V), scaled by its largest component first
-            hx = (lt[0, x] if point else cx) + v[0, x]
-            hy = (lt[1, x] if point else cy) + v[1, x]
-            hz = (lt[2, x] if point else cz) + v[2, x]
-            m = max(abs(hx), abs(hy), abs(hz))
-            ok = m > 0.0
-            lt[0, x] = hx / m if ok else hx  # lt is free once N.L is known: it holds H
-            lt[1, x] = hy / m if ok else hy
-            lt[2, x] = hz / m if ok else hz
-        for x in range(nw):
-            hx = lt[0, x]
-            hy = lt[1, x]
-            hz = lt[2, x]
-            length = math.sqrt(hx * hx + hy * hy + hz * hz)
-            ok = length > 0.0
-            hx = hx / length if ok else hx
-            hy = hy / length if ok else hy
-            hz = hz / length if ok else hz
-            b = (
-                np.float64(nrm[y, 3 * x]) * hx
-                + np.float64(nrm[y, 3 * x + 1]) * hy
-                + np.float64(nrm[y, 3 * x + 2]) * hz
-            )
-            base[i, x] = b if b >= 0.0 else 0.0
+            lx = l0[x] if point else cx
+            ly = l1[x] if point else cy
+            lz = l2[x] if point else cz
+            two = 2.0 * ndl[x]
+            rx = two * np.float64(nrow[3 * x]) - lx
+            ry = two * np.float64(nrow[3 * x + 1]) - ly
+            rz = two * np.float64(nrow[3 * x + 2]) - lz
+            b = rx * v0[x] + ry * v1[x] + rz * v2[x]
+            bs[x] = b if b >= 0.0 else 0.0
+        return
+    for x in range(nw):  # H = unit_vectors(L + V), scaled by its largest component first
+        hx = (l0[x] if point else cx) + v0[x]
+        hy = (l1[x] if point else cy) + v1[x]
+        hz = (l2[x] if point else cz) + v2[x]
+        m = max(abs(hx), abs(hy), abs(hz))
+        ok = m > 0.0
+        l0[x] = hx / m if ok else hx  # l* is free once N.L is known: it holds H
+        l1[x] = hy / m if ok else hy
+        l2[x] = hz / m if ok else hz
+    for x in range(nw):
+        hx = l0[x]
+        hy = l1[x]
+        hz = l2[x]
+        length = math.sqrt(hx * hx + hy * hy + hz * hz)
+        ok = length > 0.0
+        hx = hx / length if ok else hx
+        hy = hy / length if ok else hy
+        hz = hz / length if ok else hz
+        b = (
+            np.float64(nrow[3 * x]) * hx
+            + np.float64(nrow[3 * x + 1]) * hy
+            + np.float64(nrow[3 * x + 2]) * hz
+        )
+        bs[x] = b if b >= 0.0 else 0.0
 
 
 @njit
