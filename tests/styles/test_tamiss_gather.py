@@ -51,9 +51,9 @@ def random_inputs(n: int, seed: int) -> FieldInputs:
     )
 
 
-def oracle(inp: FieldInputs, i: int, field: StrokeField, hw: float, tam_width=None, fade=None):
-    """Strokes over sample i by brute force: [(id, t, coverage)] (coverage for TAM only)."""
-    out = []
+def _layer_frames(inp: FieldInputs, i: int, field: StrokeField):
+    """Per layer with ink at sample i, the spec's frame (sec. 3.1, docs/kit.md ``tam-field``):
+    ``(layer, rho, p, q, d_p, d_q, L, f, thin)``, in plain Python floats."""
     su, sv = inp.uv_scale[i]
     u, v = inp.uv[i, 0] * su, inp.uv[i, 1] * sv
     ux, vx = inp.duv_dx[i, 0] * su, inp.duv_dx[i, 1] * sv
@@ -72,6 +72,13 @@ def oracle(inp: FieldInputs, i: int, field: StrokeField, hw: float, tam_width=No
             big_l, f, thin = 0, 0.0, 2.0**s
         if big_l >= field.max_level:
             big_l, f = field.max_level, 0.0
+        yield layer, rho, p, q, d_p, d_q, big_l, f, thin
+
+
+def oracle(inp: FieldInputs, i: int, field: StrokeField, hw: float, tam_width=None, fade=None):
+    """Strokes over sample i by brute force: [(id, t, coverage)] (coverage for TAM only)."""
+    out = []
+    for layer, rho, p, q, d_p, d_q, big_l, f, thin in _layer_frames(inp, i, field):
         top = big_l + 1 if f > 0 else big_l
         for lev in range(top + 1):
             gain = thin if lev <= big_l else 2.0**f - 1
@@ -222,26 +229,9 @@ def _capped_ink(inp: FieldInputs, i: int, field: StrokeField, width: float, fade
     """TAM ink of sample i as docs/kit.md's ``tam-field`` spells it: the candidates in the
     enumeration order (level, row, cell), at most ``cap`` kept per layer. Also returns the most
     candidates any layer had before the cap."""
-    su, sv = inp.uv_scale[i]
-    u, v = inp.uv[i, 0] * su, inp.uv[i, 1] * sv
-    ux, vx = inp.duv_dx[i, 0] * su, inp.duv_dx[i, 1] * sv
-    uy, vy = inp.duv_dy[i, 0] * su, inp.duv_dy[i, 1] * sv
     hw_px, end_px = width * (1 + field.width_jitter) / 2 + 0.5, 0.5
     ink, most = 0.0, 0
-    for layer, (deg, tone) in enumerate(zip(field.directions, field.layer_tones, strict=True)):
-        ca, sa = math.cos(math.radians(deg)), math.sin(math.radians(deg))
-        rho = min(max((inp.darkness[i] - tone) / (1 - tone) * field.density, 0.0), 1.0)
-        if rho <= 0:
-            continue
-        p, q = ca * u + sa * v, -sa * u + ca * v
-        d_p = 1 / math.hypot(ca * ux + sa * vx, ca * uy + sa * vy)
-        d_q = 1 / math.hypot(-sa * ux + ca * vx, -sa * uy + ca * vy)
-        s = math.log2(d_q / (7 * field.period))
-        big_l, f, thin = math.floor(s), s - math.floor(s), 1.0
-        if big_l < 0:
-            big_l, f, thin = 0, 0.0, 2.0**s
-        if big_l >= field.max_level:
-            big_l, f = field.max_level, 0.0
+    for layer, rho, p, q, d_p, d_q, big_l, f, thin in _layer_frames(inp, i, field):
         cands = []
         for lev in range(big_l + (2 if f > 0 else 1)):
             gain = thin if lev <= big_l else 2.0**f - 1
