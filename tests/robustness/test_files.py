@@ -298,7 +298,11 @@ def _check_size_api(results, tmp: Path) -> None:
 # ---------------------------------------------------------------------------------------------
 # writes interrupted by a signal, or failing
 # ---------------------------------------------------------------------------------------------
+# SIGINT as an interactive user has it: a shell starts background jobs with SIGINT ignored, and
+# an ignored signal is inherited (Python then installs no KeyboardInterrupt handler).
 _CHILD = """
+import signal
+signal.signal(signal.SIGINT, signal.default_int_handler)
 import numpy as np
 from refnpr.image import write_png_atomic
 a = np.random.default_rng(0).integers(0, 256, (3000, 3000, 4), dtype=np.uint8)
@@ -306,16 +310,10 @@ write_png_atomic({target!r}, a)
 """
 
 
-def _interrupted(sig: int, attempts: int = 3):
-    """Start a slow PNG write in a child, signal it as soon as its temporary file exists.
+def _interrupted(sig: int):
+    """Start a slow PNG write in a child, signal it once its temporary file exists."""
 
-    The write takes over a second (1.4 s on 2 cores); the signal goes at once, so it lands
-    inside it unless this process is descheduled for that long (a loaded machine: then the
-    rename wins, the child exits 0 with a complete image). Such a run is tried again, up to
-    ``attempts`` times: a child that ignores the signal exits 0 every time.
-    """
-
-    def once(tmp: Path) -> dict:
+    def run(tmp: Path) -> dict:
         target = tmp / "big.png"
         proc = subprocess.Popen(
             [sys.executable, "-c", _CHILD.format(target=str(target))],
@@ -332,6 +330,7 @@ def _interrupted(sig: int, attempts: int = 3):
                     break
                 time.sleep(0.005)
             if seen:
+                time.sleep(0.2)  # well inside the write (about a second for this image)
                 proc.send_signal(sig)
             _, err = proc.communicate(timeout=60)
         finally:
@@ -339,15 +338,6 @@ def _interrupted(sig: int, attempts: int = 3):
                 proc.kill()
                 proc.wait()
         return {"seen": seen, "rc": proc.returncode, "err": err, "files": sorted(tmp.iterdir())}
-
-    def run(tmp: Path) -> dict:
-        for attempt in range(attempts):
-            result = once(tmp)
-            late = result["rc"] == 0 and [p.name for p in result["files"]] == ["big.png"]
-            if not late or attempt == attempts - 1:
-                return result
-            (tmp / "big.png").unlink()  # the signal came after the rename: again
-        return result
 
     return run
 
