@@ -52,8 +52,8 @@ def _nonfinite(p0, p1, p2, p3):
 
 @njit
 def _pair_means(top, bot, mean, w):
-    """``mean[x] = ((top[2x] + top[2x + 1]) + bot[2x] + bot[2x + 1]) / 4`` in that order (1D
-    float64 views; 0.25 = 1 / 4 exactly, the same bits as the division)."""
+    """``mean[x] = (((top[2x] + top[2x + 1]) + bot[2x]) + bot[2x + 1]) * 0.25`` (1D float64
+    views; 0.25 = 1 / 4 exactly, the same bits as dividing by 4)."""
     for x in range(w):
         k = 2 * x
         mean[x] = (((top[k] + top[k + 1]) + bot[k]) + bot[k + 1]) * 0.25
@@ -78,10 +78,11 @@ def _store_row(q0, q1, q2, q3, dst, w):
 def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
     """Composite per sample over ``bg``, box-resolve n x n samples, unpremultiply.
 
-    rgba : (n H, n W, 4) float32, straight alpha per sample, as the style returned it.
+    rgba : (n H, n W, 4) float32, C-contiguous, straight alpha per sample, as the style returned
+        it (``refnpr.render.composite_resolve`` makes it contiguous; rows are read as flat views).
     n : int, samples per pixel along each axis.
     bg : (4,) float64, straight-alpha background.
-    out : (H, W, 4) float32, written: straight-alpha pixels.
+    out : (H, W, 4) float32, C-contiguous, written: straight-alpha pixels.
     bad_rows : (H,) uint8, written: 1 where a sample or a pixel of that output row is NaN or
         inf (a pixel overflows float32 where finite samples are out of range), so a row of 0s
         means every pixel written is finite.
@@ -119,9 +120,9 @@ def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
             dst = out[y].reshape(w * 4)
             bad = False
             for x in range(w):
-                s0, s1, s2, s3, q = _over(src, 4 * x, bg0, bg1, bg2, bg3)
+                s0, s1, s2, s3, bad_s = _over(src, 4 * x, bg0, bg1, bg2, bg3)
                 p0, p1, p2, p3 = _unpremultiply(s0, s1, s2, s3)
-                bad |= q | _nonfinite(p0, p1, p2, p3)
+                bad |= bad_s | _nonfinite(p0, p1, p2, p3)
                 dst[4 * x] = p0
                 dst[4 * x + 1] = p1
                 dst[4 * x + 2] = p2
