@@ -119,6 +119,25 @@ def test_fused_kernel_refuses_nan_and_inf(bad):
         composite_resolve(rgba, 2, (0, 0, 0, 1), style_name="toon")
 
 
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_fused_kernel_finds_a_bad_sample_anywhere_in_the_block(n):
+    """Each sample position of a pixel's n x n block (top and bottom sample rows: the spp-4 path
+    reads them as two planes), each channel, in the last pixel of a row: one NaN or inf is
+    refused. Everything is transparent, so the pixel's colour is the 0 of alpha 0 whatever its
+    samples hold: only the per-sample test sees a bad colour channel."""
+    for bad in (np.nan, np.inf):
+        for j in range(n):
+            for i in range(n):
+                for c in range(4):
+                    rgba = np.full((2 * n, 5 * n, 4), 0.5, np.float32)
+                    rgba[..., 3] = 0.0
+                    rgba[n + j, 4 * n + i, c] = bad
+                    with pytest.raises(ValueError, match="produced NaN or inf"):
+                        composite_resolve(rgba, n, (0.2, 0.3, 0.4, 0.0))
+    rgba[n + j, 4 * n + i, c] = 0.0  # the same block without it: accepted, transparent
+    assert not composite_resolve(rgba, n, (0.2, 0.3, 0.4, 0.0)).any()
+
+
 def test_fused_kernel_refuses_a_pixel_that_overflows_float32():
     """Finite samples out of range (alpha 2 and -1.999) can resolve to an inf pixel: refused
     like a NaN sample (render builds its Image on this check, without another scan)."""
