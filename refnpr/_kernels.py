@@ -154,6 +154,8 @@ def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
     count = float(n * n)
     exact_inverse = (n * n) & (n * n - 1) == 0  # a power of two: x / count == x * (1 / count)
     inverse = 1.0 / count
+    flat = rgba.reshape(rgba.size)
+    row_len = 4 * w * n  # floats per sample row
     for y in range(lo, hi):
         bad = False
         for x in range(w):
@@ -161,21 +163,12 @@ def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
             s1 = 0.0
             s2 = 0.0
             s3 = 0.0
-            for j in range(n):
-                row = y * n + j
+            for j in range(n):  # sample row by sample row, left to right
+                base = (y * n + j) * row_len + 4 * x * n
                 for i in range(n):
-                    col = x * n + i
-                    r = np.float64(rgba[row, col, 0])
-                    g = np.float64(rgba[row, col, 1])
-                    b = np.float64(rgba[row, col, 2])
-                    a = np.float64(rgba[row, col, 3])
-                    bad |= (r + g + b + a) * 0.0 != 0.0
-                    one_a = 1.0 - a
-                    o0 = r * a + bg0 * one_a
-                    o1 = g * a + bg1 * one_a
-                    o2 = b * a + bg2 * one_a
-                    o3 = a + bg3 * one_a
-                    if j == 0 and i == 0:
+                    o0, o1, o2, o3, bad_s = _over(flat, base + 4 * i, bg0, bg1, bg2, bg3)
+                    bad |= bad_s
+                    if j == 0 and i == 0:  # not 0.0 + o: that would turn -0.0 into 0.0
                         s0 = o0
                         s1 = o1
                         s2 = o2
