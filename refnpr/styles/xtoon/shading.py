@@ -146,7 +146,11 @@ def shade_rgba(cfg: Config, ctx: Any, show: str = "color") -> np.ndarray:
         diffuse = np.array(
             [np.asarray(o.material.diffuse, dtype=np.float64) for o in objs], dtype=np.float64
         ).reshape(len(objs), 3)
-    tex = np.ascontiguousarray(cfg.texture, dtype=np.float32)
+    # the float32 texture's values in float64 (exact) and flat: the kernel's texel loads
+    # need no conversion, and index it with unsigned offsets
+    tex32 = np.asarray(cfg.texture, dtype=np.float32)
+    rows, cols = tex32.shape[:2]
+    tex = np.ascontiguousarray(tex32, dtype=np.float64).reshape(-1)
     out = rgba_out(ctx, shape)  # written in full by the kernel
     bad = np.zeros(nh, dtype=np.uint8)
     K.shade_xtoon(
@@ -166,6 +170,8 @@ def shade_rgba(cfg: Config, ctx: Any, show: str = "color") -> np.ndarray:
         params,
         bool(cfg.detail.one_sided),
         tex,
+        rows,
+        cols,
         bool(cfg.modulate),
         np.ascontiguousarray(diffuse),
         _SHOW[show],
