@@ -72,7 +72,8 @@ def _reference_inputs(gb, scene, *, constant_tone=None, derivatives="smooth", or
         rgb = m_a * np.asarray(scene.ambient, dtype=np.float64)
         for light_dir, color in ctx.light_dirs(sel):
             rgb = rgb + m_d * lighting.diffuse(n, light_dir)[..., None] * color
-        dark = 1.0 - np.clip(rgb @ np.array([0.2126, 0.7152, 0.0722]), 0.0, 1.0)
+        lum = (rgb[:, 0] * 0.2126 + rgb[:, 1] * 0.7152) + rgb[:, 2] * 0.0722  # r, g, then b
+        dark = 1.0 - np.clip(lum, 0.0, 1.0)
     return np.flatnonzero(sel.ravel()), uv, duv_dx, duv_dy, uv_scale, dark, chart
 
 

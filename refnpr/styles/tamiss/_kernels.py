@@ -41,6 +41,10 @@ _KX = np.array([0, 6, 5, 1, 3, 4, 2], dtype=np.int64)
 #: kx / 7.0 per row residue, divided once here (the same float64 values the loops divided).
 _KX7 = _KX / 7.0
 _CELL_OFF = 1 << 21
+#: Rec. 709 luminance weights (the darkness of ``sample_inputs``).
+_LUMA_R = 0.2126
+_LUMA_G = 0.7152
+_LUMA_B = 0.0722
 
 #: Fragment pass modes.
 MODE_COUNT, MODE_EMIT, MODE_TAM_CLIP, MODE_TAM_FADE = 0, 1, 2, 3
@@ -805,7 +809,7 @@ def sample_inputs(
     out_dy,
     out_scale,
     out_chart,
-    out_rgb,
+    out_dark,
     chunk_max,
 ):
     """Per-sample field inputs of the N covered samples ``sample`` (flat G-buffer indices).
@@ -815,9 +819,10 @@ def sample_inputs(
     object (``scale`` (objects, 2)), chart ``charts[tri]``; with ``smooth`` the derivatives of
     :func:`smooth_duv` (same arithmetic); with ``orient`` u' = M u + offset with M =
     ``sym_m[sym[tri]]`` (signed permutations) on uv, the derivatives and (|M|) the scale, and
-    chart ``group[tri]``; with ``shade`` the diffuse colour m_a l_a + sum_i m_d f_d(N, L_i) l_i
-    (``out_rgb`` (N, 3); lights (L, 3) directions (unit, directional) or positions
-    (``l_point``), colours). ``chunk_max`` (chunks,) receives max |u' s| over each chunk.
+    chart ``group[tri]``; with ``shade`` the darkness 1 - clip(Y, 0, 1) (``out_dark`` (N,)) of
+    the diffuse colour m_a l_a + sum_i m_d f_d(N, L_i) l_i (lights (L, 3) directions (unit,
+    directional) or positions (``l_point``), colours), Y its Rec. 709 luminance.
+    ``chunk_max`` (chunks,) receives max |u' s| over each chunk.
     """
     n_samples = sample.shape[0]
     n_lights = l_color.shape[0]
@@ -972,9 +977,11 @@ def sample_inputs(
                     r = r + m_d[mi, 0] * fd * l_color[li, 0]  # eq. 1: + m_d f_d l_i
                     g = g + m_d[mi, 1] * fd * l_color[li, 1]
                     bl = bl + m_d[mi, 2] * fd * l_color[li, 2]
-                out_rgb[i, 0] = r
-                out_rgb[i, 1] = g
-                out_rgb[i, 2] = bl
+                # darkness = 1 - clip(Rec. 709 luminance, 0, 1), summed r, g, then b (as
+                # halftone's; a BLAS dot product may fuse or reorder, by CPU); NaN stays NaN
+                lum = (r * _LUMA_R + g * _LUMA_G) + bl * _LUMA_B
+                lum = 0.0 if lum < 0.0 else (1.0 if lum > 1.0 else lum)
+                out_dark[i] = 1.0 - lum
         chunk_max[ci] = cmax
 
 
