@@ -139,14 +139,19 @@ def lit_rgba(
             f"{type(out).__name__} {getattr(out, 'shape', '')} {getattr(out, 'dtype', '')}; "
             "pass None for a new one"
         )
+    m_specular = table("specular")
+    light_color = np.array(colors, dtype=np.float64).reshape(n_lights, 3)
+    # the objects and lights with a specular colour (m_s and l_i both nonzero in a channel):
+    # elsewhere the kernels skip the specular term, whose value is a signed zero there
+    spec_on = np.ascontiguousarray(
+        np.any((m_specular[:, None, :] != 0.0) & (light_color[None, :, :] != 0.0), axis=2)
+    )
     if mode == "smooth":
         # f_s = base ** shininess by multiplications where the shininess is a small integer,
         # checked against pow's float32 result in the kernel (a float64 ``out``: pow itself)
         p = shininess
         whole = (p == np.floor(p)) & (p >= 1) & (p <= _POW_INT_MAX)
         pow_int = np.where(whole, p, 0).astype(np.int64)
-        light_color = np.array(colors, dtype=np.float64).reshape(n_lights, 3)
-        m_specular = table("specular")
         terms = (m_ambient, table("diffuse"), m_specular, light_color)
         if not specular or out.dtype != np.float32 or any(np.any(a < 0) for a in terms):
             pow_int[:] = 0
@@ -162,6 +167,7 @@ def lit_rgba(
             shininess,
             pow_int,
             np.ascontiguousarray(spec_mag),
+            spec_on,
             np.array(kinds, dtype=np.int64),
             np.array(vecs, dtype=np.float64).reshape(n_lights, 3),
             light_color,
@@ -178,11 +184,12 @@ def lit_rgba(
         position,
         m_ambient,
         table("diffuse"),
-        table("specular"),
+        m_specular,
         shininess,
+        spec_on,
         np.array(kinds, dtype=np.int64),
         np.array(vecs, dtype=np.float64).reshape(n_lights, 3),
-        np.array(colors, dtype=np.float64).reshape(n_lights, 3),
+        light_color,
         np.ascontiguousarray(np.asarray(scene.camera.eye, dtype=np.float64)),
         codes[mode],
         int(n),

@@ -150,6 +150,19 @@ def _row_step_tones(nw, n_lights, n_dot_l, t, steps, tone):
             tone[i, x] = _step_n(f_d, t, steps)
 
 
+@njit(inline="always")
+def _spec_term(nonzero, r, g, b):
+    """Whether the specular term must be added to the colour sums ``(r, g, b)``.
+
+    ``nonzero`` is False where, in every channel, the object's m_s or the light's colour is
+    zero (no specular colour, as the teapot's floor): then the term m_s f_s l_i is a signed zero
+    for any finite f_s (f_s <= base ** shininess with base <= 1 + 1e-6: finite below a
+    shininess of ~1e9), and adding it changes no sum unless the sum is itself zero (-0 + +0 =
+    +0), where it is added as the formula does. Skipping it gives the same bits.
+    """
+    return nonzero or r == 0.0 or g == 0.0 or b == 0.0
+
+
 @banded("cover")
 def shade_lit(
     lo,
@@ -162,6 +175,7 @@ def shade_lit(
     m_diffuse,
     m_specular,
     shininess,
+    spec_on,
     light_kind,
     light_vec,
     light_color,
@@ -183,7 +197,9 @@ def shade_lit(
     mesh_id (nH, nW) int: object index (clamped to >= 0, as ``material_field`` does).
     normal (nH, nW, 3) float: unit normals; position (nH, nW, 3) float (any shape when neither
     ``specular`` nor a point light needs it). m_ambient (O, 3) float64: m_a * l_a per object;
-    m_diffuse, m_specular (O, 3) float64; shininess (O,) float64. light_kind (L,) int64;
+    m_diffuse, m_specular (O, 3) float64; shininess (O,) float64; spec_on (O, L) bool: m_s and
+    the light's colour both nonzero in some channel (else the term is skipped, ``_spec_term``).
+    light_kind (L,) int64;
     light_vec (L, 3) float64: unit direction for directional lights, position for point
     lights; light_color (L, 3) float64; eye (3,) float64. mode: MODE_SMOOTH / MODE_STEP /
     MODE_LAKE; steps, t: eq. 4's n and t; ramp (K,) float64: Lake's texture (MODE_LAKE);
@@ -239,7 +255,7 @@ def shade_lit(
                 r = r + m_diffuse[mi, 0] * tone * light_color[i, 0]
                 g = g + m_diffuse[mi, 1] * tone * light_color[i, 1]
                 b = b + m_diffuse[mi, 2] * tone * light_color[i, 2]
-                if specular and p > 0.0:
+                if specular and p > 0.0 and _spec_term(spec_on[mi, i], r, g, b):
                     base = bases[i, x]  # max(R.V, 0) or max(N.H, 0)
                     if mode != MODE_STEP:
                         f_s = base**p if n_dot_l > 0.0 else 0.0  # eq. 1: f_s
@@ -309,6 +325,7 @@ def shade_smooth(
     shininess,
     pow_int,
     spec_mag,
+    spec_on,
     light_kind,
     light_vec,
     light_color,
@@ -320,8 +337,11 @@ def shade_smooth(
     """``shade_lit``'s MODE_SMOOTH (Veryovka eq. 1), in a kernel of its own (arguments as
     there), with f_s = base ** shininess by multiplications where ``pow_int (O,) int64`` holds
     the object's integer shininess k >= 1 (0: pow); spec_mag (O, L) float64: 1.01 times
-    sum_c |m_s[o, c] light_color[l, c]|, the weight of an error in f_s.
-    A sample whose N.L <= 0 has f_s = 0 (eq. 1) whatever the base: no specular term there.
+    sum_c |m_s[o, c] light_color[l, c]|, the weight of an error in f_s; spec_on (O, L) bool as
+    in ``shade_lit``.
+    A sample whose N.L <= 0 has f_s = 0 (eq. 1) whatever the base, and an object without a
+    specular colour (``spec_on``) a zero term: there the term is a signed zero, added only to a
+    zero sum (where it can turn -0 into +0, as the formula does; ``_spec_term``).
 
     Such a sample's colour carries a bound on its distance from the colour with libm's pow
     (relative (k + 3) u on f_s, then the rounding of the operations that follow); where the
@@ -365,7 +385,9 @@ def shade_smooth(
                     r = r + dr
                     g = g + dg
                     b = b + db
-                    if specular and p > 0.0 and n_dot_l > 0.0:  # else f_s = 0: no term
+                    if not (specular and p > 0.0):
+                        continue
+                    if n_dot_l > 0.0 and spec_on[mi, i]:
                         base = bases[i, x]  # max(R.V, 0) or max(N.H, 0)
                         if k > 0:  # base ** p within e_s (checked below)
                             f_s = _int_pow(base, k)
@@ -378,6 +400,13 @@ def shade_smooth(
                         r = r + sr
                         g = g + sg
                         b = b + sb
+                    elif r == 0.0 or g == 0.0 or b == 0.0:
+                        # f_s = 0 (eq. 1: N.L <= 0), or m_s l_i zero channel by channel: the
+                        # term is the signed zero m_s 0 l_i, which changes only a zero sum
+                        # (-0 + +0 = +0; see _spec_term); elsewhere it is skipped
+                        r = r + m_specular[mi, 0] * 0.0 * light_color[i, 0]
+                        g = g + m_specular[mi, 1] * 0.0 * light_color[i, 1]
+                        b = b + m_specular[mi, 2] * 0.0 * light_color[i, 2]
                 if k == 0 or err == 0.0:
                     break
                 # and the rounding differences of the operations after a replaced pow, at most

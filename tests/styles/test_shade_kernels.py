@@ -295,3 +295,36 @@ def test_step_edges_give_the_tone_of_pow_near_every_breakpoint(n, t):
     # the table answers most bases (for n = 1, t = 0 only f_s >= 1 would be certain: none)
     if (n, t) != (1, 0.0):
         assert answered > 1000
+
+
+def test_objects_without_a_specular_colour_skip_the_term_with_the_same_bits():
+    """The kernels skip m_s f_s l_i where m_s or the light's colour is zero in every channel
+    (``_shade_kernels._spec_term``): the numpy formulas add that signed zero, which changes a
+    sum only where the sum is itself -0 (here from -0 ambient and diffuse colours): exact."""
+    mats = (
+        Material(ambient=(0.1, 0.1, 0.1), diffuse=(0.8, 0.7, 0.6), specular=(0.0, 0.0, 0.0)),
+        Material(ambient=(-0.0, 0.0, 0.2), diffuse=(-0.0, 0.5, 0.0), specular=(0.0, 0.0, 0.0)),
+        Material(ambient=(0.0, 0.0, 0.0), diffuse=(-0.0, -0.0, -0.0), specular=(0.0, 0.0, 0.7)),
+        MATERIALS[0],
+    )
+    lights = (
+        Light(direction=(0.4, 0.8, 0.5), color=(1.0, 0.9, 0.0)),  # no blue: m_s of mats[2] off
+        Light(kind="point", position=(0.5, 2.0, 3.0), color=(0.9, 0.9, 1.2)),
+    )
+    for seed in (4, 5):
+        ctx = random_ctx(seed, "mixed")
+        mesh_id = np.asarray(ctx.gb["mesh_id"]) % (len(mats) + 1) - 1
+        gb = {**ctx.gb, "mesh_id": mesh_id.astype(np.int32)}
+        gb["tri_id"] = np.where(mesh_id >= 0, 1, -1).astype(np.int32)
+        scene = SimpleNamespace(
+            objects=[SimpleNamespace(material=m) for m in mats],
+            lights=lights,
+            ambient=(0.9, 1.0, 1.1),
+            camera=ctx.scene.camera,
+        )
+        ctx = ShadeContext(gb, scene)
+        for style in STYLES:
+            got = style.shade(ctx)
+            want = oracle(style, ctx)
+            bad = np.argwhere(np.any(got.view(np.uint32) != want.view(np.uint32), axis=-1))
+            assert bad.size == 0, f"{style!r}: {len(bad)} samples differ, first {bad[:3].tolist()}"

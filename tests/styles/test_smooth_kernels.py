@@ -71,6 +71,7 @@ def pow_kernel(ctx: ShadeContext, model: str) -> np.ndarray:
         np.ascontiguousarray(table("diffuse")),
         np.ascontiguousarray(table("specular")),
         np.ascontiguousarray(table("shininess").reshape(-1)),
+        np.ones((len(objs), len(kinds)), dtype=np.bool_),  # every specular term added
         np.array(kinds, dtype=np.int64),
         np.array(vecs, dtype=np.float64).reshape(-1, 3),
         np.array([lt.color for lt in scene.lights], dtype=np.float64).reshape(-1, 3),
