@@ -44,11 +44,15 @@ def _step_n(x, t, n):
 
 
 @njit
-def _row_terms(y, nw, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_l, base):
-    """N.L and the specular base of every light over one sample row, in branch-free passes
-    over contiguous rows (they compile to SIMD divisions and square roots: double division is
-    what the per-sample loop waited on). The operations are the per-sample formulas', in their
-    order, so every value has the same bits; uncovered samples get values nobody reads.
+def _row_terms(
+    y, x0, x1, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_l, base
+):
+    """N.L and the specular base of every light at samples ``x0..x1 - 1`` of row y (its covered
+    span, ``_covered_span``), in branch-free passes over contiguous rows (they compile to SIMD
+    divisions and square roots: double division is what the per-sample loop waited on). The
+    operations are the per-sample formulas', in their order, so every value has the same bits;
+    uncovered samples inside the span get values nobody reads. The passes get views of the span
+    and loop from 0: a loop from x0 (a signed start) compiled without SIMD.
 
     nrm, pos (nH, nW * 3) float: normals, positions (pos unread unless ``specular`` or a point
     light); v, lt (3, nW) float64 scratch: V and the current light's L; n_dot_l, base (L, nW)
@@ -56,19 +60,22 @@ def _row_terms(y, nw, nrm, pos, eye, light_kind, light_vec, specular, phong, v, 
     V) (where ``specular``). The passes take 1D row views (``_unit_towards_row``,
     ``_row_light``): LLVM vectorized only some of the same loops over 2D indexing (``v[0, x]``;
     6 of 9 divisions as ``vdivpd ymm``, all 9 now)."""
-    nrow = nrm[y]
-    prow = pos[y] if pos.shape[0] > y else pos[0]
+    nw = x1 - x0
+    nrow = nrm[y, 3 * x0 : 3 * x1]
+    prow = pos[y, 3 * x0 : 3 * x1] if pos.shape[0] > y else pos[0]
+    v0, v1, v2 = v[0, x0:x1], v[1, x0:x1], v[2, x0:x1]
+    l0, l1, l2 = lt[0, x0:x1], lt[1, x0:x1], lt[2, x0:x1]
     if specular:  # V: unit vector towards the eye (ShadeContext.view_dir)
-        _unit_towards_row(eye[0], eye[1], eye[2], prow, nw, v[0], v[1], v[2])
+        _unit_towards_row(eye[0], eye[1], eye[2], prow, nw, v0, v1, v2)
     for i in range(light_kind.shape[0]):
         point = light_kind[i] == LIGHT_POINT
         if point:  # ShadeContext.light_dirs
             _unit_towards_row(
-                light_vec[i, 0], light_vec[i, 1], light_vec[i, 2], prow, nw, lt[0], lt[1], lt[2]
+                light_vec[i, 0], light_vec[i, 1], light_vec[i, 2], prow, nw, l0, l1, l2
             )
         _row_light(
             nw, nrow, point, light_vec[i, 0], light_vec[i, 1], light_vec[i, 2], specular, phong,
-            v[0], v[1], v[2], lt[0], lt[1], lt[2], n_dot_l[i], base[i],
+            v0, v1, v2, l0, l1, l2, n_dot_l[i, x0:x1], base[i, x0:x1],
         )  # fmt: skip
 
 
@@ -139,15 +146,29 @@ def _row_light(nw, nrow, point, cx, cy, cz, specular, phong, v0, v1, v2, l0, l1,
         bs[x] = b if b >= 0.0 else 0.0
 
 
+@njit(inline="always")
+def _covered_span(cover, y, nw):
+    """``(x0, x1)``: row y's covered samples (``cover >= 0``) lie in ``[x0, x1)``; x0 == x1
+    where the row has none. The row passes run over that span only (a fifth of the teapot
+    scene's rows are empty)."""
+    x0 = 0
+    while x0 < nw and cover[y, x0] < 0:
+        x0 += 1
+    x1 = nw
+    while x1 > x0 and cover[y, x1 - 1] < 0:
+        x1 -= 1
+    return x0, x1
+
+
 @njit
-def _row_step_tones(nw, n_lights, n_dot_l, t, steps, tone):
-    """``tone[i, x] = T_n(max(N.L, 0), t)`` (eq. 4 in eq. 2) over one sample row, in a pass that
-    vectorizes (floor, ceil and the division by n as SIMD): n_dot_l, tone (L, nW) float64."""
-    for i in range(n_lights):
-        for x in range(nw):
-            n_dot_l_x = n_dot_l[i, x]
-            f_d = n_dot_l_x if n_dot_l_x >= 0.0 else 0.0  # eq. 1: f_d = max(N.L, 0)
-            tone[i, x] = _step_n(f_d, t, steps)
+def _row_step_tones(nw, n_dot_l, t, steps, tone):
+    """``tone[x] = T_n(max(N.L, 0), t)`` (eq. 4 in eq. 2) for one light over ``nw`` samples of
+    a row, in a pass that vectorizes (floor, ceil and the division by n as SIMD): n_dot_l, tone
+    (nw,) float64 views."""
+    for x in range(nw):
+        n_dot_l_x = n_dot_l[x]
+        f_d = n_dot_l_x if n_dot_l_x >= 0.0 else 0.0  # eq. 1: f_d = max(N.L, 0)
+        tone[x] = _step_n(f_d, t, steps)
 
 
 @njit(inline="always")
@@ -224,11 +245,15 @@ def shade_lit(
     bases = np.zeros((n_lights, nw))
     step_tones = np.empty((n_lights, nw))
     for y in range(lo, hi):
-        _row_terms(
-            y, nw, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_ls, bases
-        )
-        if mode == MODE_STEP:
-            _row_step_tones(nw, n_lights, n_dot_ls, t, steps, step_tones)
+        x0, x1 = _covered_span(cover, y, nw)
+        if x0 < x1:
+            _row_terms(
+                y, x0, x1, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_ls,
+                bases,
+            )  # fmt: skip
+            if mode == MODE_STEP:
+                for i in range(n_lights):
+                    _row_step_tones(x1 - x0, n_dot_ls[i, x0:x1], t, steps, step_tones[i, x0:x1])
         for x in range(nw):
             if cover[y, x] < 0:
                 out[y, x, 0] = 0.0
@@ -358,9 +383,12 @@ def shade_smooth(
     n_dot_ls = np.empty((n_lights, nw))
     bases = np.zeros((n_lights, nw))
     for y in range(lo, hi):
-        _row_terms(
-            y, nw, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_ls, bases
-        )
+        x0, x1 = _covered_span(cover, y, nw)
+        if x0 < x1:
+            _row_terms(
+                y, x0, x1, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_ls,
+                bases,
+            )  # fmt: skip
         for x in range(nw):
             if cover[y, x] < 0:
                 out[y, x, 0] = 0.0

@@ -173,6 +173,25 @@ def test_empty_and_full_coverage():
     assert np.all(rgba[..., 3] == 1.0) and np.array_equal(rgba, oracle_toon(ToonStyle(n=2), ctx))
 
 
+def test_rows_shaded_over_their_covered_span_only():
+    """The row passes run over each row's covered span (``_covered_span``) and skip empty rows:
+    a disc of coverage (empty rows above and below, spans of every width, a hole) shades as the
+    numpy formulas do, for every style (the scratch rows keep the values of the rows before)."""
+    ctx = random_ctx(6, "mixed", shape=(47, 59))
+    yy, xx = np.mgrid[:47, :59]
+    r2 = (yy - 23) ** 2 + (xx - 29) ** 2
+    outside = (r2 > 18**2) | (r2 < 3**2)
+    for key in ("mesh_id", "tri_id"):
+        ctx.gb[key][outside] = -1
+    assert np.any(np.all(outside, axis=1)) and not np.all(outside[23])
+    for style in STYLES:
+        got = style.shade(ctx)
+        want = oracle(style, ctx)
+        bad = np.argwhere(np.any(got.view(np.uint32) != want.view(np.uint32), axis=-1))
+        assert bad.size == 0, f"{style!r}: {len(bad)} samples differ, first {bad[:3].tolist()}"
+        assert not np.any(got[outside])
+
+
 def test_inconsistent_gbuffer_is_refused():
     ctx = random_ctx(5, "point", shape=(6, 7))
     ctx.gb["normal"] = ctx.gb["normal"][:, :5]
