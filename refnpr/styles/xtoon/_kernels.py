@@ -2,12 +2,13 @@
 
 One parallel pass over the rows (a row per task, no reductions, so the result does not depend
 on the thread count). Per covered sample (``mesh_id >= 0``): the unit shading normal, the tone
-n . l (sec. 3), the detail D of an attribute map (sec. 3.1, 3.2), then, over the row's covered
-span, the bilinear edge-clamped lookup in the 2D toon texture (sec. 3) and the straight-alpha
-RGBA (two passes per row: the lookup loop alone, without the first pass's branches and calls,
-runs about 1.5x faster), or the grey attribute images of ``show``. float64 arithmetic in the order of the numpy code it replaces (``unit_rows``,
-``detail_values``, ``refnpr.formulas.xtoon``, ``XToonStyle.shade``), float32 storage; ``log``
-and ``pow`` are libm's, numpy's may be its SIMD ones (an ulp apart in float64).
+n . l (sec. 3) and the detail D of an attribute map (sec. 3.1, 3.2); then, over the row's
+covered span, the bilinear edge-clamped lookup in the 2D toon texture (sec. 3) and the
+straight-alpha RGBA (``_lookup_row``: the lookup as a loop of its own, without the first pass's
+branches and calls, took the 1080p kernel from 12.8 to 8.6 ms, benchmarks/README.md), or the
+grey attribute images of ``show``. float64 arithmetic in the order of the numpy code it replaces
+(``unit_rows``, ``detail_values``, ``refnpr.formulas.xtoon``, ``XToonStyle.shade``), float32
+storage; ``log`` and ``pow`` are libm's, numpy's may be its SIMD ones (an ulp apart in float64).
 
 Where the normals or D come from elsewhere (shape abstraction, per-vertex detail, flow, a user
 map) the caller passes the tone and D of the covered samples as flat arrays in row-major mask
