@@ -45,6 +45,13 @@ class ImageMetrics:
         return self.status == "ok" and self.frac_over <= max_frac_over and self.ssim >= min_ssim
 
 
+def _luma(img: np.ndarray) -> np.ndarray:
+    """(H, W) Rec. 709 luminance of an (H, W, C >= 3) float64 image, summed r, g, then b (not
+    ``img @ weights``: BLAS may fuse or reorder the sum by CPU, so the SSIM would depend on the
+    machine)."""
+    return (img[..., 0] * 0.2126 + img[..., 1] * 0.7152) + img[..., 2] * 0.0722
+
+
 def load_image(path: str | Path, *, what: str = "image") -> np.ndarray:
     """An image file as (H, W, 4) float64 in [0, 1] (alpha 1 if absent).
 
@@ -129,8 +136,7 @@ def compare_images(
         )
     ref, cand = _flatten(reference), _flatten(candidate)
     diff = np.abs(cand - ref)
-    lum_r = ref[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
-    lum_c = cand[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+    lum_r, lum_c = _luma(ref), _luma(cand)
     win = min(7, *(s if s % 2 else s - 1 for s in lum_r.shape))
     ssim = (
         float(structural_similarity(lum_r, lum_c, data_range=1.0, win_size=win))

@@ -51,7 +51,9 @@ def luminance(rgb: np.ndarray) -> np.ndarray:
     if a.ndim != 3 or a.shape[2] not in (3, 4):
         raise ValueError(f"rgb: expected an (H, W, 3) or (H, W, 4) image, got shape {a.shape}")
     a = a[..., :3].astype(np.float64)
-    return a @ np.asarray(LUMA)
+    # summed r, g, then b: ``a @ LUMA`` goes to BLAS, which may fuse or reorder the sum by CPU
+    # (machine-dependent bits) and whose threads spin after the call
+    return (a[..., 0] * LUMA[0] + a[..., 1] * LUMA[1]) + a[..., 2] * LUMA[2]
 
 
 @dataclass(frozen=True)

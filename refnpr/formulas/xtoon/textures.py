@@ -306,7 +306,8 @@ def toon_texture_hue(
     a = (1.0 - D)[:, None] * w[None, :]
     rf = r.astype(np.float64)
     rgb = rf[:, :3]
-    luma = (rgb @ np.asarray(LUMA_709))[:, None]
+    # luminance summed r, g, then b (``rgb @ LUMA_709`` is BLAS: may fuse or reorder, by CPU)
+    luma = ((rgb[:, 0] * LUMA_709[0] + rgb[:, 1] * LUMA_709[1]) + rgb[:, 2] * LUMA_709[2])[:, None]
     out = _lerp(rgb[None], luma[None], np.clip(desaturate * a, 0.0, 1.0))  # desaturation
     out = _lerp(out, tgt, np.clip(amount * a, 0.0, 1.0))  # shift towards the target hue
     if r.shape[1] == 4:
