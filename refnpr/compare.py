@@ -46,10 +46,11 @@ class ImageMetrics:
 
 
 def _luma(img: np.ndarray) -> np.ndarray:
-    """(H, W) Rec. 709 luminance of an (H, W, C >= 3) float64 image, summed r, g, then b (not
-    ``img @ weights``: BLAS may fuse or reorder the sum by CPU, so the SSIM would depend on the
-    machine)."""
-    return (img[..., 0] * 0.2126 + img[..., 1] * 0.7152) + img[..., 2] * 0.0722
+    """(H, W) float64 Rec. 709 luminance of an (H, W, C >= 3) float image, summed r, g, then b
+    in float64 (not ``img @ weights``: BLAS may fuse or reorder the sum by CPU, so the SSIM
+    would depend on the machine)."""
+    rgb = np.asarray(img[..., :3], dtype=np.float64)
+    return (rgb[..., 0] * 0.2126 + rgb[..., 1] * 0.7152) + rgb[..., 2] * 0.0722
 
 
 def load_image(path: str | Path, *, what: str = "image") -> np.ndarray:
