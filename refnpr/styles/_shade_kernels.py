@@ -45,21 +45,25 @@ def _step_n(x, t, n):
 
 @njit
 def _row_terms(
-    y, x0, x1, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_l, base
+    cover, y, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_l, base
 ):
-    """N.L and the specular base of every light at samples ``x0..x1 - 1`` of row y (its covered
-    span, ``_covered_span``), in branch-free passes over contiguous rows (they compile to SIMD
-    divisions and square roots: double division is what the per-sample loop waited on). The
-    operations are the per-sample formulas', in their order, so every value has the same bits;
-    uncovered samples inside the span get values nobody reads. The passes get views of the span
-    and loop from 0: a loop from x0 (a signed start) compiled without SIMD.
+    """N.L and the specular base of every light at samples ``x0..x1 - 1`` of row y, its covered
+    span (``_covered_span``; nothing where the row is empty), returned as ``(x0, x1)``; in
+    branch-free passes over contiguous rows (they compile to SIMD divisions and square roots:
+    double division is what the per-sample loop waited on). The operations are the per-sample
+    formulas', in their order, so every value has the same bits; uncovered samples inside the
+    span get values nobody reads. The passes get views of the span and loop from 0: a loop from
+    x0 (a signed start) compiled without SIMD.
 
-    nrm, pos (nH, nW * 3) float: normals, positions (pos unread unless ``specular`` or a point
+    cover (nH, nW) int: covered where >= 0. nrm, pos (nH, nW * 3) float: normals, positions (pos unread unless ``specular`` or a point
     light); v, lt (3, nW) float64 scratch: V and the current light's L; n_dot_l, base (L, nW)
     float64, written: N.L, and max(R.V, 0) (``phong``) or max(N.H, 0) with H = unit_vectors(L +
     V) (where ``specular``). The passes take 1D row views (``_unit_towards_row``,
     ``_row_light``): LLVM vectorized only some of the same loops over 2D indexing (``v[0, x]``;
     6 of 9 divisions as ``vdivpd ymm``, all 9 now)."""
+    x0, x1 = _covered_span(cover, y, cover.shape[1])
+    if x0 == x1:
+        return x0, x1
     nw = x1 - x0
     nrow = nrm[y, 3 * x0 : 3 * x1]
     prow = pos[y, 3 * x0 : 3 * x1] if pos.shape[0] > y else pos[0]
@@ -77,6 +81,7 @@ def _row_terms(
             nw, nrow, point, light_vec[i, 0], light_vec[i, 1], light_vec[i, 2], specular, phong,
             v0, v1, v2, l0, l1, l2, n_dot_l[i, x0:x1], base[i, x0:x1],
         )  # fmt: skip
+    return x0, x1
 
 
 @njit
@@ -245,15 +250,12 @@ def shade_lit(
     bases = np.zeros((n_lights, nw))
     step_tones = np.empty((n_lights, nw))
     for y in range(lo, hi):
-        x0, x1 = _covered_span(cover, y, nw)
-        if x0 < x1:
-            _row_terms(
-                y, x0, x1, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_ls,
-                bases,
-            )  # fmt: skip
-            if mode == MODE_STEP:
-                for i in range(n_lights):
-                    _row_step_tones(x1 - x0, n_dot_ls[i, x0:x1], t, steps, step_tones[i, x0:x1])
+        x0, x1 = _row_terms(
+            cover, y, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_ls, bases
+        )
+        if mode == MODE_STEP:
+            for i in range(n_lights):
+                _row_step_tones(x1 - x0, n_dot_ls[i, x0:x1], t, steps, step_tones[i, x0:x1])
         for x in range(nw):
             if cover[y, x] < 0:
                 out[y, x, 0] = 0.0
@@ -383,12 +385,9 @@ def shade_smooth(
     n_dot_ls = np.empty((n_lights, nw))
     bases = np.zeros((n_lights, nw))
     for y in range(lo, hi):
-        x0, x1 = _covered_span(cover, y, nw)
-        if x0 < x1:
-            _row_terms(
-                y, x0, x1, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_ls,
-                bases,
-            )  # fmt: skip
+        _row_terms(
+            cover, y, nrm, pos, eye, light_kind, light_vec, specular, phong, v, lt, n_dot_ls, bases
+        )
         for x in range(nw):
             if cover[y, x] < 0:
                 out[y, x, 0] = 0.0
