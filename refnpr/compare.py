@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .formulas.lighting import luminance
 from .image import atomic_file, read_image_file, write_png_atomic
 
 __all__ = ["ImageMetrics", "compare_images", "compare_dirs", "load_image", "difference_image"]
@@ -43,14 +44,6 @@ class ImageMetrics:
 
     def passes(self, *, max_frac_over: float, min_ssim: float) -> bool:
         return self.status == "ok" and self.frac_over <= max_frac_over and self.ssim >= min_ssim
-
-
-def _luma(img: np.ndarray) -> np.ndarray:
-    """(H, W) float64 Rec. 709 luminance of an (H, W, C >= 3) float image, summed r, g, then b
-    in float64 (not ``img @ weights``: BLAS may fuse or reorder the sum by CPU, so the SSIM
-    would depend on the machine)."""
-    rgb = np.asarray(img[..., :3], dtype=np.float64)
-    return (rgb[..., 0] * 0.2126 + rgb[..., 1] * 0.7152) + rgb[..., 2] * 0.0722
 
 
 def load_image(path: str | Path, *, what: str = "image") -> np.ndarray:
@@ -137,7 +130,7 @@ def compare_images(
         )
     ref, cand = _flatten(reference), _flatten(candidate)
     diff = np.abs(cand - ref)
-    lum_r, lum_c = _luma(ref), _luma(cand)
+    lum_r, lum_c = luminance(ref), luminance(cand)
     win = min(7, *(s if s % 2 else s - 1 for s in lum_r.shape))
     ssim = (
         float(structural_similarity(lum_r, lum_c, data_range=1.0, win_size=win))

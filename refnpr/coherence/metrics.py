@@ -34,13 +34,14 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..formulas import lighting
 from .motion import MotionField
 from .resample import warp
 
 __all__ = ["LUMA", "INK_THRESHOLD", "PairMetrics", "luminance", "pair_metrics"]
 
 #: Rec. 709 luminance weights of linear RGB.
-LUMA = (0.2126, 0.7152, 0.0722)
+LUMA = lighting.LUMA_709
 #: Luminance below which a pixel counts as ink (for the flip fraction).
 INK_THRESHOLD = 0.5
 
@@ -50,10 +51,7 @@ def luminance(rgb: np.ndarray) -> np.ndarray:
     a = np.asarray(rgb)
     if a.ndim != 3 or a.shape[2] not in (3, 4):
         raise ValueError(f"rgb: expected an (H, W, 3) or (H, W, 4) image, got shape {a.shape}")
-    a = a[..., :3].astype(np.float64)
-    # summed r, g, then b: ``a @ LUMA`` goes to BLAS, which may fuse or reorder the sum by CPU
-    # (machine-dependent bits) and whose threads spin after the call
-    return (a[..., 0] * LUMA[0] + a[..., 1] * LUMA[1]) + a[..., 2] * LUMA[2]
+    return lighting.luminance(a)
 
 
 @dataclass(frozen=True)

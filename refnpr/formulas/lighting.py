@@ -33,9 +33,13 @@ __all__ = [
     "illumination",
     "toon_ramp_texture",
     "toon_ramp",
+    "LUMA_709",
+    "luminance",
 ]
 
 _MODELS = ("blinn-phong", "phong")
+#: Rec. 709 luminance weights of linear RGB.
+LUMA_709 = (0.2126, 0.7152, 0.0722)
 
 
 def _vectors(dtype: np.dtype, normalize: bool, **named) -> list[np.ndarray]:
@@ -283,3 +287,30 @@ def toon_ramp(n_dot_l, ramp) -> np.ndarray:
     x = np.clip(x, 0, 1)
     index = np.minimum(np.floor(x * k), k - 1).astype(np.intp)
     return np.asarray(ramp[index], dtype=dt)
+
+
+def luminance(rgb) -> np.ndarray:
+    """Rec. 709 luminance ``Y = 0.2126 R + 0.7152 G + 0.0722 B`` of linear RGB, in float64.
+
+    Summed r, g, then b, every time: not ``rgb @ weights``, which BLAS may fuse (FMA) or reorder
+    depending on the CPU, giving other bits on other machines (and whose worker threads spin
+    after a large call, taking the cores from the numba kernels that follow).
+
+    Parameters
+    ----------
+    rgb : (..., C) float, C >= 3
+        Linear colours; channels past the third (alpha) are ignored.
+
+    Returns
+    -------
+    (...) float64
+    """
+    a = np.asarray(rgb)
+    if a.ndim < 1 or a.shape[-1] < 3:
+        raise ValueError(
+            f"rgb: expected an array of shape (..., C) with C >= 3 channels, got shape {a.shape}"
+        )
+    r = a[..., 0].astype(np.float64, copy=False)
+    g = a[..., 1].astype(np.float64, copy=False)
+    b = a[..., 2].astype(np.float64, copy=False)
+    return (r * LUMA_709[0] + g * LUMA_709[1]) + b * LUMA_709[2]

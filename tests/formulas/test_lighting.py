@@ -13,6 +13,7 @@ from refnpr.formulas.lighting import (
     ambient,
     diffuse,
     illumination,
+    luminance,
     specular,
     toon_ramp,
     toon_ramp_texture,
@@ -182,3 +183,29 @@ def test_stress_extreme_vectors_stay_finite(n, p):
             specular(nn, light, light[::-1], shininess=p, model="phong"),
         ):
             assert out.dtype == dtype and np.isfinite(out) and 0 <= out <= 1
+
+
+unit_comp = st.floats(0.0, 1.0, allow_nan=False)
+
+
+@given(st.lists(st.tuples(unit_comp, unit_comp, unit_comp, unit_comp), min_size=1, max_size=20))
+def test_luminance_sums_r_g_then_b_in_float64(pixels):
+    """Oracle: the Python float loop in the documented order (bit for bit), for float64 and
+    float32 input (computed in float64), alpha ignored; grey maps to itself within rounding."""
+    rgba = np.array(pixels, dtype=np.float64)
+    want = [(r * 0.2126 + g * 0.7152) + b * 0.0722 for r, g, b, _ in pixels]
+    got = luminance(rgba)
+    assert got.dtype == np.float64 and got.shape == (len(pixels),)
+    assert got.tolist() == want
+    low = rgba.astype(np.float32)
+    want32 = [(float(r) * 0.2126 + float(g) * 0.7152) + float(b) * 0.0722 for r, g, b, _ in low]
+    assert luminance(low.reshape(1, -1, 4)).ravel().tolist() == want32
+    grey = rgba[:, :1].repeat(3, axis=1)
+    np.testing.assert_allclose(luminance(grey), rgba[:, 0], rtol=1e-15, atol=1e-16)
+
+
+def test_luminance_needs_three_channels():
+    with pytest.raises(
+        ValueError, match=r"rgb: expected an array of shape \(\.\.\., C\) with C >= 3"
+    ):
+        luminance(np.zeros((4, 2)))

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_float, check_int, check_scalar, describe
+from ..lighting import luminance
 
 __all__ = [
     "toon_texture_blur",
@@ -28,9 +29,6 @@ __all__ = [
     "toon_texture_plastic",
     "toon_texture_metal",
 ]
-
-#: Rec. 709 luma weights used for desaturation.
-LUMA_709 = (0.2126, 0.7152, 0.0722)
 
 
 def _ramp(ramp, name: str = "ramp") -> np.ndarray:
@@ -306,8 +304,7 @@ def toon_texture_hue(
     a = (1.0 - D)[:, None] * w[None, :]
     rf = r.astype(np.float64)
     rgb = rf[:, :3]
-    # luminance summed r, g, then b (``rgb @ LUMA_709`` is BLAS: may fuse or reorder, by CPU)
-    luma = ((rgb[:, 0] * LUMA_709[0] + rgb[:, 1] * LUMA_709[1]) + rgb[:, 2] * LUMA_709[2])[:, None]
+    luma = luminance(rgb)[:, None]
     out = _lerp(rgb[None], luma[None], np.clip(desaturate * a, 0.0, 1.0))  # desaturation
     out = _lerp(out, tgt, np.clip(amount * a, 0.0, 1.0))  # shift towards the target hue
     if r.shape[1] == 4:

@@ -22,7 +22,7 @@ __all__ = [
 ]
 
 #: Rec. 709 luminance weights: the target intensity of a coloured light or material.
-LUMA = np.array([0.2126, 0.7152, 0.0722])
+LUMA = np.array(lighting.LUMA_709)
 
 
 def tangent_frame(
@@ -104,8 +104,7 @@ def lit_intensity(
                 ldk = ld[k] if np.ndim(ld) > 1 else ld
                 f_s[k] = lighting.specular(n[k], ldk, v[k], shininess=float(p))
             rgb = rgb + m_s * f_s[:, None] * color
-    # luminance summed r, g, then b (not ``rgb @ LUMA``: BLAS may fuse or reorder, by CPU)
-    lum = (rgb[:, 0] * LUMA[0] + rgb[:, 1] * LUMA[1]) + rgb[:, 2] * LUMA[2]
+    lum = lighting.luminance(rgb)
     return np.clip(lum, 0.0, 1.0)
 
 

@@ -112,17 +112,7 @@ def darkness(ctx: ShadeContext, sel: np.ndarray, constant_tone: float | None) ->
     for light_dir, color in ctx.light_dirs():
         ld = light_dir[sel] if np.ndim(light_dir) > 1 else light_dir
         rgb = rgb + m_d * lighting.diffuse(n, ld)[..., None] * color
-    return 1.0 - np.clip(_luminance(rgb), 0.0, 1.0)
-
-
-def _luminance(rgb: np.ndarray) -> np.ndarray:
-    """(N,) float64 Rec. 709 luminance of ``rgb (N, 3)`` float64, summed r, g, then b.
-
-    Not ``rgb @ weights``: a BLAS dot product may fuse or reorder the sum depending on the CPU
-    (different bits on different machines), and its worker threads spin after the call, taking
-    the cores from the numba kernels that follow (TAM and TAMISS frames ran ~20 % slower).
-    """
-    return (rgb[:, 0] * _REC709[0] + rgb[:, 1] * _REC709[1]) + rgb[:, 2] * _REC709[2]
+    return 1.0 - np.clip(lighting.luminance(rgb), 0.0, 1.0)
 
 
 @dataclass(frozen=True, eq=False)
