@@ -1,7 +1,7 @@
 """The one place that owns refnpr's numba flags.
 
-Every numba kernel in refnpr is decorated with :func:`njit`, :func:`banded` or :func:`pnjit`
-from this module, so the reference path is compiled the same way everywhere: ``fastmath`` off (IEEE semantics, no
+Every numba kernel in refnpr is decorated with :func:`njit` or :func:`banded` from this
+module, so the reference path is compiled the same way everywhere: ``fastmath`` off (IEEE semantics, no
 reassociation, so results do not depend on vector width), ``cache=True`` (a warm start does not
 recompile), ``error_model="numpy"`` (division by zero gives inf/nan instead of raising inside a
 kernel; public functions validate their inputs so that this never reaches an image).
@@ -106,26 +106,6 @@ def _jit(func, flags: dict):
 def njit(func=None, **overrides):
     """Serial numba kernel with refnpr's flags (``@njit`` or ``@njit(boundscheck=True)``)."""
     flags = {**JIT_FLAGS, **overrides}
-    if func is None:
-        return lambda f: _jit(f, flags)
-    return _jit(func, flags)
-
-
-def pnjit(func=None, **overrides):
-    """Parallel numba kernel (``prange``) with refnpr's flags.
-
-    Only for the kernels whose ``prange`` build runs measurably faster than the :func:`banded`
-    one: the TAMISS strip raster, ~1.3x (benchmarks/README.md, cold start). Everywhere else use
-    :func:`banded`: the parallel lowering compiles a loop about twice over (the function and
-    its gufunc), which doubled refnpr's cold start. Before moving a kernel here, look for row
-    views and array-taking helpers in its loops: the rasterizer's visibility and binning loops
-    were 2-3x faster under ``prange`` only because of their views' reference counting, and
-    banded with scalar reads they beat their ``prange`` build; halftone shading was here until
-    its per-sample screen lookup stopped calling samplers that take arrays (a call with NRT
-    reference counts each; banded it is now as fast, and compiles in 6 s instead of 14).
-    ``tests/test_jit_banded.py`` holds the list of kernels allowed to use it.
-    """
-    flags = {**JIT_FLAGS, "parallel": True, **overrides}
     if func is None:
         return lambda f: _jit(f, flags)
     return _jit(func, flags)
@@ -276,3 +256,54 @@ def banded(count):
         return Banded(njit(func), length)
 
     return deco
+
+
+# --------------------------------------------------------------------------------------------
+# Kernels specialised to the modes a frame uses.
+
+
+def specialised(factory):
+    """Decorator: ``factory(*modes) -> kernel``, called once per combination of modes.
+
+    A large one-pass kernel with every option of its style behind run-time codes (``if src ==
+    SRC_LINES``) compiles every option's code on its first call, whichever options the frame
+    uses. Written instead as a factory whose modes the kernel reads as closure constants, each
+    combination is its own kernel, and numba prunes the branches of the other modes before
+    typing them (``numba.core.analysis.dead_branch_prune``: a comparison of two constants), so a
+    frame compiles only the code its modes reach. numba caches each combination on disk apart:
+    the closure's values are part of a cached kernel's key. The modes must be hashable and
+    picklable (ints, bools, floats, strings).
+
+    The returned callable ``get(*modes)`` gives the kernel for those modes, built on first use
+    and kept (``get.kernels``: dict of modes to kernel). Example::
+
+        @specialised
+        def scale_for(mode):
+            @njit
+            def scale(out, x):
+                for i in range(x.shape[0]):
+                    out[i] = 2.0 * x[i] if mode == 0 else x[i] * x[i]
+
+            return scale
+
+        scale_for(0)(out, x)
+    """
+    kernels: dict = {}
+    lock = threading.Lock()
+
+    def get(*modes):
+        kernel = kernels.get(modes)
+        if kernel is None:
+            with lock:
+                kernel = kernels.get(modes)
+                if kernel is None:
+                    kernel = kernels[modes] = factory(*modes)
+        return kernel
+
+    get.kernels = kernels
+    get.__name__ = factory.__name__
+    get.__qualname__ = factory.__qualname__
+    get.__module__ = factory.__module__
+    get.__doc__ = factory.__doc__
+    get.__wrapped__ = factory
+    return get

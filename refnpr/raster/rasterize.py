@@ -513,10 +513,14 @@ def rasterize(
         counts,
     )
     todo = np.flatnonzero(status == 2)
-    sub, sub_bbox, sub_parent, sub_first = K.clip_triangles(
-        clip, faces, todo, width, height, guard, cull, n, max(1, todo.size * (K.MAX_POLY - 2))
-    )
-    K.bin_count_clipped(todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts)
+    if todo.size:
+        sub, sub_bbox, sub_parent, sub_first = K.clip_triangles(
+            clip, faces, todo, width, height, guard, cull, n, max(1, todo.size * (K.MAX_POLY - 2))
+        )
+        K.bin_count_clipped(todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts)
+    else:  # nothing to clip: what clip_triangles returns for no triangles, without compiling it
+        sub, sub_bbox = np.empty((0, 6), np.int32), np.empty((0, 4), np.int32)
+        sub_parent, sub_first = np.empty(0, np.int64), np.zeros(1, np.int64)
     timings["setup"] = time.perf_counter() - t0
 
     # ---- binning: per-tile primitive lists in triangle order ---------------------------------

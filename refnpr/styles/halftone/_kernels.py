@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from refnpr._jit import banded, njit
+from refnpr._jit import banded, njit, specialised
 
 #: ``threshold`` codes.
 THRESHOLD_BINARY = 0
@@ -261,377 +261,388 @@ def _row_units(nrm, pos, eye, specular, light_kind, unit_l, scr, x0, x1):
             b_i[x] = min(max(b, 0.0), 1.0)
 
 
-@banded("mesh_id")
-def shade_object(
-    lo,
-    hi,
-    obj,
-    mesh_id,
-    mask,
-    normal,
-    uv,
-    duv_dx,
-    duv_dy,
-    position,
-    dp_dx,
-    dp_dy,
-    scale,
-    direction,
-    engraving,
-    texels,
-    offsets,
-    shapes,
-    ntexels,
-    noffsets,
-    nshapes,
-    bump,
-    luts,
-    lut_x,
-    equalize,
-    per_level,
-    imap,
-    use_imap,
-    iscale,
-    ambient,
-    m_diffuse,
-    m_specular,
-    shininess,
-    specular,
-    light_kind,
-    light_vec,
-    light_color,
-    eye,
-    anisotropy,
-    lod_offset,
-    mode,
-    c,
-    top,
-    show,
-    ink,
-    paper,
-    out,
-    raw,
-):
-    """Shade the samples of object ``obj`` (``mesh_id == obj``) into ``out`` or ``raw``.
+@specialised
+def shade_object_for(show, bump, per_level, equalize, use_imap, isotropic):
+    """:func:`shade_object` for one output and set of options: ``show`` (SHOW_*), ``bump`` (the
+    normal map's DOT3 lighting, sec. 5.2), ``per_level`` (a threshold per pyramid level),
+    ``equalize`` (tone LUTs), ``use_imap`` (the indication map, sec. 5.1), ``isotropic``
+    (``anisotropy == 1``). numba prunes the other options' branches before typing them, so a
+    frame compiles only the code it uses (:func:`refnpr._jit.specialised`)."""
 
-    Grid channels (nH, nW[, k]), any float dtype: normal, uv, duv_dx, duv_dy, position (specular
-    or point lights), dp_dx, dp_dy (``bump``); mesh_id int, mask bool (covered). scale (2,):
-    uv_scale; direction (2,): the engraving direction (``engraving``: coordinates (uv . d, 1/2)).
-    texels, offsets, shapes: the packed screen pyramid; ntexels, noffsets, nshapes: the packed
-    RGB normal map (``bump`` or show normals). luts (L, B), lut_x (B,): tone LUTs (``equalize``);
-    ``per_level``: threshold the two level samples separately. imap (r, c), iscale (2,):
-    indication map (``use_imap``). ambient (3,): m_a l_a; m_diffuse, m_specular (3,);
-    shininess; light_kind (L,), light_vec (L, 3): unit direction or position, light_color
-    (L, 3); eye (3,). anisotropy: 1 isotropic, N > 1 up to N probes; lod_offset added to the
-    LOD. mode: THRESHOLD_*; c, top: the smooth ramp's slope and 1 (or 1/2, centred). show:
-    SHOW_*. ink, paper (3,). out (nH, nW, 4) float32: RGBA written where mesh_id == obj
-    (SHOW_COLOR); raw (nH, nW, 3) float64: the raw value or normal-map RGB otherwise.
-    """
-    nw = mesh_id.shape[1]
-    # channel indices as int64 values, not literals: the samplers compile once, not once per
-    # literal channel (four specialisations each; cold start, issue 11)
-    ch0 = np.int64(0)
-    ch1 = np.int64(1)
-    ch2 = np.int64(2)
-    n_lights = light_kind.shape[0]
-    cols = np.float64(shapes[0, 1])
-    rows = np.float64(shapes[0, 0])
-    unit_l = np.zeros((n_lights, 3))  # unit_vectors(L) of a directional light: per frame
-    for i in range(n_lights):
-        unit_l[i, 0], unit_l[i, 1], unit_l[i, 2] = _unit(
-            light_vec[i, 0], light_vec[i, 1], light_vec[i, 2]
-        )
-    lit = show == SHOW_COLOR or show == SHOW_INTENSITY
-    nrm = normal.reshape(normal.shape[0], nw * 3)
-    pos = position.reshape(position.shape[0], position.shape[1] * 3)
-    scr = np.zeros((9 + n_lights, nw))  # _row_units' scratch: un, v, h, base per light
-    for y in range(lo, hi):
-        x0 = 0  # the row's span of the object's samples
-        while x0 < nw and mesh_id[y, x0] != obj:
-            x0 += 1
-        x1 = nw
-        while x1 > x0 and mesh_id[y, x1 - 1] != obj:
-            x1 -= 1
-        if x0 == x1:
-            continue
-        if lit:
-            _row_units(
-                nrm[y, 3 * x0 : 3 * x1],
-                pos[y, 3 * x0 : 3 * x1] if specular else pos[0, :0],
-                eye,
-                specular,
-                light_kind,
-                unit_l,
-                scr,
-                x0,
-                x1,
+    @banded("mesh_id")
+    def shade_object(
+        lo,
+        hi,
+        obj,
+        mesh_id,
+        mask,
+        normal,
+        uv,
+        duv_dx,
+        duv_dy,
+        position,
+        dp_dx,
+        dp_dy,
+        scale,
+        direction,
+        engraving,
+        texels,
+        offsets,
+        shapes,
+        ntexels,
+        noffsets,
+        nshapes,
+        luts,
+        lut_x,
+        imap,
+        iscale,
+        ambient,
+        m_diffuse,
+        m_specular,
+        shininess,
+        specular,
+        light_kind,
+        light_vec,
+        light_color,
+        eye,
+        anisotropy,
+        lod_offset,
+        mode,
+        c,
+        top,
+        ink,
+        paper,
+        out,
+        raw,
+    ):
+        """Shade the samples of object ``obj`` (``mesh_id == obj``) into ``out`` or ``raw``.
+
+        Grid channels (nH, nW[, k]), any float dtype: normal, uv, duv_dx, duv_dy, position (specular
+        or point lights), dp_dx, dp_dy (``bump``); mesh_id int, mask bool (covered). scale (2,):
+        uv_scale; direction (2,): the engraving direction (``engraving``: coordinates (uv . d, 1/2)).
+        texels, offsets, shapes: the packed screen pyramid; ntexels, noffsets, nshapes: the packed
+        RGB normal map (``bump`` or show normals). luts (L, B), lut_x (B,): tone LUTs (``equalize``);
+        ``per_level``: threshold the two level samples separately. imap (r, c), iscale (2,):
+        indication map (``use_imap``). ambient (3,): m_a l_a; m_diffuse, m_specular (3,);
+        shininess; light_kind (L,), light_vec (L, 3): unit direction or position, light_color
+        (L, 3); eye (3,). anisotropy: 1 isotropic, N > 1 up to N probes; lod_offset added to the
+        LOD. mode: THRESHOLD_*; c, top: the smooth ramp's slope and 1 (or 1/2, centred). show:
+        SHOW_*. ink, paper (3,). out (nH, nW, 4) float32: RGBA written where mesh_id == obj
+        (SHOW_COLOR); raw (nH, nW, 3) float64: the raw value or normal-map RGB otherwise.
+        """
+        nw = mesh_id.shape[1]
+        # channel indices as int64 values, not literals: the samplers compile once, not once per
+        # literal channel (four specialisations each; cold start, issue 11)
+        ch0 = np.int64(0)
+        ch1 = np.int64(1)
+        ch2 = np.int64(2)
+        n_lights = light_kind.shape[0]
+        cols = np.float64(shapes[0, 1])
+        rows = np.float64(shapes[0, 0])
+        unit_l = np.zeros((n_lights, 3))  # unit_vectors(L) of a directional light: per frame
+        for i in range(n_lights):
+            unit_l[i, 0], unit_l[i, 1], unit_l[i, 2] = _unit(
+                light_vec[i, 0], light_vec[i, 1], light_vec[i, 2]
             )
-        for x in range(x0, x1):
-            if mesh_id[y, x] != obj:
+        lit = show == SHOW_COLOR or show == SHOW_INTENSITY
+        nrm = normal.reshape(normal.shape[0], nw * 3)
+        pos = position.reshape(position.shape[0], position.shape[1] * 3)
+        scr = np.zeros((9 + n_lights, nw))  # _row_units' scratch: un, v, h, base per light
+        for y in range(lo, hi):
+            x0 = 0  # the row's span of the object's samples
+            while x0 < nw and mesh_id[y, x0] != obj:
+                x0 += 1
+            x1 = nw
+            while x1 > x0 and mesh_id[y, x1 - 1] != obj:
+                x1 -= 1
+            if x0 == x1:
                 continue
-            if show == SHOW_COLOR and not mask[y, x]:
-                out[y, x, 0] = 0.0
-                out[y, x, 1] = 0.0
-                out[y, x, 2] = 0.0
-                out[y, x, 3] = 0.0
-                continue
-            u0 = np.float64(uv[y, x, 0])
-            v0 = np.float64(uv[y, x, 1])
-            su = u0 * scale[0]
-            sv = v0 * scale[1]
-            dxu = np.float64(duv_dx[y, x, 0])
-            dxv = np.float64(duv_dx[y, x, 1])
-            dyu = np.float64(duv_dy[y, x, 0])
-            dyv = np.float64(duv_dy[y, x, 1])
-            sdxu = dxu * scale[0]
-            sdxv = dxv * scale[1]
-            sdyu = dyu * scale[0]
-            sdyv = dyv * scale[1]
-            if engraving:  # sec. 4.1: t = uv . direction, along a 1D ramp
-                cu = su * direction[0] + sv * direction[1]
-                cv = 0.5
-                cdxu = sdxu * direction[0] + sdxv * direction[1]
-                cdxv = 0.0
-                cdyu = sdyu * direction[0] + sdyv * direction[1]
-                cdyv = 0.0
-            else:
-                cu = su
-                cv = sv
-                cdxu = sdxu
-                cdxv = sdxv
-                cdyu = sdyu
-                cdyv = sdyv
-            # LOD (GL 4.6 sec. 8.14) and anisotropic footprint (screens.screen_footprint)
-            ax = cdxu * cols
-            ay = cdxv * rows
-            px = math.sqrt(ax * ax + ay * ay)
-            bx = cdyu * cols
-            by = cdyv * rows
-            py = math.sqrt(bx * bx + by * by)
-            p_max = max(px, py)
-            probes = 0  # 0: isotropic (no footprint)
-            axu = 0.0
-            axv = 0.0
-            if anisotropy == 1:
-                lod = math.log2(max(p_max, 1e-30))
-            else:
-                p_min = min(px, py)
-                ratio = p_max / max(p_min, 1e-30)
-                probes = np.int64(min(max(math.ceil(ratio - 1e-9), 1.0), float(anisotropy)))
-                lod = math.log2(max(p_max / probes, 1e-30))
-                if px >= py:
-                    axu = cdxu
-                    axv = cdxv
+            if lit:
+                _row_units(
+                    nrm[y, 3 * x0 : 3 * x1],
+                    pos[y, 3 * x0 : 3 * x1] if specular else pos[0, :0],
+                    eye,
+                    specular,
+                    light_kind,
+                    unit_l,
+                    scr,
+                    x0,
+                    x1,
+                )
+            for x in range(x0, x1):
+                if mesh_id[y, x] != obj:
+                    continue
+                if show == SHOW_COLOR and not mask[y, x]:
+                    out[y, x, 0] = 0.0
+                    out[y, x, 1] = 0.0
+                    out[y, x, 2] = 0.0
+                    out[y, x, 3] = 0.0
+                    continue
+                u0 = np.float64(uv[y, x, 0])
+                v0 = np.float64(uv[y, x, 1])
+                su = u0 * scale[0]
+                sv = v0 * scale[1]
+                dxu = np.float64(duv_dx[y, x, 0])
+                dxv = np.float64(duv_dx[y, x, 1])
+                dyu = np.float64(duv_dy[y, x, 0])
+                dyv = np.float64(duv_dy[y, x, 1])
+                sdxu = dxu * scale[0]
+                sdxv = dxv * scale[1]
+                sdyu = dyu * scale[0]
+                sdyv = dyv * scale[1]
+                if engraving:  # sec. 4.1: t = uv . direction, along a 1D ramp
+                    cu = su * direction[0] + sv * direction[1]
+                    cv = 0.5
+                    cdxu = sdxu * direction[0] + sdxv * direction[1]
+                    cdxv = 0.0
+                    cdyu = sdyu * direction[0] + sdyv * direction[1]
+                    cdyv = 0.0
                 else:
-                    axu = cdyu
-                    axv = cdyv
-            lod = lod + lod_offset
-            if show == SHOW_SCREEN:
-                s = _filtered(texels, offsets, shapes, cu, cv, lod, probes, axu, axv, ch0)
-                raw[y, x, 0] = s
-                raw[y, x, 1] = s
-                raw[y, x, 2] = s
-                continue
-            if show == SHOW_NORMALS:
-                for k in range(3):
-                    if bump:
-                        raw[y, x, k] = _filtered(
-                            ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, k
-                        )
+                    cu = su
+                    cv = sv
+                    cdxu = sdxu
+                    cdxv = sdxv
+                    cdyu = sdyu
+                    cdyv = sdyv
+                # LOD (GL 4.6 sec. 8.14) and anisotropic footprint (screens.screen_footprint)
+                ax = cdxu * cols
+                ay = cdxv * rows
+                px = math.sqrt(ax * ax + ay * ay)
+                bx = cdyu * cols
+                by = cdyv * rows
+                py = math.sqrt(bx * bx + by * by)
+                p_max = max(px, py)
+                probes = 0  # 0: isotropic (no footprint)
+                axu = 0.0
+                axv = 0.0
+                if isotropic:
+                    lod = math.log2(max(p_max, 1e-30))
+                else:
+                    p_min = min(px, py)
+                    ratio = p_max / max(p_min, 1e-30)
+                    probes = np.int64(min(max(math.ceil(ratio - 1e-9), 1.0), float(anisotropy)))
+                    lod = math.log2(max(p_max / probes, 1e-30))
+                    if px >= py:
+                        axu = cdxu
+                        axv = cdxv
                     else:
-                        raw[y, x, k] = 0.5 if k < 2 else 1.0
-                continue
-            # target intensity: Veryovka eq. 1 as luminance, DOT3 stroke lighting (sec. 5.2)
-            nx = np.float64(normal[y, x, 0])
-            ny = np.float64(normal[y, x, 1])
-            nz = np.float64(normal[y, x, 2])
-            unx = scr[0, x]  # _unit(N), from _row_units
-            uny = scr[1, x]
-            unz = scr[2, x]
-            valid = False
-            tx = ty = tz = 0.0
-            btx = bty = btz = 0.0
-            mx = my = mz = 0.0
-            if bump:  # shading.tangent_frame with the unscaled uv derivatives
-                det = dxu * dyv - dyu * dxv
-                ok = abs(det) > 1e-20
-                inv = 1.0 / det if ok else 0.0
-                qx0 = np.float64(dp_dx[y, x, 0])
-                qx1 = np.float64(dp_dx[y, x, 1])
-                qx2 = np.float64(dp_dx[y, x, 2])
-                qy0 = np.float64(dp_dy[y, x, 0])
-                qy1 = np.float64(dp_dy[y, x, 1])
-                qy2 = np.float64(dp_dy[y, x, 2])
-                pu0 = (qx0 * dyv - qy0 * dxv) * inv
-                pu1 = (qx1 * dyv - qy1 * dxv) * inv
-                pu2 = (qx2 * dyv - qy2 * dxv) * inv
-                pv0 = (qy0 * dxu - qx0 * dyu) * inv
-                pv1 = (qy1 * dxu - qx1 * dyu) * inv
-                pv2 = (qy2 * dxu - qx2 * dyu) * inv
-                d = (pu0 * nx + pu1 * ny) + pu2 * nz
-                tx = pu0 - d * nx
-                ty = pu1 - d * ny
-                tz = pu2 - d * nz
-                t_len = math.sqrt((tx * tx + ty * ty) + tz * tz)
-                if t_len > 1e-30:
-                    tx = tx / t_len
-                    ty = ty / t_len
-                    tz = tz / t_len
-                else:
-                    tx = ty = tz = 0.0
-                d1 = (pv0 * nx + pv1 * ny) + pv2 * nz
-                d2 = (pv0 * tx + pv1 * ty) + pv2 * tz
-                btx = (pv0 - d1 * nx) - d2 * tx
-                bty = (pv1 - d1 * ny) - d2 * ty
-                btz = (pv2 - d1 * nz) - d2 * tz
-                b_len = math.sqrt((btx * btx + bty * bty) + btz * btz)
-                if b_len > 1e-30:
-                    btx = btx / b_len
-                    bty = bty / b_len
-                    btz = btz / b_len
-                else:
-                    btx = bty = btz = 0.0
-                valid = ok and t_len > 1e-30 and b_len > 1e-30
-                if valid:
-                    mx = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch0)
-                    my = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch1)
-                    mz = _filtered(ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch2)
-                    mx, my, mz = _unit(2.0 * mx - 1.0, 2.0 * my - 1.0, 2.0 * mz - 1.0)
-            vx = vy = vz = 0.0
-            need_pos = specular
-            for i in range(n_lights):
-                if light_kind[i] == LIGHT_POINT:
-                    need_pos = True
-            if need_pos:
-                ppx = np.float64(position[y, x, 0])
-                ppy = np.float64(position[y, x, 1])
-                ppz = np.float64(position[y, x, 2])
-            else:
-                ppx = ppy = ppz = 0.0
-            if specular:  # ShadeContext.view_dir, then unit_vectors: from _row_units
-                vx = scr[3, x]
-                vy = scr[4, x]
-                vz = scr[5, x]
-            r = ambient[0]  # eq. 1: m_a l_a
-            g = ambient[1]
-            b = ambient[2]
-            for i in range(n_lights):
-                lx = light_vec[i, 0]
-                ly = light_vec[i, 1]
-                lz = light_vec[i, 2]
-                if light_kind[i] == LIGHT_POINT:  # ShadeContext.light_dirs
-                    lx = lx - ppx
-                    ly = ly - ppy
-                    lz = lz - ppz
-                    length = math.sqrt((lx * lx + ly * ly) + lz * lz)
-                    if length > 0.0:
-                        lx = lx / length
-                        ly = ly / length
-                        lz = lz / length
-                    else:
-                        lx = ly = lz = 0.0
-                    ulx, uly, ulz = _unit(lx, ly, lz)
-                else:
-                    ulx = unit_l[i, 0]
-                    uly = unit_l[i, 1]
-                    ulz = unit_l[i, 2]
-                n_dot_l = (unx * ulx + uny * uly) + unz * ulz
-                f_d = max(n_dot_l, 0.0)  # eq. 1: f_d = max(N.L, 0)
-                f_d = min(f_d, 1.0)
-                if valid:  # sec. 5.2: clip(N_map . L_t, 0, 1), L_t = (L.T, L.B, L.N)
-                    ltx = (lx * tx + ly * ty) + lz * tz
-                    lty = (lx * btx + ly * bty) + lz * btz
-                    ltz = (lx * nx + ly * ny) + lz * nz
-                    ltx, lty, ltz = _unit(ltx, lty, ltz)
-                    f_d = min(max((mx * ltx + my * lty) + mz * ltz, 0.0), 1.0)
-                r = r + m_diffuse[0] * f_d * light_color[i, 0]  # eq. 1: diffuse sum
-                g = g + m_diffuse[1] * f_d * light_color[i, 1]
-                b = b + m_diffuse[2] * f_d * light_color[i, 2]
-                if specular:
-                    f_s = 0.0
-                    if shininess > 0.0:  # Blinn-Phong: H = unit(L + V), base = N.H
-                        if light_kind[i] == LIGHT_DIRECTIONAL:
-                            base = scr[9 + i, x]  # from _row_units
+                        axu = cdyu
+                        axv = cdyv
+                lod = lod + lod_offset
+                if show == SHOW_SCREEN:
+                    s = _filtered(texels, offsets, shapes, cu, cv, lod, probes, axu, axv, ch0)
+                    raw[y, x, 0] = s
+                    raw[y, x, 1] = s
+                    raw[y, x, 2] = s
+                    continue
+                if show == SHOW_NORMALS:
+                    for k in range(3):
+                        if bump:
+                            raw[y, x, k] = _filtered(
+                                ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, k
+                            )
                         else:
-                            hx, hy, hz = _unit(ulx + vx, uly + vy, ulz + vz)
-                            base = (unx * hx + uny * hy) + unz * hz
-                            base = min(max(base, 0.0), 1.0)
-                        f_s = base**shininess if n_dot_l > 0.0 else 0.0  # eq. 1: f_s
-                    r = r + m_specular[0] * f_s * light_color[i, 0]  # eq. 1: specular sum
-                    g = g + m_specular[1] * f_s * light_color[i, 1]
-                    b = b + m_specular[2] * f_s * light_color[i, 2]
-            inten = (r * LUMA_R + g * LUMA_G) + b * LUMA_B
-            inten = min(max(inten, 0.0), 1.0)
-            if use_imap:  # sec. 5.1: clip(I + indication, 0, 1)
-                icols = imap.shape[1]
-                irows = imap.shape[0]
-                fxi = min(max((u0 * iscale[0]) * icols - 0.5, 0.0), icols - 1.0)
-                fyi = min(max((v0 * iscale[1]) * irows - 0.5, 0.0), irows - 1.0)
-                x0 = min(np.int64(math.floor(fxi)), icols - 1)
-                y0 = min(np.int64(math.floor(fyi)), irows - 1)
-                x1 = min(x0 + 1, icols - 1)
-                y1 = min(y0 + 1, irows - 1)
-                wx = fxi - x0
-                wy = fyi - y0
-                top_i = imap[y0, x0] * (1.0 - wx) + imap[y0, x1] * wx
-                bot_i = imap[y1, x0] * (1.0 - wx) + imap[y1, x1] * wx
-                ind = top_i * (1.0 - wy) + bot_i * wy
-                inten = min(max(inten + ind, 0.0), 1.0)
-            if show == SHOW_INTENSITY:
-                raw[y, x, 0] = inten
-                raw[y, x, 1] = inten
-                raw[y, x, 2] = inten
-                continue
-            if not per_level:  # sec. 3: threshold the screen sampled at (uv, LOD)
-                # _filtered(texels, ..., ch0) written out (the hot lookup; see _taps)
-                n_lv = offsets.shape[0]
-                lam = min(max(lod, 0.0), n_lv - 1.0)
-                k0 = np.int64(math.floor(lam))
-                k1 = min(k0 + 1, n_lv - 1)
-                f = lam - k0
-                acc = 0.0
-                for j in range(max(probes, 1)):
-                    su_ = cu
-                    sv_ = cv
-                    if probes > 0:
-                        t = (j + 0.5) / probes - 0.5
-                        su_ = cu + axu * t
-                        sv_ = cv + axv * t
-                    r = 0.0
-                    for q in range(2 if f > 0.0 else 1):
-                        k = k0 if q == 0 else k1
-                        w = 1.0 - f if q == 0 else f
-                        i00, i10, i01, i11, w00, w10, w01, w11 = _taps(
-                            offsets[k], shapes[k, 0], shapes[k, 1], su_, sv_
+                            raw[y, x, k] = 0.5 if k < 2 else 1.0
+                    continue
+                # target intensity: Veryovka eq. 1 as luminance, DOT3 stroke lighting (sec. 5.2)
+                nx = np.float64(normal[y, x, 0])
+                ny = np.float64(normal[y, x, 1])
+                nz = np.float64(normal[y, x, 2])
+                unx = scr[0, x]  # _unit(N), from _row_units
+                uny = scr[1, x]
+                unz = scr[2, x]
+                valid = False
+                tx = ty = tz = 0.0
+                btx = bty = btz = 0.0
+                mx = my = mz = 0.0
+                if bump:  # shading.tangent_frame with the unscaled uv derivatives
+                    det = dxu * dyv - dyu * dxv
+                    ok = abs(det) > 1e-20
+                    inv = 1.0 / det if ok else 0.0
+                    qx0 = np.float64(dp_dx[y, x, 0])
+                    qx1 = np.float64(dp_dx[y, x, 1])
+                    qx2 = np.float64(dp_dx[y, x, 2])
+                    qy0 = np.float64(dp_dy[y, x, 0])
+                    qy1 = np.float64(dp_dy[y, x, 1])
+                    qy2 = np.float64(dp_dy[y, x, 2])
+                    pu0 = (qx0 * dyv - qy0 * dxv) * inv
+                    pu1 = (qx1 * dyv - qy1 * dxv) * inv
+                    pu2 = (qx2 * dyv - qy2 * dxv) * inv
+                    pv0 = (qy0 * dxu - qx0 * dyu) * inv
+                    pv1 = (qy1 * dxu - qx1 * dyu) * inv
+                    pv2 = (qy2 * dxu - qx2 * dyu) * inv
+                    d = (pu0 * nx + pu1 * ny) + pu2 * nz
+                    tx = pu0 - d * nx
+                    ty = pu1 - d * ny
+                    tz = pu2 - d * nz
+                    t_len = math.sqrt((tx * tx + ty * ty) + tz * tz)
+                    if t_len > 1e-30:
+                        tx = tx / t_len
+                        ty = ty / t_len
+                        tz = tz / t_len
+                    else:
+                        tx = ty = tz = 0.0
+                    d1 = (pv0 * nx + pv1 * ny) + pv2 * nz
+                    d2 = (pv0 * tx + pv1 * ty) + pv2 * tz
+                    btx = (pv0 - d1 * nx) - d2 * tx
+                    bty = (pv1 - d1 * ny) - d2 * ty
+                    btz = (pv2 - d1 * nz) - d2 * tz
+                    b_len = math.sqrt((btx * btx + bty * bty) + btz * btz)
+                    if b_len > 1e-30:
+                        btx = btx / b_len
+                        bty = bty / b_len
+                        btz = btz / b_len
+                    else:
+                        btx = bty = btz = 0.0
+                    valid = ok and t_len > 1e-30 and b_len > 1e-30
+                    if valid:
+                        mx = _filtered(
+                            ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch0
                         )
-                        r = r + w * (
-                            w00 * texels[i00, 0]
-                            + w10 * texels[i10, 0]
-                            + w01 * texels[i01, 0]
-                            + w11 * texels[i11, 0]
+                        my = _filtered(
+                            ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch1
                         )
-                    acc = acc + r if probes > 0 else r
-                s = acc / probes if probes > 0 else acc
-                value = _threshold(s, inten, mode, c, top)
-            else:  # level_weights, then a threshold per level blended with the weight
-                n_lv = offsets.shape[0]
-                lam = min(max(lod, 0.0), n_lv - 1.0)
-                k0 = np.int64(math.floor(lam))
-                k1 = min(k0 + 1, n_lv - 1)
-                w1 = lam - k0
-                s0 = _level_filtered(texels, offsets, shapes, k0, cu, cv, probes, axu, axv)
-                s1 = _level_filtered(texels, offsets, shapes, k1, cu, cv, probes, axu, axv)
-                if equalize:
-                    s0 = _interp(s0, lut_x, luts[k0])
-                    s1 = _interp(s1, lut_x, luts[k1])
-                t0 = _threshold(s0, inten, mode, c, top)
-                t1 = _threshold(s1, inten, mode, c, top)
-                value = (1.0 - w1) * t0 + w1 * t1
-            rem = 1.0 - value
-            out[y, x, 0] = min(max(value * paper[0] + rem * ink[0], 0.0), 1.0)
-            out[y, x, 1] = min(max(value * paper[1] + rem * ink[1], 0.0), 1.0)
-            out[y, x, 2] = min(max(value * paper[2] + rem * ink[2], 0.0), 1.0)
-            out[y, x, 3] = 1.0
+                        mz = _filtered(
+                            ntexels, noffsets, nshapes, cu, cv, lod, probes, axu, axv, ch2
+                        )
+                        mx, my, mz = _unit(2.0 * mx - 1.0, 2.0 * my - 1.0, 2.0 * mz - 1.0)
+                vx = vy = vz = 0.0
+                need_pos = specular
+                for i in range(n_lights):
+                    if light_kind[i] == LIGHT_POINT:
+                        need_pos = True
+                if need_pos:
+                    ppx = np.float64(position[y, x, 0])
+                    ppy = np.float64(position[y, x, 1])
+                    ppz = np.float64(position[y, x, 2])
+                else:
+                    ppx = ppy = ppz = 0.0
+                if specular:  # ShadeContext.view_dir, then unit_vectors: from _row_units
+                    vx = scr[3, x]
+                    vy = scr[4, x]
+                    vz = scr[5, x]
+                r = ambient[0]  # eq. 1: m_a l_a
+                g = ambient[1]
+                b = ambient[2]
+                for i in range(n_lights):
+                    lx = light_vec[i, 0]
+                    ly = light_vec[i, 1]
+                    lz = light_vec[i, 2]
+                    if light_kind[i] == LIGHT_POINT:  # ShadeContext.light_dirs
+                        lx = lx - ppx
+                        ly = ly - ppy
+                        lz = lz - ppz
+                        length = math.sqrt((lx * lx + ly * ly) + lz * lz)
+                        if length > 0.0:
+                            lx = lx / length
+                            ly = ly / length
+                            lz = lz / length
+                        else:
+                            lx = ly = lz = 0.0
+                        ulx, uly, ulz = _unit(lx, ly, lz)
+                    else:
+                        ulx = unit_l[i, 0]
+                        uly = unit_l[i, 1]
+                        ulz = unit_l[i, 2]
+                    n_dot_l = (unx * ulx + uny * uly) + unz * ulz
+                    f_d = max(n_dot_l, 0.0)  # eq. 1: f_d = max(N.L, 0)
+                    f_d = min(f_d, 1.0)
+                    if valid:  # sec. 5.2: clip(N_map . L_t, 0, 1), L_t = (L.T, L.B, L.N)
+                        ltx = (lx * tx + ly * ty) + lz * tz
+                        lty = (lx * btx + ly * bty) + lz * btz
+                        ltz = (lx * nx + ly * ny) + lz * nz
+                        ltx, lty, ltz = _unit(ltx, lty, ltz)
+                        f_d = min(max((mx * ltx + my * lty) + mz * ltz, 0.0), 1.0)
+                    r = r + m_diffuse[0] * f_d * light_color[i, 0]  # eq. 1: diffuse sum
+                    g = g + m_diffuse[1] * f_d * light_color[i, 1]
+                    b = b + m_diffuse[2] * f_d * light_color[i, 2]
+                    if specular:
+                        f_s = 0.0
+                        if shininess > 0.0:  # Blinn-Phong: H = unit(L + V), base = N.H
+                            if light_kind[i] == LIGHT_DIRECTIONAL:
+                                base = scr[9 + i, x]  # from _row_units
+                            else:
+                                hx, hy, hz = _unit(ulx + vx, uly + vy, ulz + vz)
+                                base = (unx * hx + uny * hy) + unz * hz
+                                base = min(max(base, 0.0), 1.0)
+                            f_s = base**shininess if n_dot_l > 0.0 else 0.0  # eq. 1: f_s
+                        r = r + m_specular[0] * f_s * light_color[i, 0]  # eq. 1: specular sum
+                        g = g + m_specular[1] * f_s * light_color[i, 1]
+                        b = b + m_specular[2] * f_s * light_color[i, 2]
+                inten = (r * LUMA_R + g * LUMA_G) + b * LUMA_B
+                inten = min(max(inten, 0.0), 1.0)
+                if use_imap:  # sec. 5.1: clip(I + indication, 0, 1)
+                    icols = imap.shape[1]
+                    irows = imap.shape[0]
+                    fxi = min(max((u0 * iscale[0]) * icols - 0.5, 0.0), icols - 1.0)
+                    fyi = min(max((v0 * iscale[1]) * irows - 0.5, 0.0), irows - 1.0)
+                    x0 = min(np.int64(math.floor(fxi)), icols - 1)
+                    y0 = min(np.int64(math.floor(fyi)), irows - 1)
+                    x1 = min(x0 + 1, icols - 1)
+                    y1 = min(y0 + 1, irows - 1)
+                    wx = fxi - x0
+                    wy = fyi - y0
+                    top_i = imap[y0, x0] * (1.0 - wx) + imap[y0, x1] * wx
+                    bot_i = imap[y1, x0] * (1.0 - wx) + imap[y1, x1] * wx
+                    ind = top_i * (1.0 - wy) + bot_i * wy
+                    inten = min(max(inten + ind, 0.0), 1.0)
+                if show == SHOW_INTENSITY:
+                    raw[y, x, 0] = inten
+                    raw[y, x, 1] = inten
+                    raw[y, x, 2] = inten
+                    continue
+                if not per_level:  # sec. 3: threshold the screen sampled at (uv, LOD)
+                    # _filtered(texels, ..., ch0) written out (the hot lookup; see _taps)
+                    n_lv = offsets.shape[0]
+                    lam = min(max(lod, 0.0), n_lv - 1.0)
+                    k0 = np.int64(math.floor(lam))
+                    k1 = min(k0 + 1, n_lv - 1)
+                    f = lam - k0
+                    acc = 0.0
+                    for j in range(max(probes, 1)):
+                        su_ = cu
+                        sv_ = cv
+                        if probes > 0:
+                            t = (j + 0.5) / probes - 0.5
+                            su_ = cu + axu * t
+                            sv_ = cv + axv * t
+                        r = 0.0
+                        for q in range(2 if f > 0.0 else 1):
+                            k = k0 if q == 0 else k1
+                            w = 1.0 - f if q == 0 else f
+                            i00, i10, i01, i11, w00, w10, w01, w11 = _taps(
+                                offsets[k], shapes[k, 0], shapes[k, 1], su_, sv_
+                            )
+                            r = r + w * (
+                                w00 * texels[i00, 0]
+                                + w10 * texels[i10, 0]
+                                + w01 * texels[i01, 0]
+                                + w11 * texels[i11, 0]
+                            )
+                        acc = acc + r if probes > 0 else r
+                    s = acc / probes if probes > 0 else acc
+                    value = _threshold(s, inten, mode, c, top)
+                else:  # level_weights, then a threshold per level blended with the weight
+                    n_lv = offsets.shape[0]
+                    lam = min(max(lod, 0.0), n_lv - 1.0)
+                    k0 = np.int64(math.floor(lam))
+                    k1 = min(k0 + 1, n_lv - 1)
+                    w1 = lam - k0
+                    s0 = _level_filtered(texels, offsets, shapes, k0, cu, cv, probes, axu, axv)
+                    s1 = _level_filtered(texels, offsets, shapes, k1, cu, cv, probes, axu, axv)
+                    if equalize:
+                        s0 = _interp(s0, lut_x, luts[k0])
+                        s1 = _interp(s1, lut_x, luts[k1])
+                    t0 = _threshold(s0, inten, mode, c, top)
+                    t1 = _threshold(s1, inten, mode, c, top)
+                    value = (1.0 - w1) * t0 + w1 * t1
+                rem = 1.0 - value
+                out[y, x, 0] = min(max(value * paper[0] + rem * ink[0], 0.0), 1.0)
+                out[y, x, 1] = min(max(value * paper[1] + rem * ink[1], 0.0), 1.0)
+                out[y, x, 2] = min(max(value * paper[2] + rem * ink[2], 0.0), 1.0)
+                out[y, x, 3] = 1.0
+
+    return shade_object
 
 
 @banded("mesh_id")

@@ -177,7 +177,15 @@ def shade_object_into(
     light_vec = np.array(light_vecs, dtype=np.float64).reshape(-1, 3)
     light_color = np.array([np.asarray(col, np.float64) for _, _, col in lights]).reshape(-1, 3)
     direction = screen.direction
-    K.shade_object(
+    kernel = K.shade_object_for(
+        SHOW_CODES[show],
+        has_normals,
+        bool(per_level or luts is not None),
+        luts is not None,
+        indication is not None,
+        anisotropy == 1,
+    )
+    kernel(
         int(obj),
         np.ascontiguousarray(mesh_id),
         np.ascontiguousarray(mask),
@@ -197,13 +205,9 @@ def shade_object_into(
         ntexels,
         noffsets,
         nshapes,
-        has_normals,
         lut_arr,
         lut_x,
-        luts is not None,
-        bool(per_level or luts is not None),
         imap,
-        indication is not None,
         _vec("indication_scale", indication_scale, 2),
         _vec("ambient", ambient, 3),
         _vec("diffuse", diffuse, 3),
@@ -219,7 +223,6 @@ def shade_object_into(
         THRESHOLD_CODES[threshold],
         float(c),
         0.5 if centred else 1.0,
-        SHOW_CODES[show],
         _vec("ink", ink, 3),
         _vec("paper", paper, 3),
         out,

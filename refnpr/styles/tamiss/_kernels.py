@@ -25,9 +25,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
-from refnpr._jit import banded, njit, pnjit
+from refnpr._jit import banded, njit
 
 _M1 = np.uint64(0x9E3779B97F4A7C15)
 _M2 = np.uint64(0xBF58476D1CE4E5B9)
@@ -51,6 +50,8 @@ MODE_COUNT, MODE_EMIT, MODE_TAM_CLIP, MODE_TAM_FADE = 0, 1, 2, 3
 
 _CHUNK = 512
 _CAP = 256
+#: Rows of the sample grid per band of ``raster_strips`` (a band is one index of its loop).
+_BAND = 16
 
 
 @njit
@@ -539,8 +540,10 @@ def _corner(high, aa, inv):
     return ((aa - 1) + 0.5) * inv if high else (0 + 0.5) * inv
 
 
-@pnjit
+@banded(lambda left, right, tv, opacity, bbox, nh, *rest: (nh + _BAND - 1) // _BAND)
 def raster_strips(
+    b_lo,
+    b_hi,
     left,
     right,
     tv,
@@ -558,6 +561,10 @@ def raster_strips(
 ):
     """Rasterize strips into ``out_alpha`` (nh, nw) with "over" in piece order.
 
+    Banded over bands of ``_BAND`` grid rows (``b_lo``, ``b_hi``: band indices); every band
+    walks all pieces in order, so each sample composites them in piece order whatever the
+    banding.
+
     left, right : (P, K, 2) vertices in sample units; tv : (P, K) brush u (stroke t) per vertex
     pair; opacity : (P,); bbox : (P, 4) int64 x0, y0, x1, y1 (inclusive, clipped); aa : sub-samples
     per axis (<= 8); brush : (Hb, Wb) alpha multiplier sampled at (u = t, v = across), wrapping
@@ -569,19 +576,18 @@ def raster_strips(
     n_pieces = left.shape[0]
     colored = colors.shape[0] == n_pieces and n_pieces > 0
     k = left.shape[1]
-    band = 16
-    n_bands = (nh + band - 1) // band
+    band = _BAND
     inv = 1.0 / aa
     hb = brush.shape[0]
     wb = brush.shape[1]
-    for bi in prange(n_bands):
+    # per-piece scratch (a piece's bbox within the band), reset for each piece
+    mask = np.empty(band * nw, dtype=np.uint64)
+    best = np.empty(band * nw)
+    bu = np.empty(band * nw)
+    bv = np.empty(band * nw)
+    for bi in range(b_lo, b_hi):
         y_lo = bi * band
         y_hi = min(nh, y_lo + band) - 1
-        # per-piece scratch (a piece's bbox within the band), reset for each piece
-        mask = np.empty(band * nw, dtype=np.uint64)
-        best = np.empty(band * nw)
-        bu = np.empty(band * nw)
-        bv = np.empty(band * nw)
         for pc in range(n_pieces):
             x0 = bbox[pc, 0]
             y0 = max(bbox[pc, 1], y_lo)

@@ -18,9 +18,9 @@ import math
 
 import numpy as np
 
-from refnpr._jit import banded, njit
+from refnpr._jit import banded, njit, specialised
 
-#: ``src`` codes of :func:`shade_threshold`.
+#: ``src`` codes of :func:`shade_threshold_for`.
 SRC_CONST = 0
 SRC_TABLE = 1
 SRC_LINES = 2
@@ -543,166 +543,165 @@ def _unit3(x, y, z):
     return x, y, z
 
 
-@banded("cover")
-def shade_threshold(
-    lo,
-    hi,
-    cover,
-    mesh_id,
-    row_start,
-    normal,
-    normal_tab,
-    position,
-    m_ambient,
-    m_diffuse,
-    m_specular,
-    spec_on,
-    shininess,
-    light_kind,
-    light_vec,
-    light_unit,
-    light_color,
-    eye,
-    steps,
-    strength,
-    facing_fade,
-    facing_power,
-    dark,
-    bright,
-    specular,
-    spec_const,
-    src,
-    t_const,
-    t_tab,
-    w_tab,
-    uv,
-    duv_dx,
-    duv_dy,
-    dyadic,
-    has_grad,
-    has_channel,
-    uv_scale,
-    log2_sv,
-    dir_sin,
-    dir_cos,
-    dir_zero,
-    log2_w,
-    multiscale,
-    uniform,
-    offsets,
-    noise_tab,
-    lam_bp,
-    lev_bp,
-    n_sub,
-    stipple_seed,
-    jitter,
-    cdf,
-    out,
-):
-    """Shade every sample of ``out (nH, nW, 4) float32`` (written in full; zero where empty).
+@specialised
+def shade_threshold_for(src):
+    """:func:`shade_threshold` for one threshold source ``src`` (SRC_CONST, SRC_TABLE,
+    SRC_LINES, SRC_ANALYTIC, SRC_STIPPLE): numba prunes the other sources' branches before
+    typing them, so a frame compiles only the source it uses (:func:`refnpr._jit.specialised`;
+    the line source alone compiles in about half the time of all five)."""
 
-    Banded over the rows (``lo``, ``hi``: a band, given by :func:`refnpr._jit.banded`).
+    @banded("cover")
+    def shade_threshold(
+        lo,
+        hi,
+        cover,
+        mesh_id,
+        row_start,
+        normal,
+        normal_tab,
+        position,
+        m_ambient,
+        m_diffuse,
+        m_specular,
+        spec_on,
+        shininess,
+        light_kind,
+        light_vec,
+        light_unit,
+        light_color,
+        eye,
+        steps,
+        strength,
+        facing_fade,
+        facing_power,
+        dark,
+        bright,
+        specular,
+        spec_const,
+        t_const,
+        t_tab,
+        w_tab,
+        uv,
+        duv_dx,
+        duv_dy,
+        dyadic,
+        has_grad,
+        has_channel,
+        uv_scale,
+        log2_sv,
+        dir_sin,
+        dir_cos,
+        dir_zero,
+        log2_w,
+        multiscale,
+        uniform,
+        offsets,
+        noise_tab,
+        lam_bp,
+        lev_bp,
+        n_sub,
+        stipple_seed,
+        jitter,
+        cdf,
+        out,
+    ):
+        """Shade every sample of ``out (nH, nW, 4) float32`` (written in full; zero where empty).
 
-    cover, mesh_id (nH, nW) int: covered where ``cover >= 0``; object index (clamped >= 0).
-    row_start (nH,) int64: index of each row's first covered sample in row-major mask order
-    (the order of ``t_tab``, ``w_tab``, ``noise_tab``). normal (nH, nW, 3) float: shading
-    normals (not renormalized for f_s and n.v, as in the numpy path), or ``normal_tab (M, 3)``
-    float64 in mask order where it has rows (bump-mapped normals); position (nH, nW, 3)
-    float, any shape when unused. m_ambient (O, 3) float64 = m_a l_a; m_diffuse, m_specular
-    (O, 3); shininess (O,). light_kind (L,) int64; light_vec (L, 3): d / |d| of directional
-    lights, positions of point lights; light_unit (L, 3): unit_vectors(light_vec) (directional);
-    light_color (L, 3); eye (3,). steps: n of eq. 4; strength, facing_fade, facing_power, dark,
-    bright: sec. 5 (facing_fade 0: no orientation fade). specular: add the specular terms;
-    spec_const: the specular threshold (< 0: the texture's).
+        Banded over the rows (``lo``, ``hi``: a band, given by :func:`refnpr._jit.banded`).
 
-    src: SRC_CONST (``t_const`` everywhere), SRC_TABLE (``t_tab (M, K)`` with ``w_tab (M, K)``
-    weights, or ``w_tab`` of shape (1, 0) for none), SRC_LINES (eqs. 5-8 here, one threshold per
-    row of ``offsets (K, 2)`` pixel offsets): uv, duv_dx, duv_dy (nH, nW, 2) float; has_grad:
-    whether duv_* are read (else 0); dyadic (nH, nW): the G-buffer's eq. 5 scale, read for
-    directions with ``dir_zero`` when ``has_channel``, minus log2_sv (O,); uv_scale (O, 2);
-    dir_sin, dir_cos (D,) of the hatching angles; log2_w = log2(period); multiscale, uniform;
-    noise_tab (M,) phase noise in line periods or shape (0,); lam_bp (B,), lev_bp (B, D): the
-    layer schedule composing D > 1 layers (``combine_thresholds``). SRC_ANALYTIC: the same
-    layers box-filtered over the sample's footprint (``AnalyticLines``; the derivatives divided
-    by ``n_sub``, the samples per pixel per axis), ``offsets`` unused. SRC_STIPPLE: the
-    screen-round jittered dots (``stipple_threshold``) at each row of ``offsets`` (pcf) or at
-    uv itself (shape (0, 2): filter "none"), with ``stipple_seed`` (uint64, 32 bits),
-    ``jitter`` and the tone table ``cdf (n_t, n_t, n_y)`` (shape (0, 0, 0) for none).
-    """
-    nh, nw = cover.shape
-    n_lights = light_kind.shape[0]
-    if src == SRC_TABLE:
-        kk = t_tab.shape[1]
-    elif src == SRC_LINES:
-        kk = offsets.shape[0]
-    elif src == SRC_ANALYTIC:
-        kk = 0
-    elif src == SRC_STIPPLE:
-        kk = max(offsets.shape[0], 1)
-    else:
-        kk = 1
-    has_w = src == SRC_TABLE and w_tab.shape[1] > 0
-    n_dirs = dir_sin.shape[0]
-    has_noise = noise_tab.shape[0] > 0
-    for y in range(lo, hi):
-        tk = np.empty(kk)
-        wk = np.empty(kk)
-        hits = np.empty(kk)
-        one = np.empty(1)
-        none = np.empty(1)
-        lv = np.empty(n_dirs)
-        lgx = np.empty(n_dirs)
-        lgy = np.empty(n_dirs)
-        ls = np.empty(n_dirs)
-        z = 0.0
-        s_uv = np.empty(2)
-        fbuf = np.empty(1)
-        ubuf = fbuf.view(np.uint64)
-        has_table = cdf.shape[0] > 0
-        idx = row_start[y]
-        for x in range(nw):
-            if cover[y, x] < 0:
-                out[y, x, 0] = 0.0
-                out[y, x, 1] = 0.0
-                out[y, x, 2] = 0.0
-                out[y, x, 3] = 0.0
-                continue
-            mi = max(mesh_id[y, x], 0)
-            # ---- thresholds of this sample (taken once, used by every term)
-            if src == SRC_CONST:
-                tk[0] = t_const
-            elif src == SRC_TABLE:
-                for j in range(kk):
-                    tk[j] = t_tab[idx, j]
-                if has_w:
+        cover, mesh_id (nH, nW) int: covered where ``cover >= 0``; object index (clamped >= 0).
+        row_start (nH,) int64: index of each row's first covered sample in row-major mask order
+        (the order of ``t_tab``, ``w_tab``, ``noise_tab``). normal (nH, nW, 3) float: shading
+        normals (not renormalized for f_s and n.v, as in the numpy path), or ``normal_tab (M, 3)``
+        float64 in mask order where it has rows (bump-mapped normals); position (nH, nW, 3)
+        float, any shape when unused. m_ambient (O, 3) float64 = m_a l_a; m_diffuse, m_specular
+        (O, 3); shininess (O,). light_kind (L,) int64; light_vec (L, 3): d / |d| of directional
+        lights, positions of point lights; light_unit (L, 3): unit_vectors(light_vec) (directional);
+        light_color (L, 3); eye (3,). steps: n of eq. 4; strength, facing_fade, facing_power, dark,
+        bright: sec. 5 (facing_fade 0: no orientation fade). specular: add the specular terms;
+        spec_const: the specular threshold (< 0: the texture's).
+
+        src (the factory's): SRC_CONST (``t_const`` everywhere), SRC_TABLE (``t_tab (M, K)``
+        with ``w_tab (M, K)`` weights, or ``w_tab`` of shape (1, 0) for none), SRC_LINES (eqs. 5-8 here, one threshold per
+        row of ``offsets (K, 2)`` pixel offsets): uv, duv_dx, duv_dy (nH, nW, 2) float; has_grad:
+        whether duv_* are read (else 0); dyadic (nH, nW): the G-buffer's eq. 5 scale, read for
+        directions with ``dir_zero`` when ``has_channel``, minus log2_sv (O,); uv_scale (O, 2);
+        dir_sin, dir_cos (D,) of the hatching angles; log2_w = log2(period); multiscale, uniform;
+        noise_tab (M,) phase noise in line periods or shape (0,); lam_bp (B,), lev_bp (B, D): the
+        layer schedule composing D > 1 layers (``combine_thresholds``). SRC_ANALYTIC: the same
+        layers box-filtered over the sample's footprint (``AnalyticLines``; the derivatives divided
+        by ``n_sub``, the samples per pixel per axis), ``offsets`` unused. SRC_STIPPLE: the
+        screen-round jittered dots (``stipple_threshold``) at each row of ``offsets`` (pcf) or at
+        uv itself (shape (0, 2): filter "none"), with ``stipple_seed`` (uint64, 32 bits),
+        ``jitter`` and the tone table ``cdf (n_t, n_t, n_y)`` (shape (0, 0, 0) for none).
+        """
+        nh, nw = cover.shape
+        n_lights = light_kind.shape[0]
+        if src == SRC_TABLE:
+            kk = t_tab.shape[1]
+        elif src == SRC_LINES:
+            kk = offsets.shape[0]
+        elif src == SRC_ANALYTIC:
+            kk = 0
+        elif src == SRC_STIPPLE:
+            kk = max(offsets.shape[0], 1)
+        else:
+            kk = 1
+        has_w = src == SRC_TABLE and w_tab.shape[1] > 0
+        n_dirs = dir_sin.shape[0]
+        has_noise = noise_tab.shape[0] > 0
+        for y in range(lo, hi):
+            tk = np.empty(kk)
+            wk = np.empty(kk)
+            hits = np.empty(kk)
+            one = np.empty(1)
+            none = np.empty(1)
+            lv = np.empty(n_dirs)
+            lgx = np.empty(n_dirs)
+            lgy = np.empty(n_dirs)
+            ls = np.empty(n_dirs)
+            z = 0.0
+            s_uv = np.empty(2)
+            fbuf = np.empty(1)
+            ubuf = fbuf.view(np.uint64)
+            has_table = cdf.shape[0] > 0
+            idx = row_start[y]
+            for x in range(nw):
+                if cover[y, x] < 0:
+                    out[y, x, 0] = 0.0
+                    out[y, x, 1] = 0.0
+                    out[y, x, 2] = 0.0
+                    out[y, x, 3] = 0.0
+                    continue
+                mi = max(mesh_id[y, x], 0)
+                # ---- thresholds of this sample (taken once, used by every term)
+                if src == SRC_CONST:
+                    tk[0] = t_const
+                elif src == SRC_TABLE:
                     for j in range(kk):
-                        wk[j] = w_tab[idx, j]
-            elif src == SRC_STIPPLE:
-                su = uv_scale[mi, 0]
-                sv = uv_scale[mi, 1]
-                u0 = np.float64(uv[y, x, 0]) * su
-                v0 = np.float64(uv[y, x, 1]) * sv
-                gxu = np.float64(duv_dx[y, x, 0]) * su
-                gxv = np.float64(duv_dx[y, x, 1]) * sv
-                gyu = np.float64(duv_dy[y, x, 0]) * su
-                gyv = np.float64(duv_dy[y, x, 1]) * sv
-                for axis in range(2):  # stipple_scales: eq. 5 per texture axis
-                    g = math.hypot(gxu, gyu) if axis == 0 else math.hypot(gxv, gyv)
-                    if not g >= TINY:
-                        g = TINY if g == g else g
-                    s = -(math.log2(g) + log2_w)
-                    s_uv[axis] = np.floor(s) if not multiscale else s
-                if offsets.shape[0] == 0:
-                    tk[0] = _stipple(
-                        u0, v0, s_uv[0], s_uv[1], stipple_seed, jitter, cdf, has_table, fbuf, ubuf
-                    )
-                else:
-                    for j in range(kk):
-                        uj = u0 + offsets[j, 0] * gxu + offsets[j, 1] * gyu
-                        vj = v0 + offsets[j, 0] * gxv + offsets[j, 1] * gyv
-                        tk[j] = _stipple(
-                            uj,
-                            vj,
+                        tk[j] = t_tab[idx, j]
+                    if has_w:
+                        for j in range(kk):
+                            wk[j] = w_tab[idx, j]
+                elif src == SRC_STIPPLE:
+                    su = uv_scale[mi, 0]
+                    sv = uv_scale[mi, 1]
+                    u0 = np.float64(uv[y, x, 0]) * su
+                    v0 = np.float64(uv[y, x, 1]) * sv
+                    gxu = np.float64(duv_dx[y, x, 0]) * su
+                    gxv = np.float64(duv_dx[y, x, 1]) * sv
+                    gyu = np.float64(duv_dy[y, x, 0]) * su
+                    gyv = np.float64(duv_dy[y, x, 1]) * sv
+                    for axis in range(2):  # stipple_scales: eq. 5 per texture axis
+                        g = math.hypot(gxu, gyu) if axis == 0 else math.hypot(gxv, gyv)
+                        if not g >= TINY:
+                            g = TINY if g == g else g
+                        s = -(math.log2(g) + log2_w)
+                        s_uv[axis] = np.floor(s) if not multiscale else s
+                    if offsets.shape[0] == 0:
+                        tk[0] = _stipple(
+                            u0,
+                            v0,
                             s_uv[0],
                             s_uv[1],
                             stipple_seed,
@@ -712,140 +711,135 @@ def shade_threshold(
                             fbuf,
                             ubuf,
                         )
-            else:
-                su = uv_scale[mi, 0]
-                sv = uv_scale[mi, 1]
-                u0 = np.float64(uv[y, x, 0]) * su
-                v0 = np.float64(uv[y, x, 1]) * sv
-                gxu = 0.0
-                gxv = 0.0
-                gyu = 0.0
-                gyv = 0.0
-                if has_grad:
-                    gxu = np.float64(duv_dx[y, x, 0]) * su
-                    gxv = np.float64(duv_dx[y, x, 1]) * sv
-                    gyu = np.float64(duv_dy[y, x, 0]) * su
-                    gyv = np.float64(duv_dy[y, x, 1]) * sv
-                nz = noise_tab[idx] if has_noise else 0.0
-                z = nz - np.floor(nz)
-                for j in range(kk):
-                    tk[j] = math.inf
-                for d in range(n_dirs):
-                    sa = dir_sin[d]
-                    ca = dir_cos[d]
-                    v = -u0 * sa + v0 * ca  # hatch_coordinate
-                    dvx = -gxu * sa + gxv * ca
-                    dvy = -gyu * sa + gyv * ca
-                    if dir_zero[d] and has_channel:
-                        s = np.float64(dyadic[y, x]) - log2_sv[mi]  # eq. 5 (G-buffer)
                     else:
-                        g = math.hypot(dvx, dvy)
-                        if not g >= TINY:
-                            g = TINY if g == g else g
-                        s = -(math.log2(g) + log2_w)  # eq. 5, d = 1 / |grad v|
-                    if not multiscale:
-                        s = np.floor(s)  # eq. 6 alone
-                    lv[d] = v
-                    lgx[d] = dvx / n_sub
-                    lgy[d] = dvy / n_sub
-                    ls[d] = s
+                        for j in range(kk):
+                            uj = u0 + offsets[j, 0] * gxu + offsets[j, 1] * gyu
+                            vj = v0 + offsets[j, 0] * gxv + offsets[j, 1] * gyv
+                            tk[j] = _stipple(
+                                uj,
+                                vj,
+                                s_uv[0],
+                                s_uv[1],
+                                stipple_seed,
+                                jitter,
+                                cdf,
+                                has_table,
+                                fbuf,
+                                ubuf,
+                            )
+                else:
+                    su = uv_scale[mi, 0]
+                    sv = uv_scale[mi, 1]
+                    u0 = np.float64(uv[y, x, 0]) * su
+                    v0 = np.float64(uv[y, x, 1]) * sv
+                    gxu = 0.0
+                    gxv = 0.0
+                    gyu = 0.0
+                    gyv = 0.0
+                    if has_grad:
+                        gxu = np.float64(duv_dx[y, x, 0]) * su
+                        gxv = np.float64(duv_dx[y, x, 1]) * sv
+                        gyu = np.float64(duv_dy[y, x, 0]) * su
+                        gyv = np.float64(duv_dy[y, x, 1]) * sv
+                    nz = noise_tab[idx] if has_noise else 0.0
+                    z = nz - np.floor(nz)
                     for j in range(kk):
-                        vj = v + offsets[j, 0] * dvx + offsets[j, 1] * dvy
-                        f = _line(vj, s, uniform, nz, has_noise)  # eqs. 6-8
-                        if n_dirs == 1:
-                            tk[j] = f
+                        tk[j] = math.inf
+                    for d in range(n_dirs):
+                        sa = dir_sin[d]
+                        ca = dir_cos[d]
+                        v = -u0 * sa + v0 * ca  # hatch_coordinate
+                        dvx = -gxu * sa + gxv * ca
+                        dvy = -gyu * sa + gyv * ca
+                        if dir_zero[d] and has_channel:
+                            s = np.float64(dyadic[y, x]) - log2_sv[mi]  # eq. 5 (G-buffer)
                         else:
-                            li = _darkness(f, lam_bp, lev_bp, d, n_dirs)
-                            tk[j] = li if li < tk[j] else tk[j]  # white in every layer
-                if n_dirs > 1 and kk > 0:
-                    for j in range(kk):
-                        t = math.exp(-tk[j])  # union of the dark lines: max_i h_i(F_i)
-                        if t < 0.0:
-                            t = 0.0
-                        tk[j] = t if t < ONE_BELOW else ONE_BELOW
-            # ---- eq. 1's vectors
-            if normal_tab.shape[0] > 0:
-                nx = normal_tab[idx, 0]
-                ny = normal_tab[idx, 1]
-                nz3 = normal_tab[idx, 2]
-            else:
-                nx = np.float64(normal[y, x, 0])
-                ny = np.float64(normal[y, x, 1])
-                nz3 = np.float64(normal[y, x, 2])
-            ux, uy, uz = _unit3(nx, ny, nz3)  # lighting.diffuse normalizes N
-            vx = 0.0
-            vy = 0.0
-            vz = 0.0
-            if (specular and spec_on[mi]) or facing_fade > 0.0:  # ShadeContext.view_dir
-                vx = eye[0] - np.float64(position[y, x, 0])
-                vy = eye[1] - np.float64(position[y, x, 1])
-                vz = eye[2] - np.float64(position[y, x, 2])
-                length = math.sqrt(vx * vx + vy * vy + vz * vz)
-                if length > 0.0:
-                    vx = vx / length
-                    vy = vy / length
-                    vz = vz / length
+                            g = math.hypot(dvx, dvy)
+                            if not g >= TINY:
+                                g = TINY if g == g else g
+                            s = -(math.log2(g) + log2_w)  # eq. 5, d = 1 / |grad v|
+                        if not multiscale:
+                            s = np.floor(s)  # eq. 6 alone
+                        lv[d] = v
+                        lgx[d] = dvx / n_sub
+                        lgy[d] = dvy / n_sub
+                        ls[d] = s
+                        for j in range(kk):
+                            vj = v + offsets[j, 0] * dvx + offsets[j, 1] * dvy
+                            f = _line(vj, s, uniform, nz, has_noise)  # eqs. 6-8
+                            if n_dirs == 1:
+                                tk[j] = f
+                            else:
+                                li = _darkness(f, lam_bp, lev_bp, d, n_dirs)
+                                tk[j] = li if li < tk[j] else tk[j]  # white in every layer
+                    if n_dirs > 1 and kk > 0:
+                        for j in range(kk):
+                            t = math.exp(-tk[j])  # union of the dark lines: max_i h_i(F_i)
+                            if t < 0.0:
+                                t = 0.0
+                            tk[j] = t if t < ONE_BELOW else ONE_BELOW
+                # ---- eq. 1's vectors
+                if normal_tab.shape[0] > 0:
+                    nx = normal_tab[idx, 0]
+                    ny = normal_tab[idx, 1]
+                    nz3 = normal_tab[idx, 2]
                 else:
-                    vx = 0.0
-                    vy = 0.0
-                    vz = 0.0
-            st0 = strength * 1.0
-            if facing_fade > 0.0:  # sec. 5: 1 - fade |n.v|^power
-                ndv = nx * vx + ny * vy + nz3 * vz
-                st0 = strength * (1.0 - facing_fade * _pow(abs(ndv), facing_power))
-            r = m_ambient[mi, 0]  # eq. 2: m_a l_a kept
-            g_ = m_ambient[mi, 1]
-            b = m_ambient[mi, 2]
-            p = shininess[mi]
-            for i in range(n_lights):
-                lx = light_vec[i, 0]
-                ly = light_vec[i, 1]
-                lz = light_vec[i, 2]
-                if light_kind[i] == LIGHT_POINT:  # ShadeContext.light_dirs
-                    lx = lx - np.float64(position[y, x, 0])
-                    ly = ly - np.float64(position[y, x, 1])
-                    lz = lz - np.float64(position[y, x, 2])
-                    length = math.sqrt(lx * lx + ly * ly + lz * lz)
+                    nx = np.float64(normal[y, x, 0])
+                    ny = np.float64(normal[y, x, 1])
+                    nz3 = np.float64(normal[y, x, 2])
+                ux, uy, uz = _unit3(nx, ny, nz3)  # lighting.diffuse normalizes N
+                vx = 0.0
+                vy = 0.0
+                vz = 0.0
+                if (specular and spec_on[mi]) or facing_fade > 0.0:  # ShadeContext.view_dir
+                    vx = eye[0] - np.float64(position[y, x, 0])
+                    vy = eye[1] - np.float64(position[y, x, 1])
+                    vz = eye[2] - np.float64(position[y, x, 2])
+                    length = math.sqrt(vx * vx + vy * vy + vz * vz)
                     if length > 0.0:
-                        lx = lx / length
-                        ly = ly / length
-                        lz = lz / length
+                        vx = vx / length
+                        vy = vy / length
+                        vz = vz / length
                     else:
-                        lx = 0.0
-                        ly = 0.0
-                        lz = 0.0
-                    qx, qy, qz = _unit3(lx, ly, lz)
-                else:
-                    qx = light_unit[i, 0]
-                    qy = light_unit[i, 1]
-                    qz = light_unit[i, 2]
-                f_d = ux * qx + uy * qy + uz * qz
-                f_d = f_d if f_d >= 0.0 else 0.0  # eq. 1: f_d = max(N.L, 0), <= 1
-                f_d = f_d if f_d <= 1.0 else 1.0
-                if src == SRC_ANALYTIC:
-                    tx = _analytic(
-                        f_d, steps, lv, lgx, lgy, ls, n_dirs, uniform, z, has_noise, lam_bp, lev_bp
-                    )
-                else:
-                    tx = _apply(f_d, tk, wk, kk, has_w, steps, hits)  # eq. 4, sec. 4
-                term = _blend(f_d, tx, st0, dark, bright)  # eq. 2, sec. 5
-                r = r + m_diffuse[mi, 0] * term * light_color[i, 0]
-                g_ = g_ + m_diffuse[mi, 1] * term * light_color[i, 1]
-                b = b + m_diffuse[mi, 2] * term * light_color[i, 2]
-                if specular and spec_on[mi]:
-                    f_s = 0.0
-                    if p > 0.0:  # Blinn-Phong, unnormalized N (specular_field)
-                        n_dot_l = nx * lx + ny * ly + nz3 * lz
-                        hx, hy, hz = _unit3(lx + vx, ly + vy, lz + vz)
-                        base = nx * hx + ny * hy + nz3 * hz
-                        base = base if base >= 0.0 else 0.0
-                        f_s = _pow(base, p) if n_dot_l > 0.0 else 0.0  # eq. 1: f_s
-                    if spec_const >= 0.0:
-                        one[0] = spec_const
-                        tx = _apply(f_s, one, none, 1, False, steps, hits)
-                    elif src == SRC_ANALYTIC:
+                        vx = 0.0
+                        vy = 0.0
+                        vz = 0.0
+                st0 = strength * 1.0
+                if facing_fade > 0.0:  # sec. 5: 1 - fade |n.v|^power
+                    ndv = nx * vx + ny * vy + nz3 * vz
+                    st0 = strength * (1.0 - facing_fade * _pow(abs(ndv), facing_power))
+                r = m_ambient[mi, 0]  # eq. 2: m_a l_a kept
+                g_ = m_ambient[mi, 1]
+                b = m_ambient[mi, 2]
+                p = shininess[mi]
+                for i in range(n_lights):
+                    lx = light_vec[i, 0]
+                    ly = light_vec[i, 1]
+                    lz = light_vec[i, 2]
+                    if light_kind[i] == LIGHT_POINT:  # ShadeContext.light_dirs
+                        lx = lx - np.float64(position[y, x, 0])
+                        ly = ly - np.float64(position[y, x, 1])
+                        lz = lz - np.float64(position[y, x, 2])
+                        length = math.sqrt(lx * lx + ly * ly + lz * lz)
+                        if length > 0.0:
+                            lx = lx / length
+                            ly = ly / length
+                            lz = lz / length
+                        else:
+                            lx = 0.0
+                            ly = 0.0
+                            lz = 0.0
+                        qx, qy, qz = _unit3(lx, ly, lz)
+                    else:
+                        qx = light_unit[i, 0]
+                        qy = light_unit[i, 1]
+                        qz = light_unit[i, 2]
+                    f_d = ux * qx + uy * qy + uz * qz
+                    f_d = f_d if f_d >= 0.0 else 0.0  # eq. 1: f_d = max(N.L, 0), <= 1
+                    f_d = f_d if f_d <= 1.0 else 1.0
+                    if src == SRC_ANALYTIC:
                         tx = _analytic(
-                            f_s,
+                            f_d,
                             steps,
                             lv,
                             lgx,
@@ -859,13 +853,47 @@ def shade_threshold(
                             lev_bp,
                         )
                     else:
-                        tx = _apply(f_s, tk, wk, kk, has_w, steps, hits)
-                    term = _blend(f_s, tx, st0, dark, bright)
-                    r = r + m_specular[mi, 0] * term * light_color[i, 0]  # eq. 2
-                    g_ = g_ + m_specular[mi, 1] * term * light_color[i, 1]
-                    b = b + m_specular[mi, 2] * term * light_color[i, 2]
-            out[y, x, 0] = min(max(r, 0.0), 1.0)
-            out[y, x, 1] = min(max(g_, 0.0), 1.0)
-            out[y, x, 2] = min(max(b, 0.0), 1.0)
-            out[y, x, 3] = 1.0
-            idx += 1
+                        tx = _apply(f_d, tk, wk, kk, has_w, steps, hits)  # eq. 4, sec. 4
+                    term = _blend(f_d, tx, st0, dark, bright)  # eq. 2, sec. 5
+                    r = r + m_diffuse[mi, 0] * term * light_color[i, 0]
+                    g_ = g_ + m_diffuse[mi, 1] * term * light_color[i, 1]
+                    b = b + m_diffuse[mi, 2] * term * light_color[i, 2]
+                    if specular and spec_on[mi]:
+                        f_s = 0.0
+                        if p > 0.0:  # Blinn-Phong, unnormalized N (specular_field)
+                            n_dot_l = nx * lx + ny * ly + nz3 * lz
+                            hx, hy, hz = _unit3(lx + vx, ly + vy, lz + vz)
+                            base = nx * hx + ny * hy + nz3 * hz
+                            base = base if base >= 0.0 else 0.0
+                            f_s = _pow(base, p) if n_dot_l > 0.0 else 0.0  # eq. 1: f_s
+                        if spec_const >= 0.0:
+                            one[0] = spec_const
+                            tx = _apply(f_s, one, none, 1, False, steps, hits)
+                        elif src == SRC_ANALYTIC:
+                            tx = _analytic(
+                                f_s,
+                                steps,
+                                lv,
+                                lgx,
+                                lgy,
+                                ls,
+                                n_dirs,
+                                uniform,
+                                z,
+                                has_noise,
+                                lam_bp,
+                                lev_bp,
+                            )
+                        else:
+                            tx = _apply(f_s, tk, wk, kk, has_w, steps, hits)
+                        term = _blend(f_s, tx, st0, dark, bright)
+                        r = r + m_specular[mi, 0] * term * light_color[i, 0]  # eq. 2
+                        g_ = g_ + m_specular[mi, 1] * term * light_color[i, 1]
+                        b = b + m_specular[mi, 2] * term * light_color[i, 2]
+                out[y, x, 0] = min(max(r, 0.0), 1.0)
+                out[y, x, 1] = min(max(g_, 0.0), 1.0)
+                out[y, x, 2] = min(max(b, 0.0), 1.0)
+                out[y, x, 3] = 1.0
+                idx += 1
+
+    return shade_threshold

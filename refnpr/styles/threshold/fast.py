@@ -1,4 +1,4 @@
-"""The ``threshold`` style's one-pass shading: inputs of :func:`._kernels.shade_threshold`.
+"""The ``threshold`` style's one-pass shading: inputs of :func:`._kernels.shade_threshold_for`.
 
 :func:`shade_fast` gathers the frame's tables (materials, lights, uv scales per object, the
 hatching layers and their schedule) and runs the numba kernel over the whole sample grid. The
@@ -81,7 +81,7 @@ def shade_fast(style: Any, ctx: Any) -> np.ndarray:
         SRC_LINES,
         SRC_STIPPLE,
         SRC_TABLE,
-        shade_threshold,
+        shade_threshold_for,
     )
 
     p = style.p
@@ -195,7 +195,7 @@ def shade_fast(style: Any, ctx: Any) -> np.ndarray:
     sin = np.array([math.sin(a) for a in dirs], dtype=np.float64)  # as hatch_coordinate
     cos = np.array([math.cos(a) for a in dirs], dtype=np.float64)
     out = rgba_out(ctx, shape)  # written in full by the kernel
-    shade_threshold(
+    shade_threshold_for(src)(
         cover,
         mesh_id,
         row_start,
@@ -220,7 +220,6 @@ def shade_fast(style: Any, ctx: Any) -> np.ndarray:
         float(p.tone_fade[1]),
         bool(p.specular),
         -1.0 if isinstance(p.specular_threshold, str) else float(p.specular_threshold),
-        src,
         t_const,
         t_tab,
         w_tab,
