@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import banded, njit
+from ._jit import banded, njit, specialised
 
 
 @njit(inline="always")
@@ -74,124 +74,132 @@ def _store_row(q0, q1, q2, q3, dst, w):
     return bad
 
 
-@banded("out")
-def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
-    """Composite per sample over ``bg``, box-resolve n x n samples, unpremultiply.
+@specialised
+def composite_resolve_for(case):
+    """:func:`composite_resolve` for one ``case``: 1 (n = 1), 2 (n = 2) or 0 (any n, the
+    general loop); numba prunes the other cases before typing them, so spp 1 and spp 4 frames
+    each compile one (:func:`refnpr._jit.specialised`)."""
 
-    rgba : (n H, n W, 4) float32, C-contiguous, straight alpha per sample, as the style returned
-        it (``refnpr.render.composite_resolve`` makes it contiguous; rows are read as flat views).
-    n : int, samples per pixel along each axis.
-    bg : (4,) float64, straight-alpha background.
-    out : (H, W, 4) float32, C-contiguous, written: straight-alpha pixels.
-    bad_rows : (H,) uint8, written: 1 where a sample or a pixel of that output row is NaN or
-        inf (a pixel overflows float32 where finite samples are out of range), so a row of 0s
-        means every pixel written is finite.
+    @banded("out")
+    def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
+        """Composite per sample over ``bg``, box-resolve n x n samples, unpremultiply.
 
-    Per sample (float64): ``over = (rgb * a, a) + (bg_rgb * bg_a, bg_a) * (1 - a)``; per pixel the
-    n x n ``over`` values summed sample row by sample row, left to right, then divided by n * n
-    (numpy's ``mean(axis=(1, 3))`` order); ``rgb / alpha`` where alpha > 0, else 0.
+        rgba : (n H, n W, 4) float32, C-contiguous, straight alpha per sample, as the style returned
+            it (``refnpr.render.composite_resolve`` makes it contiguous; rows are read as flat views).
+        n : int, samples per pixel along each axis.
+        bg : (4,) float64, straight-alpha background.
+        out : (H, W, 4) float32, C-contiguous, written: straight-alpha pixels.
+        bad_rows : (H,) uint8, written: 1 where a sample or a pixel of that output row is NaN or
+            inf (a pixel overflows float32 where finite samples are out of range), so a row of 0s
+            means every pixel written is finite.
 
-    Divisions are the costly part (double division is not pipelined on the CPUs measured): by a
-    power-of-two n * n the mean is a multiplication by its exact reciprocal (the same bits as
-    the division). A sample is NaN or inf exactly where ``(r + g + b + a) * 0`` is not 0 (the
-    float64 sum of four float32 values cannot overflow), and so is a stored pixel; a row's flag
-    is the OR of those tests.
+        Per sample (float64): ``over = (rgb * a, a) + (bg_rgb * bg_a, bg_a) * (1 - a)``; per pixel the
+        n x n ``over`` values summed sample row by sample row, left to right, then divided by n * n
+        (numpy's ``mean(axis=(1, 3))`` order); ``rgb / alpha`` where alpha > 0, else 0.
 
-    n = 1 and n = 2 (spp 1 and 4, the usual cases) run over each row as a flat view
-    (``rgba[y].reshape(-1)``), branch-free: ``rgb / alpha`` is computed for every pixel and
-    selected where alpha > 0 (``x / 1 == x``, so opaque pixels keep their bits). LLVM vectorizes
-    the n = 1 loop (``vdivpd``, ``vcvtps2pd`` on 4 lanes; over 2D indexing, with an alpha == 1
-    shortcut branch and a float sum as the NaN probe, it stayed scalar): 12 -> 2.6 ms at 1080p.
-    At n = 2 the over values of a row pair go to planar float64 scratch, then the means to
-    planar scratch per channel (``_pair_means``), then the pixels are stored (``_store_row``):
-    each loop with one or two inputs vectorizes, which one loop over the eight planes did not
-    (30 -> 18 ms with the first pass alone, -> 13 ms with all three, at 1080p spp 4).
-    The same operations in the same order as the general loop below, so the same bits
-    (``tests/render/test_render_context.py`` compares every n with numpy bit for bit).
-    """
-    w = out.shape[1]
-    bg0 = bg[0] * bg[3]
-    bg1 = bg[1] * bg[3]
-    bg2 = bg[2] * bg[3]
-    bg3 = bg[3]
-    if n == 1:
-        for y in range(lo, hi):
-            src = rgba[y].reshape(w * 4)
-            dst = out[y].reshape(w * 4)
-            bad = False
-            for x in range(w):
-                s0, s1, s2, s3, bad_s = _over(src, 4 * x, bg0, bg1, bg2, bg3)
-                p0, p1, p2, p3 = _unpremultiply(s0, s1, s2, s3)
-                bad |= bad_s | _nonfinite(p0, p1, p2, p3)
-                dst[4 * x] = p0
-                dst[4 * x + 1] = p1
-                dst[4 * x + 2] = p2
-                dst[4 * x + 3] = p3
-            bad_rows[y] = 1 if bad else 0
-        return
-    if n == 2:
-        scr = np.empty((8, 2 * w))  # per sample of a row pair: the 4 channels of over, planar
-        t0, t1, t2, t3 = scr[0], scr[1], scr[2], scr[3]
-        u0, u1, u2, u3 = scr[4], scr[5], scr[6], scr[7]
-        means = np.empty((4, w))  # per pixel: the 4 channels of the mean, planar
-        q0, q1, q2, q3 = means[0], means[1], means[2], means[3]
-        for y in range(lo, hi):
-            top = rgba[2 * y].reshape(w * 8)
-            bot = rgba[2 * y + 1].reshape(w * 8)
-            dst = out[y].reshape(w * 4)
-            bad = False
-            for j in range(2 * w):  # over per sample, both rows (planar stores: vectorized)
-                t0[j], t1[j], t2[j], t3[j], bad_t = _over(top, 4 * j, bg0, bg1, bg2, bg3)
-                u0[j], u1[j], u2[j], u3[j], bad_b = _over(bot, 4 * j, bg0, bg1, bg2, bg3)
-                bad |= bad_t | bad_b
-            _pair_means(t0, u0, q0, w)  # sample row by sample row, left to right
-            _pair_means(t1, u1, q1, w)
-            _pair_means(t2, u2, q2, w)
-            _pair_means(t3, u3, q3, w)
-            bad |= _store_row(q0, q1, q2, q3, dst, w)
-            bad_rows[y] = 1 if bad else 0
-        return
-    count = float(n * n)
-    exact_inverse = (n * n) & (n * n - 1) == 0  # a power of two: x / count == x * (1 / count)
-    inverse = 1.0 / count
-    flat = rgba.reshape(rgba.size)
-    row_len = 4 * w * n  # floats per sample row
-    for y in range(lo, hi):
-        bad = False
-        for x in range(w):
-            s0 = 0.0
-            s1 = 0.0
-            s2 = 0.0
-            s3 = 0.0
-            for j in range(n):  # sample row by sample row, left to right
-                base = (y * n + j) * row_len + 4 * x * n
-                for i in range(n):
-                    o0, o1, o2, o3, bad_s = _over(flat, base + 4 * i, bg0, bg1, bg2, bg3)
-                    bad |= bad_s
-                    if j == 0 and i == 0:  # not 0.0 + o: that would turn -0.0 into 0.0
-                        s0 = o0
-                        s1 = o1
-                        s2 = o2
-                        s3 = o3
+        Divisions are the costly part (double division is not pipelined on the CPUs measured): by a
+        power-of-two n * n the mean is a multiplication by its exact reciprocal (the same bits as
+        the division). A sample is NaN or inf exactly where ``(r + g + b + a) * 0`` is not 0 (the
+        float64 sum of four float32 values cannot overflow), and so is a stored pixel; a row's flag
+        is the OR of those tests.
+
+        n = 1 and n = 2 (spp 1 and 4, the usual cases) run over each row as a flat view
+        (``rgba[y].reshape(-1)``), branch-free: ``rgb / alpha`` is computed for every pixel and
+        selected where alpha > 0 (``x / 1 == x``, so opaque pixels keep their bits). LLVM vectorizes
+        the n = 1 loop (``vdivpd``, ``vcvtps2pd`` on 4 lanes; over 2D indexing, with an alpha == 1
+        shortcut branch and a float sum as the NaN probe, it stayed scalar): 12 -> 2.6 ms at 1080p.
+        At n = 2 the over values of a row pair go to planar float64 scratch, then the means to
+        planar scratch per channel (``_pair_means``), then the pixels are stored (``_store_row``):
+        each loop with one or two inputs vectorizes, which one loop over the eight planes did not
+        (30 -> 18 ms with the first pass alone, -> 13 ms with all three, at 1080p spp 4).
+        The same operations in the same order as the general loop below, so the same bits
+        (``tests/render/test_render_context.py`` compares every n with numpy bit for bit).
+        """
+        w = out.shape[1]
+        bg0 = bg[0] * bg[3]
+        bg1 = bg[1] * bg[3]
+        bg2 = bg[2] * bg[3]
+        bg3 = bg[3]
+        if case == 1:
+            for y in range(lo, hi):
+                src = rgba[y].reshape(w * 4)
+                dst = out[y].reshape(w * 4)
+                bad = False
+                for x in range(w):
+                    s0, s1, s2, s3, bad_s = _over(src, 4 * x, bg0, bg1, bg2, bg3)
+                    p0, p1, p2, p3 = _unpremultiply(s0, s1, s2, s3)
+                    bad |= bad_s | _nonfinite(p0, p1, p2, p3)
+                    dst[4 * x] = p0
+                    dst[4 * x + 1] = p1
+                    dst[4 * x + 2] = p2
+                    dst[4 * x + 3] = p3
+                bad_rows[y] = 1 if bad else 0
+        elif case == 2:
+            scr = np.empty((8, 2 * w))  # per sample of a row pair: the 4 channels of over, planar
+            t0, t1, t2, t3 = scr[0], scr[1], scr[2], scr[3]
+            u0, u1, u2, u3 = scr[4], scr[5], scr[6], scr[7]
+            means = np.empty((4, w))  # per pixel: the 4 channels of the mean, planar
+            q0, q1, q2, q3 = means[0], means[1], means[2], means[3]
+            for y in range(lo, hi):
+                top = rgba[2 * y].reshape(w * 8)
+                bot = rgba[2 * y + 1].reshape(w * 8)
+                dst = out[y].reshape(w * 4)
+                bad = False
+                for j in range(2 * w):  # over per sample, both rows (planar stores: vectorized)
+                    t0[j], t1[j], t2[j], t3[j], bad_t = _over(top, 4 * j, bg0, bg1, bg2, bg3)
+                    u0[j], u1[j], u2[j], u3[j], bad_b = _over(bot, 4 * j, bg0, bg1, bg2, bg3)
+                    bad |= bad_t | bad_b
+                _pair_means(t0, u0, q0, w)  # sample row by sample row, left to right
+                _pair_means(t1, u1, q1, w)
+                _pair_means(t2, u2, q2, w)
+                _pair_means(t3, u3, q3, w)
+                bad |= _store_row(q0, q1, q2, q3, dst, w)
+                bad_rows[y] = 1 if bad else 0
+        else:
+            count = float(n * n)
+            # a power of two: x / count == x * (1 / count)
+            exact_inverse = (n * n) & (n * n - 1) == 0
+            inverse = 1.0 / count
+            flat = rgba.reshape(rgba.size)
+            row_len = 4 * w * n  # floats per sample row
+            for y in range(lo, hi):
+                bad = False
+                for x in range(w):
+                    s0 = 0.0
+                    s1 = 0.0
+                    s2 = 0.0
+                    s3 = 0.0
+                    for j in range(n):  # sample row by sample row, left to right
+                        base = (y * n + j) * row_len + 4 * x * n
+                        for i in range(n):
+                            o0, o1, o2, o3, bad_s = _over(flat, base + 4 * i, bg0, bg1, bg2, bg3)
+                            bad |= bad_s
+                            if j == 0 and i == 0:  # not 0.0 + o: that would turn -0.0 into 0.0
+                                s0 = o0
+                                s1 = o1
+                                s2 = o2
+                                s3 = o3
+                            else:
+                                s0 += o0
+                                s1 += o1
+                                s2 += o2
+                                s3 += o3
+                    if exact_inverse:
+                        s0 = s0 * inverse
+                        s1 = s1 * inverse
+                        s2 = s2 * inverse
+                        s3 = s3 * inverse
                     else:
-                        s0 += o0
-                        s1 += o1
-                        s2 += o2
-                        s3 += o3
-            if exact_inverse:
-                s0 = s0 * inverse
-                s1 = s1 * inverse
-                s2 = s2 * inverse
-                s3 = s3 * inverse
-            else:
-                s0 = s0 / count
-                s1 = s1 / count
-                s2 = s2 / count
-                s3 = s3 / count
-            p0, p1, p2, p3 = _unpremultiply(s0, s1, s2, s3)
-            bad |= _nonfinite(p0, p1, p2, p3)
-            out[y, x, 0] = p0
-            out[y, x, 1] = p1
-            out[y, x, 2] = p2
-            out[y, x, 3] = p3
-        bad_rows[y] = 1 if bad else 0
+                        s0 = s0 / count
+                        s1 = s1 / count
+                        s2 = s2 / count
+                        s3 = s3 / count
+                    p0, p1, p2, p3 = _unpremultiply(s0, s1, s2, s3)
+                    bad |= _nonfinite(p0, p1, p2, p3)
+                    out[y, x, 0] = p0
+                    out[y, x, 1] = p1
+                    out[y, x, 2] = p2
+                    out[y, x, 3] = p3
+                bad_rows[y] = 1 if bad else 0
+
+    return composite_resolve

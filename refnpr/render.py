@@ -103,7 +103,7 @@ def composite_resolve(
     the n x n samples of a pixel are averaged (box filter), and the pixel's colour is divided by
     its alpha (0 where alpha is 0). Bit-identical to the numpy expression
     ``box_resolve(premult + bg_premult * (1 - a), n)`` followed by ``rgb / alpha``, for any
-    numba thread count (``refnpr._kernels.composite_resolve``).
+    numba thread count (``refnpr._kernels.composite_resolve_for``).
 
     Parameters
     ----------
@@ -158,7 +158,7 @@ def composite_resolve(
             "pass out=None for a new one"
         )
     bad_rows = np.empty(shape[0], dtype=np.uint8)
-    K.composite_resolve(np.ascontiguousarray(rgba), n, bg, out, bad_rows)
+    K.composite_resolve_for(n if n <= 2 else 0)(np.ascontiguousarray(rgba), n, bg, out, bad_rows)
     if bad_rows.any():
         raise ValueError(f"style {style_name!r} produced NaN or inf; this is a bug in the style")
     return out

@@ -1213,14 +1213,24 @@ def finish_fragments(lo, hi, src_off, src_len, dst_off, src, sample, width, n_ax
             out_y[b + m] = py
 
 
-@njit
 def group_keys(keys):
     """Stable grouping of ``keys`` (n,) int64 by value, without a full sort.
 
     Returns ``uid`` (S,) the distinct keys ascending, ``starts`` (S + 1,) int64 and ``perm``
     (n,) int64: the positions of key ``uid[g]`` are ``perm[starts[g]:starts[g + 1]]`` in
-    increasing order, i.e. ``perm`` is the stable argsort of ``keys``.
+    increasing order, i.e. ``perm`` is the stable argsort of ``keys``. Two kernels: the groups
+    by hashing (:func:`_group_first`), then, with the S distinct keys sorted by numpy (they are
+    distinct, so any sort gives the same order; numba's own sort would compile for ~1 s on a
+    cold start), the counting pass (:func:`_group_perm`).
     """
+    grp, first = _group_first(keys)
+    return _group_perm(grp, first, np.argsort(first))
+
+
+@njit
+def _group_first(keys):
+    """Group index ``grp`` (n,) of each key, in order of first appearance, and ``first`` (S,)
+    the key of each group."""
     n = keys.shape[0]
     size = 16
     while size < 2 * n:
@@ -1248,7 +1258,15 @@ def group_keys(keys):
                 grp[i] = g
                 break
             h = h + np.uint64(1)
-    order = np.argsort(first[:ng])
+    return grp, first[:ng].copy()
+
+
+@njit
+def _group_perm(grp, first, order):
+    """``group_keys``'s (uid, starts, perm) from the groups of :func:`_group_first` and
+    ``order`` (S,), the argsort of their keys ``first``."""
+    n = grp.shape[0]
+    ng = first.shape[0]
     rank = np.empty(ng, dtype=np.int64)
     uid = np.empty(ng, dtype=np.int64)
     for r in range(ng):
