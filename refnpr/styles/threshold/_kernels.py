@@ -544,11 +544,13 @@ def _unit3(x, y, z):
 
 
 @specialised
-def shade_threshold_for(src):
+def shade_threshold_for(src, cross):
     """:func:`shade_threshold` for one threshold source ``src`` (SRC_CONST, SRC_TABLE,
-    SRC_LINES, SRC_ANALYTIC, SRC_STIPPLE): numba prunes the other sources' branches before
-    typing them, so a frame compiles only the source it uses (:func:`refnpr._jit.specialised`;
-    the line source alone compiles in about half the time of all five)."""
+    SRC_LINES, SRC_ANALYTIC, SRC_STIPPLE) and ``cross`` (more than one hatching direction:
+    ``dir_sin.shape[0] > 1``, the layers composed by ``lam_bp``, ``lev_bp``). numba prunes the
+    other sources' branches, and the layer composition of a single direction, before typing
+    them, so a frame compiles only what it uses (:func:`refnpr._jit.specialised`; the line
+    source of one direction alone compiles in about half the time of the all-source kernel)."""
 
     @banded("cover")
     def shade_threshold(
@@ -767,12 +769,12 @@ def shade_threshold_for(src):
                         for j in range(kk):
                             vj = v + offsets[j, 0] * dvx + offsets[j, 1] * dvy
                             f = _line(vj, s, uniform, nz, has_noise)  # eqs. 6-8
-                            if n_dirs == 1:
+                            if not cross:
                                 tk[j] = f
                             else:
                                 li = _darkness(f, lam_bp, lev_bp, d, n_dirs)
                                 tk[j] = li if li < tk[j] else tk[j]  # white in every layer
-                    if n_dirs > 1 and kk > 0:
+                    if cross and kk > 0:
                         for j in range(kk):
                             t = math.exp(-tk[j])  # union of the dark lines: max_i h_i(F_i)
                             if t < 0.0:

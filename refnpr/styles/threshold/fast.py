@@ -195,7 +195,7 @@ def shade_fast(style: Any, ctx: Any) -> np.ndarray:
     sin = np.array([math.sin(a) for a in dirs], dtype=np.float64)  # as hatch_coordinate
     cos = np.array([math.cos(a) for a in dirs], dtype=np.float64)
     out = rgba_out(ctx, shape)  # written in full by the kernel
-    shade_threshold_for(src)(
+    shade_threshold_for(src, len(dirs) > 1)(
         cover,
         mesh_id,
         row_start,
