@@ -124,6 +124,7 @@ def bench_styles(args) -> dict:
         proc = subprocess.run(
             [sys.executable, "-c", _CHILD, json.dumps(ROWS), json.dumps(args.size)],
             env=_env(cache),
+            cwd=str(ROOT),  # `-c` puts the working directory first on sys.path: this checkout's
             capture_output=True,
             text=True,
             check=False,

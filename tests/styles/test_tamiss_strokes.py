@@ -136,12 +136,12 @@ def test_pieces_composite_over_each_other_and_samples_scale():
     assert b[2:4, 2:6].min() == 1.0 and b.sum() == 8.0
 
 
-def test_a_folded_strip_is_inked_once():
+@pytest.mark.parametrize("aa", [1, 3, 4, 8])  # a kernel per aa (raster_strips_for)
+def test_a_folded_strip_is_inked_once(aa):
     # a strip that doubles back over itself (hairpin); coverage is that of the union
     left = np.array([[[2.0, 2.0], [12.0, 2.0], [4.0, 2.5]]])
     right = np.array([[[2.0, 5.0], [12.0, 5.0], [4.0, 4.5]]])
     strip = StrokeStrip(left=left, right=right, t=np.array([[0.0, 0.5, 1.0]]))
-    aa = 4
     alpha, _ = rasterize_strips(strips_of(strip), (8, 16), aa=aa)
     # oracle: union of the four triangles at the same sub-sample points
     tris = []
@@ -162,6 +162,17 @@ def test_a_folded_strip_is_inked_once():
         inside |= (np.all([v >= 0 for v in d], 0)) | (np.all([v <= 0 for v in d], 0))
     np.testing.assert_allclose(alpha, inside.mean(-1), atol=1e-12)
     assert alpha.max() == 1.0
+
+
+@pytest.mark.parametrize(
+    ("aa", "err", "match"),
+    [(0, ValueError, r"aa: expected an integer in \[1, 8\], got 0"),
+     (9, ValueError, r"aa: expected an integer in \[1, 8\], got 9"),
+     (4.0, TypeError, "aa: expected an integer, got float 4.0")],
+)  # fmt: skip
+def test_sub_samples_outside_one_to_eight_are_refused(aa, err, match):
+    with pytest.raises(err, match=match):
+        rasterize_strips(strips_of(rect_strip(1, 3, 1, 2)), (8, 8), aa=aa)
 
 
 def test_brushes():

@@ -5,7 +5,7 @@
   (``field``) that cover it, then either count/emit TAMISS fragments or accumulate the
   anti-aliased TAM/RPTAM ink (the TAM modes through ``_tam_layer``, the enumeration fused with
   the accumulation, same bits).
-* ``raster_strips``: anti-aliased rasterization of image-space triangle strips (supersampled
+* ``raster_strips_for(aa)``: anti-aliased rasterization of image-space triangle strips (supersampled
   coverage of the union of a strip's triangles), composited in order with "over";
   ``strip_bbox``: the pieces' clipped sample bboxes it takes.
 * ``sample_inputs``: the per-sample field inputs straight from the G-buffer channels (compaction,
@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from refnpr._jit import banded, njit
+from refnpr._jit import banded, njit, specialised
 
 _M1 = np.uint64(0x9E3779B97F4A7C15)
 _M2 = np.uint64(0xBF58476D1CE4E5B9)
@@ -540,172 +540,190 @@ def _corner(high, aa, inv):
     return ((aa - 1) + 0.5) * inv if high else (0 + 0.5) * inv
 
 
-@banded(lambda left, right, tv, opacity, bbox, nh, *rest: (nh + _BAND - 1) // _BAND)
-def raster_strips(
-    b_lo,
-    b_hi,
-    left,
-    right,
-    tv,
-    opacity,
-    bbox,
-    nh,
-    nw,
-    aa,
-    brush,
-    t_wrap,
-    out_alpha,
-    out_strokes,
-    colors,
-    out_rgb,
-):
-    """Rasterize strips into ``out_alpha`` (nh, nw) with "over" in piece order.
+@specialised
+def raster_strips_for(aa):
+    """:func:`raster_strips` for ``aa`` sub-samples per axis (1..8): with ``aa`` a constant,
+    LLVM unrolls the aa x aa coverage loop of each sample (the same operations, same bits;
+    ~30 % faster at aa = 4 on the TAMISS teapot's strokes, benchmarks/README.md)."""
 
-    Banded over bands of ``_BAND`` grid rows (``b_lo``, ``b_hi``: band indices); every band
-    walks all pieces in order, so each sample composites them in piece order whatever the
-    banding.
+    @banded(lambda left, right, tv, opacity, bbox, nh, *rest: (nh + _BAND - 1) // _BAND)
+    def raster_strips(
+        b_lo,
+        b_hi,
+        left,
+        right,
+        tv,
+        opacity,
+        bbox,
+        nh,
+        nw,
+        brush,
+        t_wrap,
+        out_alpha,
+        out_strokes,
+        colors,
+        out_rgb,
+    ):
+        """Rasterize strips into ``out_alpha`` (nh, nw) with "over" in piece order.
 
-    left, right : (P, K, 2) vertices in sample units; tv : (P, K) brush u (stroke t) per vertex
-    pair; opacity : (P,); bbox : (P, 4) int64 x0, y0, x1, y1 (inclusive, clipped); aa : sub-samples
-    per axis (<= 8); brush : (Hb, Wb) alpha multiplier sampled at (u = t, v = across), wrapping
-    in u when ``t_wrap``; out_strokes : (nh, nw) int32, number of pieces touching each sample.
-    Each piece's coverage is the fraction of aa x aa sub-samples inside any of its 2 (K - 1)
-    triangles (L_i, R_i, L_i+1) and (R_i, R_i+1, L_i+1). With ``colors`` (P, 3) (else (0, 3)),
-    ``out_rgb`` (nh, nw, 3) accumulates premultiplied colour with the same "over".
-    """
-    n_pieces = left.shape[0]
-    colored = colors.shape[0] == n_pieces and n_pieces > 0
-    k = left.shape[1]
-    band = _BAND
-    inv = 1.0 / aa
-    hb = brush.shape[0]
-    wb = brush.shape[1]
-    # per-piece scratch (a piece's bbox within the band), reset for each piece
-    mask = np.empty(band * nw, dtype=np.uint64)
-    best = np.empty(band * nw)
-    bu = np.empty(band * nw)
-    bv = np.empty(band * nw)
-    for bi in range(b_lo, b_hi):
-        y_lo = bi * band
-        y_hi = min(nh, y_lo + band) - 1
-        for pc in range(n_pieces):
-            x0 = bbox[pc, 0]
-            y0 = max(bbox[pc, 1], y_lo)
-            x1 = bbox[pc, 2]
-            y1 = min(bbox[pc, 3], y_hi)
-            if y1 < y0 or x1 < x0:
-                continue
-            w = x1 - x0 + 1
-            h = y1 - y0 + 1
-            for idx in range(h * w):
-                mask[idx] = 0
-                best[idx] = -np.inf
-                bu[idx] = 0.0
-                bv[idx] = 0.0
-            for seg in range(k - 1):
-                for tri in range(2):
-                    if tri == 0:
-                        ax, ay = left[pc, seg, 0], left[pc, seg, 1]
-                        bx, by = right[pc, seg, 0], right[pc, seg, 1]
-                        cx, cy = left[pc, seg + 1, 0], left[pc, seg + 1, 1]
-                        ta, tb, tc = tv[pc, seg], tv[pc, seg], tv[pc, seg + 1]
-                        va, vb, vc = 0.0, 1.0, 0.0
-                    else:
-                        ax, ay = right[pc, seg, 0], right[pc, seg, 1]
-                        bx, by = right[pc, seg + 1, 0], right[pc, seg + 1, 1]
-                        cx, cy = left[pc, seg + 1, 0], left[pc, seg + 1, 1]
-                        ta, tb, tc = tv[pc, seg], tv[pc, seg + 1], tv[pc, seg + 1]
-                        va, vb, vc = 1.0, 1.0, 0.0
-                    area = _edge(ax, ay, bx, by, cx, cy)
-                    if abs(area) < 1e-12:
-                        continue
-                    sgn = 1.0 if area > 0.0 else -1.0
-                    # bounds clamped in float before the integer conversion (a vertex at 1e300
-                    # would not fit an int64); within [x0 - 1, x1 + 1] the same as unclamped
-                    tx0 = max(x0, _floor_in(min(ax, bx, cx), x0, x1))
-                    tx1 = min(x1, _floor_in(max(ax, bx, cx), x0, x1))
-                    ty0 = max(y0, _floor_in(min(ay, by, cy), y0, y1))
-                    ty1 = min(y1, _floor_in(max(ay, by, cy), y0, y1))
-                    if ty1 < ty0 or tx1 < tx0:
-                        continue  # outside this band (or the piece's clipped bbox)
-                    # the factors of _edge's two products (same values, computed once)
-                    e0x, e0y = cx - bx, cy - by
-                    e1x, e1y = ax - cx, ay - cy
-                    e2x, e2y = bx - ax, by - ay
-                    # per edge, the sub-sample of a pixel most inside it: every rounding step of
-                    # the test below (py - by, e0x (.), px - bx, e0y (.), r0 - (.), (.) sgn) is
-                    # monotonic, so the rounded values are monotonic along each axis of the
-                    # aa x aa grid and their maximum is at this corner; where it is outside,
-                    # so are all the pixel's sub-samples (exactly: same values, no margin)
-                    oy0, ox0 = _corner(e0x * sgn > 0.0, aa, inv), _corner(e0y * sgn < 0.0, aa, inv)
-                    oy1, ox1 = _corner(e1x * sgn > 0.0, aa, inv), _corner(e1y * sgn < 0.0, aa, inv)
-                    oy2, ox2 = _corner(e2x * sgn > 0.0, aa, inv), _corner(e2y * sgn < 0.0, aa, inv)
-                    for y in range(ty0, ty1 + 1):
-                        for x in range(tx0, tx1 + 1):
-                            idx = (y - y0) * w + (x - x0)
-                            if not (
-                                (e0x * (y + oy0 - by) - e0y * (x + ox0 - bx)) * sgn < 0.0
-                                or (e1x * (y + oy1 - cy) - e1y * (x + ox1 - cx)) * sgn < 0.0
-                                or (e2x * (y + oy2 - ay) - e2y * (x + ox2 - ax)) * sgn < 0.0
-                            ):
-                                bits = mask[idx]
-                                for sj in range(aa):
-                                    py = y + (sj + 0.5) * inv
-                                    r0 = e0x * (py - by)
-                                    r1 = e1x * (py - cy)
-                                    r2 = e2x * (py - ay)
-                                    for si in range(aa):
-                                        px = x + (si + 0.5) * inv
-                                        # inside all three edges (_edge's values), without branches
-                                        inside = (
-                                            ((r0 - e0y * (px - bx)) * sgn >= 0.0)
-                                            & ((r1 - e1y * (px - cx)) * sgn >= 0.0)
-                                            & ((r2 - e2y * (px - ax)) * sgn >= 0.0)
-                                        )
-                                        bits |= np.uint64(inside) << np.uint64(sj * aa + si)
-                                mask[idx] = bits
-                            # brush coordinates from the triangle the sample centre is most inside
-                            pcx = x + 0.5
-                            pcy = y + 0.5
-                            w0 = _edge(bx, by, cx, cy, pcx, pcy) / area
-                            w1 = _edge(cx, cy, ax, ay, pcx, pcy) / area
-                            w2 = 1.0 - w0 - w1
-                            m = min(w0, w1, w2)
-                            if m > best[idx]:
-                                best[idx] = m
-                                w0c = max(w0, 0.0)
-                                w1c = max(w1, 0.0)
-                                w2c = max(w2, 0.0)
-                                ws = w0c + w1c + w2c
-                                bu[idx] = (w0c * ta + w1c * tb + w2c * tc) / ws
-                                bv[idx] = (w0c * va + w1c * vb + w2c * vc) / ws
-            for y in range(y0, y1 + 1):
-                for x in range(x0, x1 + 1):
-                    idx = (y - y0) * w + (x - x0)
-                    if mask[idx] == 0:
-                        continue
-                    cov = _popcount(mask[idx]) / (aa * aa)
-                    # bilinear brush lookup, texel centres at (i + 0.5) / size
-                    fu = bu[idx] * wb - 0.5
-                    fv = min(max(bv[idx], 0.0), 1.0) * hb - 0.5
-                    iu = int(math.floor(fu))
-                    iv = int(math.floor(fv))
-                    au = fu - iu
-                    av = fv - iv
-                    cc0 = _texel(iu, wb, t_wrap)  # the two columns, once for both rows
-                    cc1 = _texel(iu + 1, wb, t_wrap)
-                    val = 0.0
-                    for dv in range(2):
-                        rr = min(max(iv + dv, 0), hb - 1)
-                        wv = av if dv == 1 else 1.0 - av
-                        val += (1.0 - au) * wv * brush[rr, cc0]
-                        val += au * wv * brush[rr, cc1]
-                    a = cov * opacity[pc] * val
-                    out_alpha[y, x] = out_alpha[y, x] + a * (1.0 - out_alpha[y, x])
-                    if colored:
-                        for ch in range(3):
-                            out_rgb[y, x, ch] = colors[pc, ch] * a + out_rgb[y, x, ch] * (1.0 - a)
-                    out_strokes[y, x] += 1
+        Banded over bands of ``_BAND`` grid rows (``b_lo``, ``b_hi``: band indices); every band
+        walks all pieces in order, so each sample composites them in piece order whatever the
+        banding.
+
+        left, right : (P, K, 2) vertices in sample units; tv : (P, K) brush u (stroke t) per
+        vertex pair; opacity : (P,); bbox : (P, 4) int64 x0, y0, x1, y1 (inclusive, clipped);
+        aa (the factory's) : sub-samples per axis (<= 8); brush : (Hb, Wb) alpha multiplier
+        sampled at (u = t, v = across), wrapping in u when ``t_wrap``; out_strokes : (nh, nw) int32, number of pieces touching each sample.
+        Each piece's coverage is the fraction of aa x aa sub-samples inside any of its 2 (K - 1)
+        triangles (L_i, R_i, L_i+1) and (R_i, R_i+1, L_i+1). With ``colors`` (P, 3) (else (0, 3)),
+        ``out_rgb`` (nh, nw, 3) accumulates premultiplied colour with the same "over".
+        """
+        n_pieces = left.shape[0]
+        colored = colors.shape[0] == n_pieces and n_pieces > 0
+        k = left.shape[1]
+        band = _BAND
+        inv = 1.0 / aa
+        hb = brush.shape[0]
+        wb = brush.shape[1]
+        # per-piece scratch (a piece's bbox within the band), reset for each piece
+        mask = np.empty(band * nw, dtype=np.uint64)
+        best = np.empty(band * nw)
+        bu = np.empty(band * nw)
+        bv = np.empty(band * nw)
+        for bi in range(b_lo, b_hi):
+            y_lo = bi * band
+            y_hi = min(nh, y_lo + band) - 1
+            for pc in range(n_pieces):
+                x0 = bbox[pc, 0]
+                y0 = max(bbox[pc, 1], y_lo)
+                x1 = bbox[pc, 2]
+                y1 = min(bbox[pc, 3], y_hi)
+                if y1 < y0 or x1 < x0:
+                    continue
+                w = x1 - x0 + 1
+                h = y1 - y0 + 1
+                for idx in range(h * w):
+                    mask[idx] = 0
+                    best[idx] = -np.inf
+                    bu[idx] = 0.0
+                    bv[idx] = 0.0
+                for seg in range(k - 1):
+                    for tri in range(2):
+                        if tri == 0:
+                            ax, ay = left[pc, seg, 0], left[pc, seg, 1]
+                            bx, by = right[pc, seg, 0], right[pc, seg, 1]
+                            cx, cy = left[pc, seg + 1, 0], left[pc, seg + 1, 1]
+                            ta, tb, tc = tv[pc, seg], tv[pc, seg], tv[pc, seg + 1]
+                            va, vb, vc = 0.0, 1.0, 0.0
+                        else:
+                            ax, ay = right[pc, seg, 0], right[pc, seg, 1]
+                            bx, by = right[pc, seg + 1, 0], right[pc, seg + 1, 1]
+                            cx, cy = left[pc, seg + 1, 0], left[pc, seg + 1, 1]
+                            ta, tb, tc = tv[pc, seg], tv[pc, seg + 1], tv[pc, seg + 1]
+                            va, vb, vc = 1.0, 1.0, 0.0
+                        area = _edge(ax, ay, bx, by, cx, cy)
+                        if abs(area) < 1e-12:
+                            continue
+                        sgn = 1.0 if area > 0.0 else -1.0
+                        # bounds clamped in float before the integer conversion (a vertex at 1e300
+                        # would not fit an int64); within [x0 - 1, x1 + 1] the same as unclamped
+                        tx0 = max(x0, _floor_in(min(ax, bx, cx), x0, x1))
+                        tx1 = min(x1, _floor_in(max(ax, bx, cx), x0, x1))
+                        ty0 = max(y0, _floor_in(min(ay, by, cy), y0, y1))
+                        ty1 = min(y1, _floor_in(max(ay, by, cy), y0, y1))
+                        if ty1 < ty0 or tx1 < tx0:
+                            continue  # outside this band (or the piece's clipped bbox)
+                        # the factors of _edge's two products (same values, computed once)
+                        e0x, e0y = cx - bx, cy - by
+                        e1x, e1y = ax - cx, ay - cy
+                        e2x, e2y = bx - ax, by - ay
+                        # per edge, the sub-sample of a pixel most inside it: every rounding step of
+                        # the test below (py - by, e0x (.), px - bx, e0y (.), r0 - (.), (.) sgn) is
+                        # monotonic, so the rounded values are monotonic along each axis of the
+                        # aa x aa grid and their maximum is at this corner; where it is outside,
+                        # so are all the pixel's sub-samples (exactly: same values, no margin)
+                        oy0, ox0 = (
+                            _corner(e0x * sgn > 0.0, aa, inv),
+                            _corner(e0y * sgn < 0.0, aa, inv),
+                        )
+                        oy1, ox1 = (
+                            _corner(e1x * sgn > 0.0, aa, inv),
+                            _corner(e1y * sgn < 0.0, aa, inv),
+                        )
+                        oy2, ox2 = (
+                            _corner(e2x * sgn > 0.0, aa, inv),
+                            _corner(e2y * sgn < 0.0, aa, inv),
+                        )
+                        for y in range(ty0, ty1 + 1):
+                            for x in range(tx0, tx1 + 1):
+                                idx = (y - y0) * w + (x - x0)
+                                if not (
+                                    (e0x * (y + oy0 - by) - e0y * (x + ox0 - bx)) * sgn < 0.0
+                                    or (e1x * (y + oy1 - cy) - e1y * (x + ox1 - cx)) * sgn < 0.0
+                                    or (e2x * (y + oy2 - ay) - e2y * (x + ox2 - ax)) * sgn < 0.0
+                                ):
+                                    bits = mask[idx]
+                                    for sj in range(aa):
+                                        py = y + (sj + 0.5) * inv
+                                        r0 = e0x * (py - by)
+                                        r1 = e1x * (py - cy)
+                                        r2 = e2x * (py - ay)
+                                        for si in range(aa):
+                                            px = x + (si + 0.5) * inv
+                                            # inside all three edges (_edge's values), without branches
+                                            inside = (
+                                                ((r0 - e0y * (px - bx)) * sgn >= 0.0)
+                                                & ((r1 - e1y * (px - cx)) * sgn >= 0.0)
+                                                & ((r2 - e2y * (px - ax)) * sgn >= 0.0)
+                                            )
+                                            bits |= np.uint64(inside) << np.uint64(sj * aa + si)
+                                    mask[idx] = bits
+                                # brush coordinates from the triangle the sample centre is most inside
+                                pcx = x + 0.5
+                                pcy = y + 0.5
+                                w0 = _edge(bx, by, cx, cy, pcx, pcy) / area
+                                w1 = _edge(cx, cy, ax, ay, pcx, pcy) / area
+                                w2 = 1.0 - w0 - w1
+                                m = min(w0, w1, w2)
+                                if m > best[idx]:
+                                    best[idx] = m
+                                    w0c = max(w0, 0.0)
+                                    w1c = max(w1, 0.0)
+                                    w2c = max(w2, 0.0)
+                                    ws = w0c + w1c + w2c
+                                    bu[idx] = (w0c * ta + w1c * tb + w2c * tc) / ws
+                                    bv[idx] = (w0c * va + w1c * vb + w2c * vc) / ws
+                for y in range(y0, y1 + 1):
+                    for x in range(x0, x1 + 1):
+                        idx = (y - y0) * w + (x - x0)
+                        if mask[idx] == 0:
+                            continue
+                        cov = _popcount(mask[idx]) / (aa * aa)
+                        # bilinear brush lookup, texel centres at (i + 0.5) / size
+                        fu = bu[idx] * wb - 0.5
+                        fv = min(max(bv[idx], 0.0), 1.0) * hb - 0.5
+                        iu = int(math.floor(fu))
+                        iv = int(math.floor(fv))
+                        au = fu - iu
+                        av = fv - iv
+                        cc0 = _texel(iu, wb, t_wrap)  # the two columns, once for both rows
+                        cc1 = _texel(iu + 1, wb, t_wrap)
+                        val = 0.0
+                        for dv in range(2):
+                            rr = min(max(iv + dv, 0), hb - 1)
+                            wv = av if dv == 1 else 1.0 - av
+                            val += (1.0 - au) * wv * brush[rr, cc0]
+                            val += au * wv * brush[rr, cc1]
+                        a = cov * opacity[pc] * val
+                        out_alpha[y, x] = out_alpha[y, x] + a * (1.0 - out_alpha[y, x])
+                        if colored:
+                            for ch in range(3):
+                                out_rgb[y, x, ch] = colors[pc, ch] * a + out_rgb[y, x, ch] * (
+                                    1.0 - a
+                                )
+                        out_strokes[y, x] += 1
+
+    return raster_strips
 
 
 @banded("tri")

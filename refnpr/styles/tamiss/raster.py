@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._common import check_count
 from . import _kernels as K
 from .strokes import Strips
 
@@ -80,6 +81,7 @@ def rasterize_strips(
     rgb : (nH, nW, 3) float64 premultiplied colour, only when ``colors`` (P, 3) is given (a
         colour per piece, composited with the same "over")
     """
+    aa = check_count("aa", aa, lo=1, hi=8)  # a kernel per aa (sub-sample bits: 64 at most)
     nh, nw = int(shape[0]), int(shape[1])
     alpha = np.zeros((nh, nw))
     touched = np.zeros((nh, nw), dtype=np.int32)
@@ -99,7 +101,7 @@ def rasterize_strips(
     bbox = np.empty((left.shape[0], 4), dtype=np.int64)
     K.strip_bbox(left, right, nh, nw, bbox)
     tex, wrap = brush_texture(brush)
-    K.raster_strips(
+    K.raster_strips_for(aa)(
         left,
         right,
         np.ascontiguousarray(strips.strip.t, dtype=np.float64),
@@ -107,7 +109,6 @@ def rasterize_strips(
         bbox,
         nh,
         nw,
-        int(aa),
         np.ascontiguousarray(tex),
         bool(wrap),
         alpha,
