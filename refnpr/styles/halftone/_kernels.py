@@ -262,12 +262,13 @@ def _row_units(nrm, pos, eye, specular, light_kind, unit_l, scr, x0, x1):
 
 
 @specialised
-def shade_object_for(show, bump, per_level, equalize, use_imap, isotropic):
-    """:func:`shade_object` for one output and set of options: ``show`` (SHOW_*), ``bump`` (the
-    normal map's DOT3 lighting, sec. 5.2), ``per_level`` (a threshold per pyramid level),
-    ``equalize`` (tone LUTs), ``use_imap`` (the indication map, sec. 5.1), ``isotropic``
-    (``anisotropy == 1``). numba prunes the other options' branches before typing them, so a
-    frame compiles only the code it uses (:func:`refnpr._jit.specialised`)."""
+def shade_object_for(show, bump):
+    """:func:`shade_object` for one output ``show`` (SHOW_*) and ``bump`` (the normal map's
+    DOT3 lighting, sec. 5.2): numba prunes the other outputs' branches and the tangent frame
+    before typing them, so a frame compiles only the code it uses
+    (:func:`refnpr._jit.specialised`). The smaller options (per-level thresholds, tone LUTs,
+    the indication map, anisotropy) stay run-time arguments: as modes they saved no measurable
+    compile time and would multiply the kernels a test suite compiles (21 combinations)."""
 
     @banded("mesh_id")
     def shade_object(
@@ -294,7 +295,10 @@ def shade_object_for(show, bump, per_level, equalize, use_imap, isotropic):
         nshapes,
         luts,
         lut_x,
+        equalize,
+        per_level,
         imap,
+        use_imap,
         iscale,
         ambient,
         m_diffuse,
@@ -415,7 +419,7 @@ def shade_object_for(show, bump, per_level, equalize, use_imap, isotropic):
                 probes = 0  # 0: isotropic (no footprint)
                 axu = 0.0
                 axv = 0.0
-                if isotropic:
+                if anisotropy == 1:
                     lod = math.log2(max(p_max, 1e-30))
                 else:
                     p_min = min(px, py)

@@ -177,14 +177,7 @@ def shade_object_into(
     light_vec = np.array(light_vecs, dtype=np.float64).reshape(-1, 3)
     light_color = np.array([np.asarray(col, np.float64) for _, _, col in lights]).reshape(-1, 3)
     direction = screen.direction
-    kernel = K.shade_object_for(
-        SHOW_CODES[show],
-        has_normals,
-        bool(per_level or luts is not None),
-        luts is not None,
-        indication is not None,
-        anisotropy == 1,
-    )
+    kernel = K.shade_object_for(SHOW_CODES[show], has_normals)
     kernel(
         int(obj),
         np.ascontiguousarray(mesh_id),
@@ -207,7 +200,10 @@ def shade_object_into(
         nshapes,
         lut_arr,
         lut_x,
+        luts is not None,
+        bool(per_level or luts is not None),
         imap,
+        indication is not None,
         _vec("indication_scale", indication_scale, 2),
         _vec("ambient", ambient, 3),
         _vec("diffuse", diffuse, 3),
