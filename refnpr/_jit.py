@@ -12,6 +12,13 @@ raises "cannot cache function ...: no locator available" when a kernel is decora
 import. Then the kernel is cached in a private directory under :func:`tempfile.gettempdir`
 instead, and where that is not writable either it is compiled without caching, with one warning.
 
+numba writes a new cache entry by reading the kernel's index, picking the first unused data file
+name and rewriting the index. Two processes doing that for two signatures of one kernel at the
+same moment (``refnpr warmup --jobs``, pytest-xdist workers, Dask workers on one machine) can
+pick the same data file, leaving an index entry that names the other signature's code. Each
+save is therefore made under an exclusive ``flock`` on ``<index>.lock`` beside the index
+(POSIX; elsewhere numba's own behaviour).
+
 This module imports nothing of refnpr and may be imported by every subpackage.
 """
 
@@ -26,10 +33,39 @@ import warnings
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
+from numba.core import caching as _numba_caching
 from numba.core import config as _numba_config
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: numba's unlocked saves
+    fcntl = None
 
 #: Flags of the reference path. ``fastmath`` is off on purpose: see module docstring.
 JIT_FLAGS: dict = {"cache": True, "fastmath": False, "nogil": True, "error_model": "numpy"}
+
+
+def _locked_save(save):
+    """numba's ``IndexDataCacheFile.save`` under an exclusive lock on ``<index>.lock``."""
+
+    def locked_save(self, key, data):
+        try:
+            fd = os.open(self._index_path + ".lock", os.O_RDWR | os.O_CREAT, 0o600)
+        except OSError:  # an unwritable cache directory: numba's save reports it
+            return save(self, key, data)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+            return save(self, key, data)
+        finally:
+            os.close(fd)  # releases the lock
+
+    locked_save.refnpr_locked = True
+    locked_save.__wrapped__ = save
+    return locked_save
+
+
+if fcntl is not None and not getattr(_numba_caching.IndexDataCacheFile.save, "refnpr_locked", 0):
+    _numba_caching.IndexDataCacheFile.save = _locked_save(_numba_caching.IndexDataCacheFile.save)
 
 
 def fallback_cache_dir() -> str | None:
