@@ -383,11 +383,15 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
 
     def progress(label: str, fraction: float) -> None:
         if not args.quiet and label != "done":
-            print(f"warmup: {label} ...", file=sys.stderr, flush=True)
+            print(f"warmup: {label}", file=sys.stderr, flush=True)
 
-    times = warm(progress=progress)
+    jobs = args.jobs if args.jobs is not None else min(4, len(os.sched_getaffinity(0)))
+    times = warm(jobs=jobs, progress=progress)
     total = time.perf_counter() - t0
-    print(f"warmup: {len(times)} renders in {total:.1f} s; kernels are cached for the next run")
+    print(
+        f"warmup: {len(times)} renders in {total:.1f} s ({jobs} process{'es' if jobs > 1 else ''});"
+        " kernels are cached for the next run"
+    )
     return 0
 
 
@@ -629,6 +633,13 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     w.add_argument("-q", "--quiet", action="store_true", help="no line per render")
+    w.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="N",
+        help="processes compiling at once (default: one per core, at most 4; 1: this process)",
+    )
     w.set_defaults(func=_cmd_warmup)
     return p
 

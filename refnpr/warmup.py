@@ -13,69 +13,130 @@ Nothing here changes any result: it only renders (and discards) small images.
 
 from __future__ import annotations
 
+import multiprocessing
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from .render import render
+from .styles._common import check_count
 
 __all__ = ["WARM_ROWS", "warm"]
 
 #: (scene, style) pairs rendered: each style's benchmark scene (benchmarks/bench_frame.py) and the
-#: default scene with its own style (``None``: what ``refnpr render`` draws).
+#: default scene with its own style (``None``: what ``refnpr render`` draws). After the default
+#: scene, costliest to compile first, so that worker processes take the long ones first.
 WARM_ROWS: tuple[tuple[str, str | None], ...] = (
     ("default", None),
+    ("tamiss_teapot", "tam"),
+    ("tamiss_teapot", "tamiss"),
+    ("veryovka_plane", "threshold"),
     ("teapot", "toon"),
     ("teapot", "smooth"),
     ("xtoon_teapot", "xtoon"),
-    ("veryovka_plane", "threshold"),
     ("halftone_teapot", "halftone"),
-    ("tamiss_teapot", "tam"),
-    ("tamiss_teapot", "tamiss"),
 )
 
 #: Tiny frames: compilation depends on argument types, not on sizes.
 _SIZE = (64, 36)
 
 
+def _label(scene: str, style: str | None, spp: int, contours: bool) -> str:
+    return f"{scene} / {style or 'its style'} spp {spp}{' + contours' if contours else ''}"
+
+
+def _jobs(rows: Sequence[tuple[str, str | None]]) -> list[tuple[str, str | None, int, bool]]:
+    out = []
+    for scene, style in rows:
+        out.append((scene, style, 1, False))
+        out.append((scene, style, 4, True))
+    return out
+
+
+def _render_job(scene: str, style: str | None, spp: int, contours: bool) -> float:
+    spec = {"name": style, "contours": True} if contours and style is not None else style
+    t = time.perf_counter()
+    render(scene, spec, *_SIZE, spp)
+    return time.perf_counter() - t
+
+
+def _warm_group(rows: list[tuple[str, str | None]]) -> dict[str, float]:
+    """One worker's task: the renders of ``rows`` in order (a worker process's entry point)."""
+    return {_label(*job): _render_job(*job) for job in _jobs(rows)}
+
+
+def _groups(rows: Sequence[tuple[str, str | None]]) -> list[list[tuple[str, str | None]]]:
+    """Rows grouped by scene, in order of first appearance: rows of one scene share most of
+    their kernels (toon and smooth, TAM and TAMISS), so one worker compiles them once."""
+    groups: dict[str, list[tuple[str, str | None]]] = {}
+    for row in rows:
+        groups.setdefault(str(row[0]), []).append(row)
+    return list(groups.values())
+
+
 def warm(
     rows: Sequence[tuple[str, str | None]] = WARM_ROWS,
     *,
+    jobs: int = 1,
     progress: Callable[[str, float], None] | None = None,
 ) -> dict[str, float]:
     """Render each row at 64x36, spp 1 and spp 4 with contours, so their kernels are compiled
     and cached.
 
+    numba compiles one kernel at a time on one core, so with ``jobs > 1`` the rows are rendered
+    in up to ``jobs`` worker processes (``spawn``; they share the on-disk cache through
+    ``NUMBA_CACHE_DIR`` or ``__pycache__``, whose saves :mod:`refnpr._jit` serialises), the rows
+    of one scene in one worker (toon and smooth, TAM and TAMISS share most of their kernels),
+    in the order of ``rows``. The workers all compile the rasterizer's kernels at first (on
+    two cores: 62-69 s serial, 43 s with two workers for :data:`WARM_ROWS`). A last pass here
+    renders every row again from the cache, so that this process holds the code too.
+
     Parameters
     ----------
     rows : sequence of (scene, style or None)
         Built-in scene names (or scene files) and style names; None for the scene's own style.
+    jobs : int
+        Processes compiling at once, 1 to 64 (default 1: everything in this process).
     progress : callable(label, fraction), optional
-        Called before each render with ``"scene / style spp N"`` and the fraction done.
+        Called with ``"scene / style spp N"`` and the fraction done: before each render when
+        ``jobs`` is 1, after each worker's renders otherwise.
 
     Returns
     -------
     dict of str to float
-        Seconds per render, keyed like the progress labels (the first ones include compiling).
+        Seconds per render, keyed like the progress labels, in the order of ``rows`` (the first
+        ones include compiling; with ``jobs > 1`` a worker's first render also includes its
+        imports).
     """
     if isinstance(rows, (str, bytes)) or not all(
         isinstance(r, tuple) and len(r) == 2 for r in rows
     ):
         raise TypeError(f"rows: expected a sequence of (scene, style or None) pairs, got {rows!r}")
-    jobs = []
-    for scene, style in rows:
-        jobs.append((scene, style, 1, False))
-        jobs.append((scene, style, 4, True))
-    times: dict[str, float] = {}
-    for i, (scene, style, spp, contours) in enumerate(jobs):
-        label = f"{scene} / {style or 'its style'} spp {spp}{' + contours' if contours else ''}"
+    jobs = check_count("jobs", jobs, lo=1, hi=64)
+    rows = list(rows)
+    work = _jobs(rows)
+    groups = _groups(rows)
+    if jobs == 1 or len(groups) < 2:
+        times: dict[str, float] = {}
+        for i, job in enumerate(work):
+            if progress is not None:
+                progress(_label(*job), i / len(work))
+            times[_label(*job)] = _render_job(*job)
         if progress is not None:
-            progress(label, i / len(jobs))
-        spec = style
-        if contours and style is not None:
-            spec = {"name": style, "contours": True}
-        t = time.perf_counter()
-        render(scene, spec, *_SIZE, spp)
-        times[label] = time.perf_counter() - t
+            progress("done", 1.0)
+        return times
+    done: dict[str, float] = {}
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(min(jobs, len(groups)), mp_context=ctx) as pool:
+        futures = [pool.submit(_warm_group, group) for group in groups]
+        for fut in as_completed(futures):
+            part = fut.result()
+            done.update(part)
+            if progress is not None:
+                for label in part:
+                    progress(label, len(done) / len(work))
+    for job in work:  # loads from the cache
+        _render_job(*job)
     if progress is not None:
         progress("done", 1.0)
-    return times
+    return {_label(*job): done[_label(*job)] for job in work}
