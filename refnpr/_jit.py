@@ -49,15 +49,21 @@ def _locked_save(save):
     """numba's ``IndexDataCacheFile.save`` under an exclusive lock on ``<index>.lock``."""
 
     def locked_save(self, key, data):
+        path = getattr(self, "_index_path", None)
+        fd = None
+        if path is not None:
+            try:
+                fd = os.open(path + ".lock", os.O_RDWR | os.O_CREAT, 0o600)
+                fcntl.flock(fd, fcntl.LOCK_EX)
+            except OSError:  # an unwritable directory, a file system without locks: unlocked
+                if fd is not None:
+                    os.close(fd)
+                fd = None
         try:
-            fd = os.open(self._index_path + ".lock", os.O_RDWR | os.O_CREAT, 0o600)
-        except OSError:  # an unwritable cache directory: numba's save reports it
-            return save(self, key, data)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX)
             return save(self, key, data)
         finally:
-            os.close(fd)  # releases the lock
+            if fd is not None:
+                os.close(fd)  # releases the lock
 
     locked_save.refnpr_locked = True
     locked_save.__wrapped__ = save

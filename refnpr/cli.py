@@ -385,7 +385,8 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
         if not args.quiet and label != "done":
             print(f"warmup: {label}", file=sys.stderr, flush=True)
 
-    jobs = args.jobs if args.jobs is not None else min(4, len(os.sched_getaffinity(0)))
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    jobs = args.jobs if args.jobs is not None else min(4, cores or 1)
     times = warm(jobs=jobs, progress=progress)
     total = time.perf_counter() - t0
     print(

@@ -88,7 +88,7 @@ def warm(
     ``NUMBA_CACHE_DIR`` or ``__pycache__``, whose saves :mod:`refnpr._jit` serialises), the rows
     of one scene in one worker (toon and smooth, TAM and TAMISS share most of their kernels),
     in the order of ``rows``. The workers all compile the rasterizer's kernels at first (on
-    two cores: 62-69 s serial, 43 s with two workers for :data:`WARM_ROWS`). A last pass here
+    two cores: 62-69 s serial, 38-43 s with two workers for :data:`WARM_ROWS`). A last pass here
     renders every row again from the cache, so that this process holds the code too.
 
     Parameters

@@ -56,3 +56,14 @@ def test_without_the_lock_the_same_race_loses_one(tmp_path, monkeypatch):
     # the control: numba's own save, same interleaving, keeps only one entry
     f = _race(tmp_path, monkeypatch, caching.IndexDataCacheFile.save.__wrapped__)
     assert len(_entries(f)) == 1
+
+
+def test_a_file_system_without_locks_still_saves(tmp_path, monkeypatch):
+    # flock failing (ENOLCK on some network file systems) must not fail the compile
+    def no_locks(fd, op):
+        raise OSError(37, "No locks available")
+
+    monkeypatch.setattr(refnpr._jit.fcntl, "flock", no_locks)
+    f = caching.IndexDataCacheFile(str(tmp_path), "kernel-12.py311", _STAMP)
+    f.save(("sig", "a"), "code for a")
+    assert _entries(f) == {("sig", "a"): "code for a"}
