@@ -385,8 +385,9 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
         if not args.quiet and label != "done":
             print(f"warmup: {label}", file=sys.stderr, flush=True)
 
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    jobs = args.jobs if args.jobs is not None else min(4, cores or 1)
+    from ._jit import usable_cores
+
+    jobs = args.jobs if args.jobs is not None else min(4, usable_cores())
     times = warm(jobs=jobs, progress=progress)
     total = time.perf_counter() - t0
     print(

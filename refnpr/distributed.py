@@ -53,6 +53,7 @@ import numpy as np
 
 from . import golden as _golden
 from . import sequence as _sequence
+from ._jit import usable_cores
 from .sequence import SequenceProgress, SequenceResult
 
 __all__ = ["check_suite", "open_client", "render_sequence", "update_suite", "worker_threads"]
@@ -82,10 +83,7 @@ def worker_threads(n_workers: int, cores: int | None = None) -> int:
     on: the workers share the cores instead of each starting a thread per core.
     """
     if cores is None:
-        try:
-            cores = len(os.sched_getaffinity(0))
-        except AttributeError:  # not on Linux
-            cores = os.cpu_count() or 1
+        cores = usable_cores()
     return max(1, cores // n_workers)
 
 
