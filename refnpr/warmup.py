@@ -88,8 +88,8 @@ def warm(
     ``NUMBA_CACHE_DIR`` or ``__pycache__``, whose saves :mod:`refnpr._jit` serialises), the rows
     of one scene in one worker (toon and smooth, TAM and TAMISS share most of their kernels),
     in the order of ``rows``. The workers all compile the rasterizer's kernels at first (on
-    two cores: 62-69 s serial, 38-43 s with two workers for :data:`WARM_ROWS`). A last pass here
-    renders every row again from the cache, so that this process holds the code too.
+    two cores: 62-69 s serial, 38-43 s with two workers for :data:`WARM_ROWS`). This process
+    renders nothing then: what it leaves is the on-disk cache, as with ``jobs=1``.
 
     Parameters
     ----------
@@ -135,8 +135,6 @@ def warm(
             if progress is not None:
                 for label in part:
                     progress(label, len(done) / len(work))
-    for job in work:  # loads from the cache
-        _render_job(*job)
     if progress is not None:
         progress("done", 1.0)
     return {_label(*job): done[_label(*job)] for job in work}

@@ -62,8 +62,8 @@ def test_after_warmup_the_default_render_compiles_nothing(tmp_path):
 
 def test_parallel_warmup_leaves_nothing_to_compile(tmp_path):
     # jobs=2: the sphere's rows (toon, smooth) in one spawned worker, the teapot's X-Toon in
-    # the other. The listener sees this process's compiles only: none means the workers
-    # compiled and cached every kernel and the last pass here loaded them
+    # the other. The listener sees this process's compiles only: none means the work went to
+    # the workers, and a fresh process compiling nothing means they cached every kernel
     cache = str(tmp_path / "numba-cache")
     assert _compiles("warm-parallel", cache) == []
     assert _compiles("render-parallel", cache) == 0
