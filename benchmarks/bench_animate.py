@@ -5,7 +5,7 @@ Usage::
     python benchmarks/bench_animate.py                 # 640x360, 16 frames, 2 workers, 5 runs
     python benchmarks/bench_animate.py --quick --json /tmp/a.json   # smoke run (tiny frames)
 
-What is measured (issue 12, part 6): a stateless sequence (``--scene``, default
+What is measured: a stateless sequence (``--scene``, default
 ``halftone_light_orbit``: the engraved teapot with contours under an orbiting light) rendered
 into a fresh directory by :func:`refnpr.sequence.render_sequence` (one process, numba on all its
 cores) and by :func:`refnpr.distributed.render_sequence` on a ``LocalCluster`` of ``--workers``

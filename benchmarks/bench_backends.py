@@ -14,8 +14,9 @@ directory), then, alternating in one process:
   the numba kernels, is a warm-up and not counted);
 * GLSL: ``refnpr_glsl.render.render_case`` end to end: G-buffer pass, the style's shade pass,
   contours, composite + resolve and the read-back of the linear RGBA image (``glFinish`` after
-  each stage). The geometry upload (``prepare``) is excluded, as the issue asks; textures a style
-  uploads inside ``shade`` are included. The first call (shader compilation) is a warm-up.
+  each stage). The geometry upload (``prepare``) is excluded (a GPU keeps its mesh resident);
+  textures a style uploads inside ``shade`` are included. The first call (shader compilation) is
+  a warm-up.
 
 Reported per style: median and spread (min, max) of each, the ratio refnpr / GLSL (the
 performance anchor of the style layer), the GLSL stage medians, and whether the GLSL image of

@@ -1,4 +1,4 @@
-"""Temporal coherence of the four papers' built-in sequences, per style (issue 12).
+"""Temporal coherence of the four papers' built-in sequences, per style.
 
 Usage::
 

@@ -10,8 +10,15 @@ Sections (``--sections``, comma separated; default all, ``--quick`` defaults to 
 
 ``gbuffer``
     refnpr ``rasterize`` at 1920x1080 for icosphere(6) and icosphere(8) with four channel sets,
-    alternating with llvmpipe rendering the full set in the same process (render and
-    ``glReadPixels`` timed separately), and the agreement of the two images.
+    alternating in the same process with Mesa llvmpipe rendering the full set in four
+    configurations (``--gl-layouts``, ``gl_peer.py``): ``six`` per-channel attachments and
+    ``packed`` (three RGBA32F, w in a colour channel), both read with ``fbo.read`` (fresh bytes
+    every frame); ``plain`` (three RGBA32F + a depth texture read with ``read_into`` into
+    preallocated arrays: what a GPU user writes); ``six_into`` (the six attachments read with
+    ``read_into``). Render and ``glReadPixels`` are timed separately. Every configuration's
+    last frame is checked against refnpr's G-buffer (``CHECK_TOLERANCES``: covered pixels,
+    triangle ids, depth, uv, normal, the uv derivatives); the ratio and its target use the
+    fastest configuration that passed.
 ``startup``
     cold compile (a fresh process, ``NUMBA_CACHE_DIR`` an empty temp dir, that imports refnpr and
     rasterizes a tiny mesh with every channel) and warm start-up (the same process again with that
@@ -55,13 +62,50 @@ SECTIONS = ("gbuffer", "startup", "cli")
 #: The full set's arrays in the floor kernel's argument order.
 FLOOR_ORDER = ("depth", "tri_id", "uv", "duv_dx", "duv_dy", "normal")
 
-# Targets of the issue: (name, limit)
-TARGET_FULL_VS_GL = (
-    0.4  # refnpr full, steady state (out=) / faster llvmpipe layout (render + readback)
-)
+# Targets (printed MET / NOT MET, never asserted)
+#: refnpr full, steady state (out=) / the fastest llvmpipe configuration that passed its check
+#: (render + readback)
+TARGET_FULL_VS_GL = 0.4
 TARGET_IDDEPTH_VS_FULL = 0.40  # refnpr {tri_id, depth} / refnpr full
 TARGET_CLI_S = 2.5  # `refnpr render --size 512x512`, warm cache, whole process
 TARGET_COLD_S = 30.0  # cold compile of everything, whole process
+
+#: What an llvmpipe configuration's output must meet, against refnpr's full G-buffer of the same
+#: view (GL readbacks flipped to refnpr's convention), for its time to count. Values compared at
+#: the pixels both cover with the same triangle id. Figures seen on correct output (1920x1080):
+#: id agreement 0.9999, |duv| 1e-4, |dn| 4e-4, derivatives 4e-4 median and 5e-3 p99 relative
+#: (GL's per-quad differences against refnpr's analytic derivatives), depth 4e-5 relative from
+#: ``1 / gl_FragCoord.w`` and 3e-6 (p99) from the 24-bit depth texture, whose own plane
+#: evaluation is up to 2.5e-4 off on a few silhouette slivers (hence a max and a p99 bound). A
+#: wrong or missing output (a channel unwritten or swapped, dFdy unflipped, a depth shifted by
+#: 1e-4 of its range) misses by an order of magnitude or more.
+CHECK_TOLERANCES = {
+    "covered_pixels_rel_diff": 1e-3,  # |covered(gl) - covered(refnpr)| / covered(refnpr), max
+    "tri_id_agreement": 0.999,  # same id / union of covered pixels, min
+    "depth_max_rel_diff": 1e-3,  # |w_gl - w_refnpr| / w_refnpr, max
+    "depth_p99_rel_diff": 2e-5,  # ... 99th percentile
+    "uv_max_abs_diff": 1e-3,
+    "normal_max_abs_diff": 2e-3,
+    "duv_dx_median_rel_diff": 1e-2,  # |d_gl - d_refnpr| / |d_refnpr|, median over pixels
+    "duv_dy_median_rel_diff": 1e-2,
+    "duv_dx_p99_rel_diff": 0.1,  # ... 99th percentile
+    "duv_dy_p99_rel_diff": 0.1,
+}
+#: tolerances that are lower bounds (all others are upper bounds)
+_CHECK_MIN = ("tri_id_agreement",)
+#: short names for the printed table
+_CHECK_LABEL = {
+    "covered_pixels_rel_diff": "cover",
+    "tri_id_agreement": "ids",
+    "depth_max_rel_diff": "depth",
+    "depth_p99_rel_diff": "depth p99",
+    "uv_max_abs_diff": "uv",
+    "normal_max_abs_diff": "normal",
+    "duv_dx_median_rel_diff": "duv_dx",
+    "duv_dy_median_rel_diff": "duv_dy",
+    "duv_dx_p99_rel_diff": "duv_dx p99",
+    "duv_dy_p99_rel_diff": "duv_dy p99",
+}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -123,9 +167,11 @@ def agreement(ref, gl: dict[str, np.ndarray]) -> dict:
     r_id, g_id = np.asarray(ref["tri_id"]), gl["tri_id"]
     union = (r_id >= 0) | (g_id >= 0)
     same = (r_id == g_id) & (r_id >= 0)
+    n_ref, n_gl = int((r_id >= 0).sum()), int((g_id >= 0).sum())
     out = {
-        "covered_pixels_refnpr": int((r_id >= 0).sum()),
-        "covered_pixels_gl": int((g_id >= 0).sum()),
+        "covered_pixels_refnpr": n_ref,
+        "covered_pixels_gl": n_gl,
+        "covered_pixels_rel_diff": abs(n_gl - n_ref) / max(1, n_ref),
         "tri_id_agreement": float(same.sum() / max(1, union.sum())),
     }
     if not same.any():
@@ -134,14 +180,33 @@ def agreement(ref, gl: dict[str, np.ndarray]) -> dict:
     out["uv_max_abs_diff"] = float(duv.max())
     out["uv_p99_abs_diff"] = float(np.quantile(duv.max(axis=1), 0.99))
     dep_r = ref["depth"][same].astype(np.float64)
-    out["depth_max_rel_diff"] = float(np.max(np.abs(dep_r - gl["depth"][same]) / dep_r))
+    dep_rel = np.abs(dep_r - gl["depth"][same]) / dep_r
+    out["depth_max_rel_diff"] = float(np.max(dep_rel))
+    out["depth_p99_rel_diff"] = float(np.quantile(dep_rel, 0.99))
     out["normal_max_abs_diff"] = float(np.abs(ref["normal"][same] - gl["normal"][same]).max())
     for name in ("duv_dx", "duv_dy"):
         a = ref[name][same].astype(np.float64)
         b = gl[name][same].astype(np.float64)
         rel = np.linalg.norm(a - b, axis=1) / np.maximum(np.linalg.norm(a, axis=1), 1e-30)
         out[f"{name}_median_rel_diff"] = float(np.median(rel))
+        out[f"{name}_p99_rel_diff"] = float(np.quantile(rel, 0.99))
     return out
+
+
+def check_output(agree: dict) -> dict:
+    """Pass / fail of one llvmpipe configuration's output against :data:`CHECK_TOLERANCES`.
+
+    A value that could not be computed (no pixel with the same triangle id) or is NaN fails.
+    """
+    failed = []
+    for key, tol in CHECK_TOLERANCES.items():
+        value = agree.get(key)
+        ok = value is not None and bool(
+            value >= tol if key in _CHECK_MIN else value <= tol
+        )  # NaN compares False: fails
+        if not ok:
+            failed.append(key)
+    return {"passed": not failed, "failed": failed, "tolerances": dict(CHECK_TOLERANCES)}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -215,9 +280,9 @@ def bench_gbuffer(args, report: dict) -> None:
         peers = {}
         if gl_status is None or gl_status.startswith("ok"):
             try:
-                from gl_peer import LAYOUTS, open_peer
+                from gl_peer import open_peer
 
-                for layout in LAYOUTS:
+                for layout in args.gl_layouts:
                     peers[layout] = open_peer(
                         mesh.positions,
                         mesh.faces,
@@ -228,7 +293,7 @@ def bench_gbuffer(args, report: dict) -> None:
                         height,
                         layout=layout,
                     )
-                peer = peers["six"]
+                peer = peers[args.gl_layouts[0]]
                 gl_status = f"ok: {peer.renderer}; {peer.version}"
                 report["meta"]["gl_renderer"] = peer.renderer
                 report["meta"]["gl_version"] = peer.version
@@ -275,8 +340,8 @@ def bench_gbuffer(args, report: dict) -> None:
                 gl_render[layout].append(peer.render())
                 data, t_read = peer.readback()
                 gl_readback[layout].append(t_read)
-                if run == args.runs - 1:
-                    gl_data[layout] = {k: v.copy() for k, v in data.items()}
+                if run == args.runs - 1:  # flipped copies (plain: w from the depth texture)
+                    gl_data[layout] = peer.refnpr_convention(data)
                 del data
             line = f"  run {run + 1}/{args.runs}: full {times['full'][-1] * 1e3:.0f} ms"
             line += f" (fresh {fresh[-1] * 1e3:.0f}), floor {floor[-1] * 1e3:.1f}"
@@ -330,10 +395,13 @@ def bench_gbuffer(args, report: dict) -> None:
                 "fraction_of_full": statistics.median(floor) / full_median,
             }
         )
-        gl_total = {}
+        gl_total, gl_check, gl_agree = {}, {}, {}
+        ref = bufs["full"]
         for layout, peer in peers.items():
             total = [a + b for a, b in zip(gl_render[layout], gl_readback[layout], strict=True)]
             gl_total[layout] = statistics.median(total)
+            gl_agree[layout] = agreement(ref, gl_data[layout])
+            gl_check[layout] = check_output(gl_agree[layout])
             report["rows"].append(
                 {
                     "engine": "llvmpipe",
@@ -345,6 +413,7 @@ def bench_gbuffer(args, report: dict) -> None:
                     "render": summary(gl_render[layout]),
                     "readback": summary(gl_readback[layout]),
                     "setup_s": peer.setup_s,
+                    "check": {**gl_check[layout], "values": gl_agree[layout]},
                 }
             )
             peer.release()
@@ -357,24 +426,43 @@ def bench_gbuffer(args, report: dict) -> None:
             "iddepth_over_full": statistics.median(times["id+depth"]) / full_median,
         }
         if gl_total:
-            from gl_peer import to_refnpr_convention
-
-            best = min(gl_total, key=gl_total.get)
-            ratio.update(
-                {
-                    "gl_six_s": gl_total.get("six"),
-                    "gl_packed_s": gl_total.get("packed"),
-                    "gl_faster": best,
-                    "refnpr_full_over_gl_faster": full_median / gl_total[best],
-                    "refnpr_full_over_gl_six": full_median / gl_total["six"],
-                }
+            ratio["gl_total_s"] = dict(gl_total)
+            ratio["gl_check_passed"] = {k: c["passed"] for k, c in gl_check.items()}
+            for layout in gl_total:
+                ratio[f"gl_{layout}_s"] = gl_total[layout]
+            eligible = [k for k in gl_total if gl_check[k]["passed"]]
+            if eligible:
+                best = min(eligible, key=gl_total.get)
+                ratio.update(
+                    {
+                        "gl_fastest": best,
+                        "gl_fastest_s": gl_total[best],
+                        "refnpr_full_over_gl_fastest": full_median / gl_total[best],
+                        # the names of earlier runs' JSON: the same figures
+                        "gl_faster": best,
+                        "refnpr_full_over_gl_faster": full_median / gl_total[best],
+                    }
+                )
+                if "six" in gl_total:
+                    ratio["refnpr_full_over_gl_six"] = full_median / gl_total["six"]
+            shown = ratio.get("gl_fastest") or min(gl_total, key=gl_total.get)
+            agree = dict(gl_agree[shown])
+            # the configurations that write w = 1 / gl_FragCoord.w must agree bit for bit; plain
+            # (depth from the depth texture) in every other channel
+            with_w = [k for k in ("six", "packed", "six_into") if k in gl_data]
+            if len(with_w) > 1:
+                a = gl_data[with_w[0]]
+                agree["gl_layouts_identical"] = all(
+                    np.array_equal(a[k], gl_data[o][k]) for o in with_w[1:] for k in a
+                )
+            if "plain" in gl_data and with_w:
+                a, b = gl_data["plain"], gl_data[with_w[0]]
+                agree["gl_plain_identical_but_depth"] = all(
+                    np.array_equal(a[k], b[k]) for k in a if k != "depth"
+                )
+            report["agreement"].append(
+                {**common, "peer": shown, "check_passed": gl_check[shown]["passed"], **agree}
             )
-            ref = bufs["full"]
-            agree = agreement(ref, to_refnpr_convention(gl_data[best]))
-            if len(gl_data) == 2:
-                a, b = (to_refnpr_convention(gl_data[k]) for k in ("six", "packed"))
-                agree["gl_layouts_identical"] = all(np.array_equal(a[k], b[k]) for k in a)
-            report["agreement"].append({**common, "peer": best, **agree})
         report["steady"].append(ratio)
         if gl_total:
             report["ratios"].append(ratio)
@@ -510,13 +598,24 @@ def bench_cli(args, report: dict) -> None:
 def evaluate_targets(report: dict) -> None:
     targets = []
     for r in report["ratios"]:
-        if "refnpr_full_over_gl_faster" in r:
+        if "refnpr_full_over_gl_fastest" in r:
             targets.append(
                 {
-                    "target": f"refnpr full, steady (out=) <= {TARGET_FULL_VS_GL} x faster llvmpipe "
-                    f"({r['gl_faster']}, render+readback), {r['mesh']}",
-                    "value": r["refnpr_full_over_gl_faster"],
+                    "target": f"refnpr full, steady (out=) <= {TARGET_FULL_VS_GL} x fastest "
+                    f"llvmpipe ({r['gl_fastest']}, render+readback, output checked), "
+                    f"{r['mesh']}",
+                    "value": r["refnpr_full_over_gl_fastest"],
                     "limit": TARGET_FULL_VS_GL,
+                }
+            )
+        elif "gl_total_s" in r:
+            targets.append(
+                {
+                    "target": f"refnpr full, steady (out=) <= {TARGET_FULL_VS_GL} x fastest "
+                    f"llvmpipe, {r['mesh']}",
+                    "value": None,
+                    "limit": TARGET_FULL_VS_GL,
+                    "note": "no llvmpipe configuration passed its output check",
                 }
             )
     for r in report["steady"]:
@@ -599,6 +698,27 @@ def print_table(report: dict) -> None:
                     f"{_ms(r['render']['median_s']):>10} + {_ms(r['readback']['median_s'])}"
                     f"  (setup {r['setup_s']:.2f} s, not in runs)"
                 )
+    checked = [r for r in rows if r["engine"] == "llvmpipe" and "check" in r]
+    if checked:
+        tol = checked[0]["check"]["tolerances"]
+        print(
+            "\noutput check of each llvmpipe configuration against refnpr's full G-buffer "
+            "(CHECK_TOLERANCES; relative except uv, normal: absolute; at pixels with the same "
+            "triangle id)\n  tolerance          "
+            + ", ".join(
+                f"{_CHECK_LABEL.get(k, k)} {'>=' if k in _CHECK_MIN else '<='} {v:g}"
+                for k, v in tol.items()
+            )
+        )
+    for r in checked:
+        c, v = r["check"], r["check"]["values"]
+        verdict = "PASS" if c["passed"] else "FAIL (" + ", ".join(c["failed"]) + ")"
+        parts = [
+            f"{_CHECK_LABEL.get(k, k)} "
+            + ("-" if k not in v else f"{v[k]:.5f}" if k in _CHECK_MIN else f"{v[k]:.2g}")
+            for k in c["tolerances"]
+        ]
+        print(f"  {r['mode']:<9}{r['mesh']:<14}" + ", ".join(parts) + f": {verdict}")
     for r in rows:
         if r["engine"] == "refnpr" and r["set"] in ("id+depth", "full"):
             ph = ", ".join(f"{k} {_ms(v)}" for k, v in r["phases_median_s"].items() if k != "total")
@@ -615,11 +735,18 @@ def print_table(report: dict) -> None:
             f"{r['refnpr_full_over_floor']:.2f}; {{tri_id, depth}} / full = "
             f"{r['iddepth_over_full']:.3f}"
         )
-        if "gl_faster" in r:
-            line += (
-                f"; llvmpipe six {_ms(r['gl_six_s'])} ms, packed {_ms(r['gl_packed_s'])} ms -> "
-                f"refnpr / faster ({r['gl_faster']}) = {r['refnpr_full_over_gl_faster']:.3f}"
+        if "gl_total_s" in r:
+            line += "; llvmpipe " + ", ".join(
+                f"{k} {_ms(v)} ms" + ("" if r["gl_check_passed"][k] else " (check FAILED)")
+                for k, v in r["gl_total_s"].items()
             )
+            if "gl_fastest" in r:
+                line += (
+                    f" -> refnpr / fastest ({r['gl_fastest']}) = "
+                    f"{r['refnpr_full_over_gl_fastest']:.3f}"
+                )
+            else:
+                line += " -> no ratio: no configuration passed its check"
         print(line)
     for a in report["agreement"]:
         parts = [f"tri_id agreement {a['tri_id_agreement']:.5f}"]
@@ -634,7 +761,9 @@ def print_table(report: dict) -> None:
             if key in a:
                 parts.append(f"{label} {a[key]:.2e}")
         if "gl_layouts_identical" in a:
-            parts.append(f"llvmpipe six == packed: {a['gl_layouts_identical']}")
+            parts.append(f"llvmpipe configurations identical: {a['gl_layouts_identical']}")
+        if "gl_plain_identical_but_depth" in a:
+            parts.append(f"plain identical but depth: {a['gl_plain_identical_but_depth']}")
         print(f"agreement {a['mesh']} (llvmpipe {a['peer']} vs refnpr): " + ", ".join(parts))
     st = report.get("startup")
     if st is not None:
@@ -682,6 +811,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     p.add_argument("--quick", action="store_true", help="small sizes, 3 runs, gbuffer section only")
     p.add_argument("--no-gl", action="store_true", help="skip the llvmpipe peer")
+    p.add_argument(
+        "--gl-layouts",
+        default="six,packed,plain,six_into",
+        help="llvmpipe configurations to time, comma separated (default all: "
+        "six,packed,plain,six_into)",
+    )
     p.add_argument("--startup-runs", type=int, default=3, help="warm start-up repeats (default 3)")
     p.add_argument("--cli-runs", type=int, default=5, help="`refnpr render` repeats (default 5)")
     p.add_argument("--json", type=Path, default=None, help="write the results here")
@@ -700,6 +835,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     bad = sorted(set(args.sections) - set(SECTIONS))
     if bad:
         p.error(f"--sections: unknown {bad}; choose from {list(SECTIONS)}")
+    if str(HERE) not in sys.path:
+        sys.path.insert(0, str(HERE))
+    from gl_peer import LAYOUTS  # numpy only: Mesa is loaded when a peer opens
+
+    args.gl_layouts = [v.strip() for v in args.gl_layouts.split(",") if v.strip()]
+    bad = sorted(set(args.gl_layouts) - set(LAYOUTS)) or ([] if args.gl_layouts else ["(none)"])
+    if bad:
+        p.error(f"--gl-layouts: unknown {bad}; choose from {list(LAYOUTS)}")
     if args.runs < 1 or args.threads < 1:
         p.error("--runs and --threads must be >= 1")
     return args
@@ -729,6 +872,10 @@ def main(argv: list[str] | None = None) -> dict:
             "quick": args.quick,
             "sections": args.sections,
             "channel_sets": {k: list(v) for k, v in CHANNEL_SETS.items()},
+            "gl_layouts": args.gl_layouts,
+            "gl_ratio_rule": "refnpr full (steady) / the fastest llvmpipe configuration "
+            "(median render + readback) whose output passed the check against refnpr",
+            "check_tolerances": dict(CHECK_TOLERANCES),
             "statistic": "median of the timed runs (first call in the process excluded)",
         },
         "rows": [],

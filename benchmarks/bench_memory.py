@@ -1,4 +1,4 @@
-"""Peak memory of a render against the bytes of the buffers it needs (issue 11, target 5).
+"""Peak memory of a render against the bytes of the buffers it needs (target: growth <= 2x).
 
 Usage::
 

@@ -1,5 +1,5 @@
-"""Cold start (issue 11, target 4): what the first renders of a process cost on an empty numba
-cache, and which kernels that time goes to.
+"""Cold start: what the first renders of a process cost on an empty numba cache, and which
+kernels that time goes to.
 
 Usage::
 

@@ -7,7 +7,7 @@ Usage::
 
 Sections (``--sections``, comma separated; default phases,hash,jitter; ``options`` on request)::
 
-    python benchmarks/bench_tamiss.py --sections options          # the jitter remedies (issue 12)
+    python benchmarks/bench_tamiss.py --sections options          # the jitter remedies
     python benchmarks/bench_tamiss.py --sections options --quick  # smoke run
 
 ``phases``
@@ -21,7 +21,7 @@ Sections (``--sections``, comma separated; default phases,hash,jitter; ``options
     (anti-aliased strips, 4 x 4 sub-samples) -- and the fit's share of the total. Then the same
     rows beside the paper's Table 1 (``PAPER_TABLE1``, GPU milliseconds: OLS against gather +
     aggregate, CGM against fit, E&R against extrude + raster), and at 1920 x 1200 a MET / NOT MET
-    line for issue 11's target: the whole frame (all five phases) <= ``TARGET_16K_S`` at 16k strokes.
+    line for the target: the whole frame (all five phases) <= ``TARGET_16K_S`` at 16k strokes.
 ``hash``
     The paper's double-hashed aggregation on the same G-buffer with about 4k strokes: for table
     sizes from a quarter of the stroke count to 8 times it, three frames of a still view routed from an
@@ -151,7 +151,7 @@ PAPER_TABLE1 = (
     (193_000, 4000, 2.78, 0.23, 0.51),
     (193_000, 16000, 2.88, 0.91, 2.04),
 )
-#: Issue 11, target 2: the whole frame (all phases, G-buffer excluded) at 16k strokes, seconds.
+#: Target: the whole TAMISS frame (all phases, G-buffer excluded), 16k strokes at 1920x1200, s.
 TARGET_16K_S = 0.25
 
 

@@ -27,14 +27,40 @@ attachment  value (RGBA32F)
 2           ``normal.x, normal.y, normal.z, 0``
 ==========  ==============================================
 
-and its ``readback`` returns the same named arrays, as views into the three RGBA reads. In both,
-the depth test is ``GL_LESS`` (the first-drawn, i.e. lower, triangle wins a
-tie, as in refnpr). Every attachment is cleared to -1 (so ``tri_id`` is -1 where empty).
+and its ``readback`` returns the same named arrays, as views into the three RGBA reads.
+
+The ``"plain"`` layout is the configuration a GPU user writes: one draw pass whose fragment shader
+writes the attributes and their quad derivatives into three RGBA32F colour textures, depth in a
+depth texture (the depth buffer itself, no colour copy of it), and a readback with
+``Framebuffer.read_into`` into numpy arrays allocated once when the peer is opened (a
+``glReadPixels`` into memory that is already mapped: no per-frame allocation, no first-touch page
+faults; ``fbo.read`` in the other two layouts returns fresh ``bytes`` every frame):
+
+============  ==============================================
+attachment    value
+============  ==============================================
+0 (RGBA32F)   ``uv.x, uv.y, dFdx(uv).x, dFdx(uv).y``
+1 (RGBA32F)   ``dFdy(uv).x, dFdy(uv).y, tri_id, 0``
+2 (RGBA32F)   ``normal.x, normal.y, normal.z, 0``
+depth         window-space depth in [0, 1] (``DEPTH_COMPONENT24`` texture), read as float32
+============  ==============================================
+
+Its ``readback`` returns ``depth_window`` instead of ``depth``; :meth:`GLPeer.refnpr_convention`
+turns it into the view-axis distance w (``z_ndc = a + b / w``, with ``a``, ``b`` taken from the
+view-projection matrix's z and w rows) outside the timed readback.
+
+``"six_into"`` is the ``six`` layout read the plain way: ``read_into`` the attachments' own
+preallocated arrays (``normal`` as RGB), no per-frame allocation.
+
+In every layout the depth test is ``GL_LESS`` (the first-drawn, i.e. lower, triangle wins a
+tie, as in refnpr). Every colour attachment is cleared to -1 (so ``tri_id`` is -1 where empty),
+depth to 1.
 
 Timings: ``render`` is clear + draw + ``glFinish``; ``readback`` is one ``glReadPixels`` per
 attachment into host memory. The vertex and index buffers are uploaded once (``setup``), like a
 GPU backend that keeps its mesh resident. Arrays come back in GL's window orientation (row 0 is the
-*bottom* row); :func:`to_refnpr_convention` flips them to refnpr's (row 0 on top, d/dy downward).
+*bottom* row); :func:`to_refnpr_convention` (or :meth:`GLPeer.refnpr_convention`, which also
+converts the plain layout's window depth) flips them to refnpr's (row 0 on top, d/dy downward).
 
 Needs ``moderngl`` and a working EGL (on Debian: libegl1, libgl1-mesa-dri, libegl-mesa0). Set
 ``LP_NUM_THREADS`` before the first context is created to choose llvmpipe's thread count.
@@ -47,7 +73,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["GLPeer", "GLUnavailable", "open_peer", "to_refnpr_convention", "ATTACHMENTS"]
+__all__ = [
+    "ATTACHMENTS",
+    "LAYOUTS",
+    "GLPeer",
+    "GLUnavailable",
+    "clip_z_ab",
+    "open_peer",
+    "to_refnpr_convention",
+    "window_depth_to_w",
+]
 
 #: (channel name, texture components, components read back)
 ATTACHMENTS: tuple[tuple[str, int, int], ...] = (
@@ -107,8 +142,29 @@ void main() {
     out_normal = vec4(normalize(v_normal), 0.0);
 }
 """
-#: Layouts: name -> (fragment shader, number of RGBA32F / per-channel attachments)
-LAYOUTS = ("six", "packed")
+FRAGMENT_SHADER_PLAIN = """
+#version 450 core
+in vec3 v_normal;
+in vec2 v_uv;
+layout(location = 0) out vec4 out_uv_dx;    // uv, dFdx(uv)
+layout(location = 1) out vec4 out_dy_id;    // dFdy(uv), tri_id, 0
+layout(location = 2) out vec4 out_normal;   // normalize(n), 0
+void main() {
+    out_uv_dx = vec4(v_uv, dFdx(v_uv));
+    out_dy_id = vec4(dFdy(v_uv), float(gl_PrimitiveID), 0.0);
+    out_normal = vec4(normalize(v_normal), 0.0);
+}
+"""
+#: Layouts (module docstring): six per-channel attachments; three RGBA32F with w in a colour
+#: channel, read with ``fbo.read``; three RGBA32F + depth texture read with ``read_into``; the
+#: six attachments read with ``read_into``.
+LAYOUTS = ("six", "packed", "plain", "six_into")
+_FRAGMENT = {
+    "six": FRAGMENT_SHADER,
+    "packed": FRAGMENT_SHADER_PACKED,
+    "plain": FRAGMENT_SHADER_PLAIN,
+    "six_into": FRAGMENT_SHADER,
+}
 
 
 class GLUnavailable(RuntimeError):
@@ -127,6 +183,10 @@ class GLPeer:
     height: int
     setup_s: float
     layout: str = "six"
+    #: ``z_clip = a * w_clip + b`` (taken from the view-projection matrix): window depth -> w
+    clip_z_ab: tuple[float, float] = (0.0, 0.0)
+    #: ``read_into`` targets (plain: three (H, W, 4) and one (H, W); six_into: one per attachment)
+    host: tuple[np.ndarray, ...] = ()
 
     @property
     def renderer(self) -> str:
@@ -159,6 +219,26 @@ class GLPeer:
     def _readback(self) -> tuple[dict[str, np.ndarray], float]:
         out: dict[str, np.ndarray] = {}
         t0 = time.perf_counter()
+        if self.layout == "plain":
+            a0, a1, a2, zwin = self.host
+            for i, dest in enumerate((a0, a1, a2)):
+                self.fbo.read_into(dest, components=4, attachment=i, dtype="f4")
+            self.fbo.read_into(zwin, components=1, attachment=-1, dtype="f4")
+            t = time.perf_counter() - t0
+            out = {
+                "depth_window": zwin,
+                "tri_id": a1[..., 2],
+                "uv": a0[..., 0:2],
+                "duv_dx": a0[..., 2:4],
+                "duv_dy": a1[..., 0:2],
+                "normal": a2[..., 0:3],
+            }
+            return out, t  # views of the peer's own arrays: the next readback overwrites them
+        if self.layout == "six_into":
+            for i, ((name, _, comps), dest) in enumerate(zip(ATTACHMENTS, self.host, strict=True)):
+                self.fbo.read_into(dest, components=comps, attachment=i, dtype="f4")
+                out[name] = dest
+            return out, time.perf_counter() - t0
         if self.layout == "packed":
             a0, a1, a2 = (
                 np.frombuffer(
@@ -181,6 +261,13 @@ class GLPeer:
             shape = (self.height, self.width) if comps == 1 else (self.height, self.width, comps)
             out[name] = np.frombuffer(raw, dtype=np.float32).reshape(shape)
         return out, time.perf_counter() - t0
+
+    def refnpr_convention(self, gl: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """:func:`to_refnpr_convention`, with the plain layout's ``depth_window`` turned into w."""
+        if "depth_window" in gl:
+            gl = dict(gl)
+            gl["depth"] = window_depth_to_w(gl.pop("depth_window"), *self.clip_z_ab)
+        return to_refnpr_convention(gl)
 
     def release(self) -> None:
         with self.ctx:
@@ -211,8 +298,11 @@ def open_peer(
         ``projection_matrix(width, height) @ view_matrix()`` (row-major numpy; uploaded transposed
         because GL matrices are column-major).
     width, height : int
-    layout : {"six", "packed"}
-        Six per-channel attachments, or three RGBA32F ones plus a depth texture (module docstring).
+    layout : {"six", "packed", "plain", "six_into"}
+        Six per-channel attachments; three RGBA32F ones plus a depth texture, w in a colour
+        channel, read with ``fbo.read``; the plain GPU layout, three RGBA32F and the depth
+        texture read with ``read_into`` into preallocated arrays; or the six attachments read
+        with ``read_into`` (module docstring).
 
     Raises
     ------
@@ -233,7 +323,7 @@ def open_peer(
             f"no EGL OpenGL 4.5 context ({type(exc).__name__}: {exc}); on Debian install "
             "libegl1 libgl1-mesa-dri libegl-mesa0"
         ) from exc
-    fragment = FRAGMENT_SHADER_PACKED if layout == "packed" else FRAGMENT_SHADER
+    fragment = _FRAGMENT[layout]
     prog = ctx.program(vertex_shader=VERTEX_SHADER, fragment_shader=fragment)
     prog["u_view_projection"].write(np.asarray(view_projection, dtype="f4").T.copy().tobytes())
     verts = np.hstack(
@@ -252,7 +342,7 @@ def open_peer(
         index_element_size=4,
     )
     size = (int(width), int(height))
-    if layout == "packed":
+    if layout in ("packed", "plain"):
         colors = [ctx.texture(size, 4, dtype="f4") for _ in range(3)]
         depth = ctx.depth_texture(size)
     else:
@@ -264,11 +354,43 @@ def open_peer(
     ctx.disable(moderngl.CULL_FACE)
     fbo.use()
     fbo.viewport = (0, 0, size[0], size[1])
-    peer = GLPeer(ctx, fbo, vao, prog, size[0], size[1], 0.0, layout)
+    host: tuple[np.ndarray, ...] = ()
+    if layout == "plain":
+        # allocated and touched once: every readback lands in memory that is already mapped
+        host = tuple(np.zeros((size[1], size[0], 4), np.float32) for _ in range(3))
+        host += (np.zeros((size[1], size[0]), np.float32),)
+    elif layout == "six_into":
+        host = tuple(
+            np.zeros((size[1], size[0]) + ((comps,) if comps > 1 else ()), np.float32)
+            for _, _, comps in ATTACHMENTS
+        )
+    peer = GLPeer(
+        ctx, fbo, vao, prog, size[0], size[1], 0.0, layout, clip_z_ab(view_projection), host
+    )
     peer.render()  # llvmpipe JIT-compiles the shaders on the first draw: keep that out of the runs
     peer.readback()
     peer.setup_s = time.perf_counter() - t0
     return peer
+
+
+def clip_z_ab(view_projection: np.ndarray) -> tuple[float, float]:
+    """(a, b) with ``z_clip = a * w_clip + b`` for every point, read off a perspective
+    view-projection matrix (its z row is a times its w row plus b in the last column), so that
+    ``z_ndc = a + b / w``. Raises ``ValueError`` for a matrix without that form (orthographic)."""
+    m = np.asarray(view_projection, dtype=np.float64)
+    zr, wr = m[2], m[3]
+    a = float(zr[:3] @ wr[:3] / (wr[:3] @ wr[:3]))
+    b = float(zr[3] - a * wr[3])
+    if not np.allclose(zr[:3], a * wr[:3], rtol=1e-9, atol=1e-12 * np.abs(zr).max()):
+        raise ValueError("view_projection: z_clip is not a * w_clip + b (not a perspective matrix)")
+    return a, b
+
+
+def window_depth_to_w(depth_window: np.ndarray, a: float, b: float) -> np.ndarray:
+    """View-axis distance w (float32) from window depth in [0, 1] (``glDepthRange(0, 1)``)."""
+    z_ndc = 2.0 * np.asarray(depth_window, dtype=np.float64) - 1.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return (b / (z_ndc - a)).astype(np.float32)
 
 
 def to_refnpr_convention(gl: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
