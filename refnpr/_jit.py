@@ -12,6 +12,14 @@ raises "cannot cache function ...: no locator available" when a kernel is decora
 import. Then the kernel is cached in a private directory under :func:`tempfile.gettempdir`
 instead, and where that is not writable either it is compiled without caching, with one warning.
 
+numba keys a cached kernel on its own source file (modification time and size) and bytecode,
+not on the functions it calls: a kernel in one file that calls a formula's ``f.scalar`` in
+another would load its stale machine code after the formula was edited. Every function compiled
+here therefore also keys its cache entries on the files of every numba function it reaches
+(through its globals, the attributes it reads of them, and its closure), followed
+transitively: editing ``f.scalar``'s body recompiles every kernel that calls it, on its next
+call, in every process (:func:`dependency_files`).
+
 numba writes a new cache entry by reading the kernel's index, picking the first unused data file
 name and rewriting the index. Two processes doing that for two signatures of one kernel at the
 same moment (``refnpr warmup --jobs``, pytest-xdist workers, Dask workers on one machine) can
@@ -24,9 +32,11 @@ This module imports nothing of refnpr and may be imported by every subpackage.
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 import os
 import stat
+import types
 import tempfile
 import threading
 import warnings
@@ -112,6 +122,12 @@ def _no_locator(exc: RuntimeError) -> bool:
 
 
 def _jit(func, flags: dict):
+    kernel = _jit_cached(func, flags)
+    _track_dependencies(kernel)
+    return kernel
+
+
+def _jit_cached(func, flags: dict):
     try:
         return numba.njit(**flags)(func)
     except RuntimeError as exc:
@@ -143,6 +159,105 @@ def _jit(func, flags: dict):
             stacklevel=3,
         )
     return numba.njit(**{**flags, "cache": False})(func)
+
+
+# --------------------------------------------------------------------------------------------
+# Cache entries keyed on the sources a kernel calls into.
+
+
+def _dispatchers_in(value, names: frozenset[str]) -> list:
+    """The numba functions a global ``value`` of a kernel gives it: the value itself, or
+    (a module, a formula's numpy face, a banded kernel) its attributes that the kernel names."""
+    if isinstance(value, numba.core.dispatcher.Dispatcher):
+        return [value]
+    if isinstance(value, Banded):
+        return [value.body]
+    if value is None or isinstance(value, (int, float, bool, str, bytes)):
+        return []
+    found = []
+    for name in names:
+        try:
+            attr = getattr(value, name, None)
+        except Exception:  # noqa: BLE001 (an object whose attributes raise: not a dependency)
+            continue
+        if isinstance(attr, numba.core.dispatcher.Dispatcher):
+            found.append(attr)
+        elif isinstance(attr, Banded):
+            found.append(attr.body)
+    return found
+
+
+def _code_names(code: types.CodeType) -> frozenset[str]:
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            names |= _code_names(const)
+    return frozenset(names)
+
+
+def dependency_files(py_func) -> tuple[str, ...]:
+    """The source files of ``py_func`` and of every numba function it may call, transitively.
+
+    A callee is found where the compiled code can reach one: a global name of the function
+    (``detail_depth_scalar``), an attribute it reads of a global (``K.shade``, a module's
+    function; ``f.scalar``, a formula's device function), or a closure variable (a kernel
+    built by a factory). Sorted, each once.
+    """
+    files: set[str] = set()
+    seen: set[int] = set()
+    stack = [py_func]
+    while stack:
+        func = stack.pop()
+        if id(func) in seen or not hasattr(func, "__code__"):
+            continue
+        seen.add(id(func))
+        code = func.__code__
+        files.add(code.co_filename)
+        names = _code_names(code)
+        scope = getattr(func, "__globals__", {})
+        values = [scope[n] for n in names if n in scope]
+        values += [cell.cell_contents for cell in (func.__closure__ or ()) if _has_contents(cell)]
+        for value in values:
+            stack.extend(d.py_func for d in _dispatchers_in(value, names))
+    return tuple(sorted(files))
+
+
+def _has_contents(cell) -> bool:
+    try:
+        cell.cell_contents  # noqa: B018
+    except ValueError:  # an empty cell (the closure's variable is not bound yet)
+        return False
+    return True
+
+
+def _stamp(files: tuple[str, ...]) -> str:
+    """A hash of each file's name, modification time and size (numba's own source stamp)."""
+    h = hashlib.sha256()
+    for path in files:
+        try:
+            st = os.stat(path)
+            h.update(f"{path}\0{st.st_mtime_ns}\0{st.st_size}\0".encode())
+        except OSError:  # a file that is gone: its name alone
+            h.update(f"{path}\0-\0".encode())
+    return h.hexdigest()
+
+
+def _track_dependencies(dispatcher) -> None:
+    """Key ``dispatcher``'s cache entries also on :func:`dependency_files` (found on first use,
+    when every callee is defined)."""
+    cache = getattr(dispatcher, "_cache", None)
+    if cache is None or not hasattr(cache, "_index_key"):
+        return
+    base = cache._index_key
+    found: list[tuple[str, ...]] = []
+
+    def _index_key(sig, codegen):
+        if not found:
+            found.append(dependency_files(dispatcher.py_func))
+        key = base(sig, codegen)
+        return key[:-1] + (key[-1] + (_stamp(found[0]),),)
+
+    cache._index_key = _index_key
 
 
 def njit(func=None, **overrides):

@@ -42,10 +42,14 @@ class Style:
     renamed: ClassVar[Mapping[str, str]] = {}
     #: Deprecated names whose value changed form; the style converts them itself (with a warning).
     deprecated: ClassVar[tuple[str, ...]] = ()
+    #: The style's parameter declaration (:class:`refnpr.styles._declare.Params`), if it has one.
+    PARAMS: ClassVar[Any] = None
 
     @classmethod
     def parameters(cls) -> tuple[str, ...]:
-        """The parameter names ``__init__`` takes (current names; sorted)."""
+        """The parameter names the style takes (current names; sorted)."""
+        if cls.PARAMS is not None:
+            return tuple(sorted(cls.PARAMS.names))
         sig = inspect.signature(inspect.unwrap(cls.__init__))
         kinds = (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
         return tuple(
@@ -205,7 +209,11 @@ def register(cls: type[Style]) -> type[Style]:
     """
     if not cls.name:
         raise ValueError(f"{cls.__name__}: a registered style needs a non-empty `name`")
-    if "__init__" in cls.__dict__:
+    if cls.PARAMS is not None:  # its declaration validates names and values
+        self_param = inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD)
+        sig = cls.PARAMS.signature()
+        cls.__init__.__signature__ = sig.replace(parameters=[self_param, *sig.parameters.values()])
+    elif "__init__" in cls.__dict__:
         init = cls.__init__
 
         @functools.wraps(init)

@@ -1,7 +1,8 @@
-"""X-Toon's one-pass numba shading (``xtoon.shading.shade_rgba``) against the numpy code it
-replaced (kept here verbatim as the oracle: ``evaluate`` + ``toon_lookup`` + ``rgba_from``), on
-random G-buffers and rendered scenes, for every detail map, tone, light kind, show view,
-modulate and the shape / per-vertex paths; and the same result for 1 and 2 numba threads."""
+"""X-Toon's one-pass numba shading (``xtoon.shading.shade_rgba``) against the style's numpy
+evaluation (``evaluate``: the same formulas through their numpy faces, assembled by numpy code
+here: ``toon_lookup`` + ``rgba_from``), on random G-buffers and rendered scenes, for every detail
+map, tone, light kind, show view, modulate and the shape / per-vertex paths; the texture corners
+against the texture itself; and the same result for 1 and 2 numba threads."""
 
 from __future__ import annotations
 
@@ -22,23 +23,24 @@ from refnpr.styles.base import ShadeContext
 from refnpr.styles.xtoon import XToonStyle
 from refnpr.styles.xtoon.evaluation import evaluate
 from refnpr.styles.xtoon.shading import fused
-from refnpr.styles.xtoon.texture import srgb_to_linear
+from refnpr.image import srgb_to_linear
 
 # ------------------------------------------------------------------ oracle: the numpy shade()
 
 
 def oracle(style: XToonStyle, ctx: ShadeContext) -> np.ndarray:
-    """``XToonStyle.shade`` before the kernel, verbatim."""
+    """``XToonStyle.shade`` assembled in numpy from ``evaluate``."""
     ev = evaluate(style._cfg, ctx)
-    if style._show != "color":
+    show = style._cfg.p.show
+    if show != "color":
         value = {"detail": ev.detail, "inverse_detail": 1.0 - ev.detail, "tone": ev.tone}
         grey = np.zeros(ev.mask.shape)
-        grey[ev.mask] = srgb_to_linear(np.clip(value[style._show], 0.0, 1.0))
+        grey[ev.mask] = srgb_to_linear(np.clip(value[show], 0.0, 1.0))
         return rgba_from(grey[..., None], ev.mask)
     rgb = np.zeros(ev.mask.shape + (3,))
     alpha = np.zeros(ev.mask.shape)
     col = ev.rgba[:, :3]
-    if style._cfg.modulate:
+    if style._cfg.p.modulate:
         col = col * ctx.material_field("diffuse")[ev.mask]
     rgb[ev.mask] = col
     alpha[ev.mask] = ev.rgba[:, 3]
@@ -104,6 +106,7 @@ def random_ctx(seed: int, light: str, shape=(41, 57)) -> ShadeContext:
     scene = SimpleNamespace(
         objects=[SimpleNamespace(material=m, name=f"o{i}") for i, m in enumerate(MATERIALS)],
         lights=(LIGHTS[light],),
+        ambient=(0.0, 0.0, 0.0),
         camera=CAMERA,
         bounds=lambda: (np.full(3, -1.5), np.full(3, 1.5)),
         world_meshes=lambda: [],

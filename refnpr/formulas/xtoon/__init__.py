@@ -24,9 +24,15 @@ fields (Fig. 5) in ``shapes``; both are re-exported here.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from .._shading_checks import unit_vectors
+from refnpr._jit import njit
+from refnpr.device.scalars import clip01
+from refnpr.device.vectors import unit_scaled
+
+from .._face import Whole, elementwise, face
 from .._validate import as_float, check_scalar, describe, result_dtype
 from .shapes import (
     cylinder_normals,
@@ -47,7 +53,9 @@ from .textures import (
 )
 
 __all__ = [
+    "tone",
     "detail_depth",
+    "focus_constants",
     "detail_focus",
     "detail_orientation",
     "detail_highlight",
@@ -74,6 +82,11 @@ _R_HINT = (
 )
 
 
+#: Distances are clamped to at least this before the log of sec. 3.1 (a distance of 0, a
+#: vertex at the eye, has no log; it gets D = 1).
+TINY = 1e-9
+
+
 def _check_depth(name: str, z) -> np.ndarray:
     arr = as_float(name, z)
     bad = np.isnan(arr) | (arr <= 0)
@@ -95,11 +108,50 @@ def _check_no_nan(name: str, value) -> np.ndarray:
     return arr
 
 
+@njit
+def _tone(n_dot_l, half_lambert):
+    if half_lambert:
+        return 0.5 * (n_dot_l + 1.0)  # half-Lambert (Valve): n.l mapped to [0, 1]
+    return clip01(n_dot_l)  # sec. 3: tone from n.l, clamped
+
+
+@face(_tone)
+def tone(n_dot_l, *, half_lambert: bool = False) -> np.ndarray:
+    """The tone coordinate of the 2D toon texture, X-Toon sec. 3: n . l clamped to [0, 1].
+
+    Parameters
+    ----------
+    n_dot_l : (...) float
+        Dot product of the unit shading normal and the unit direction towards the light.
+    half_lambert : bool, keyword-only
+        (n . l + 1) / 2 instead (half-Lambert, Valve; refnpr's option): the whole texture width
+        over the sphere of normals.
+
+    Returns
+    -------
+    (...) float64, or float32 if ``n_dot_l`` is float32
+    """
+    if not isinstance(half_lambert, (bool, np.bool_)):
+        raise TypeError(f"half_lambert: expected a bool, got {half_lambert!r}")
+    c = _check_no_nan("n_dot_l", n_dot_l)
+    return elementwise(tone.scalar, result_dtype(c), c, bool(half_lambert))
+
+
+@njit
+def _detail_depth(z, z_min, log_r):
+    z = max(z, TINY)
+    return clip01(1.0 - math.log(z / z_min) / log_r)  # sec. 3.1: 1 - log_r; footnote 1
+
+
+@face(_detail_depth)
 def detail_depth(z, z_min: float, r: float) -> np.ndarray:
     """Depth-based (LOA / aerial perspective) detail, X-Toon sec. 3.1.
 
     D = 1 - log_r(z / z_min), clamped to [0, 1]: D = 1 up to z_min, D = 0 from z_max = r * z_min on,
     logarithmic in between (to account for perspective).
+
+    ``detail_depth.scalar(z, z_min, log_r)`` is the device function (``log_r = log(r)``, a frame
+    constant); it clamps z to at least ``TINY`` (1e-9) first.
 
     Parameters
     ----------
@@ -118,14 +170,41 @@ def detail_depth(z, z_min: float, r: float) -> np.ndarray:
     z_min = check_scalar("z_min", z_min, lo=0.0, lo_open=True, hint="z_min is a distance")
     r = check_scalar("r", r, lo=1.0, lo_open=True, hint=_R_HINT)
     z = _check_depth("z", z)
-    dt = result_dtype(z)
-    with np.errstate(divide="ignore"):
-        D = 1.0 - np.log(z / dt.type(z_min)) / dt.type(
-            np.log(r)
-        )  # sec. 3.1: D = 1 - log_r(z/z_min)
-    return np.clip(D, 0.0, 1.0).astype(dt, copy=False)  # footnote 1: z_min <= z <= z_max
+    return elementwise(detail_depth.scalar, result_dtype(z), z, z_min, float(np.log(r)))
 
 
+def focus_constants(z_focus: float, z_min: float, r: float) -> tuple[float, ...]:
+    """The frame constants of :func:`detail_focus`'s device function: ``(z_c, z_min^-,
+    z_min^+, log(z_max^- / z_min^-), log(z_max^+ / z_min^+))`` with z_min^± = z_c ± z_min and
+    z_max^± = z_c ± r z_min (X-Toon sec. 3.1). Validated as :func:`detail_focus`'s arguments."""
+    z_focus = check_scalar("z_focus", z_focus, lo=0.0, lo_open=True, hint="z_focus is a distance")
+    z_min = check_scalar("z_min", z_min, lo=0.0, lo_open=True, hint="z_min is a distance")
+    r = check_scalar("r", r, lo=1.0, lo_open=True, hint=_R_HINT)
+    if not z_focus - r * z_min > 0.0:
+        raise ValueError(
+            f"z_focus - r*z_min: expected > 0 (X-Toon footnote 2: 0 < z_max^- = z_c - r*z_min), "
+            f"got z_focus={z_focus}, r={r}, z_min={z_min} -> {z_focus - r * z_min}; "
+            "move the focus point further away or reduce z_min or r"
+        )
+    return (
+        z_focus,
+        z_focus - z_min,
+        z_focus + z_min,
+        float(np.log((z_focus - r * z_min) / (z_focus - z_min))),
+        float(np.log((z_focus + r * z_min) / (z_focus + z_min))),
+    )
+
+
+@njit
+def _detail_focus(z, f):
+    z_c, z_min_near, z_min_far, log_near, log_far = f
+    z = max(z, TINY)
+    if z < z_c:  # sec. 3.1, depth of field: 1 - log(z / z_min^-) / log(z_max^- / z_min^-)
+        return clip01(1.0 - math.log(z / z_min_near) / log_near)
+    return clip01(1.0 - math.log(z / z_min_far) / log_far)  # the far branch, same form
+
+
+@face(_detail_focus)
 def detail_focus(z, z_focus: float, z_min: float, r: float) -> np.ndarray:
     """Depth-of-field detail around a focus distance, X-Toon sec. 3.1.
 
@@ -136,6 +215,9 @@ def detail_focus(z, z_focus: float, z_min: float, r: float) -> np.ndarray:
 
     clamped to [0, 1]: D = 1 within z_min of the focus, 0 beyond r * z_min from it. (Both branches
     are the same expression 1 - log(z / z_min^±) / log(z_max^± / z_min^±); at z = z_c, D = 1.)
+
+    ``detail_focus.scalar(z, f)`` is the device function, ``f`` the frame constants of
+    :func:`focus_constants`; it clamps z to at least ``TINY`` (1e-9) first.
 
     Parameters
     ----------
@@ -157,29 +239,18 @@ def detail_focus(z, z_focus: float, z_min: float, r: float) -> np.ndarray:
     -------
     D : (...) float64, or float32 if ``z`` is float32
     """
-    z_focus = check_scalar("z_focus", z_focus, lo=0.0, lo_open=True, hint="z_focus is a distance")
-    z_min = check_scalar("z_min", z_min, lo=0.0, lo_open=True, hint="z_min is a distance")
-    r = check_scalar("r", r, lo=1.0, lo_open=True, hint=_R_HINT)
-    if not z_focus - r * z_min > 0.0:
-        raise ValueError(
-            f"z_focus - r*z_min: expected > 0 (X-Toon footnote 2: 0 < z_max^- = z_c - r*z_min), "
-            f"got z_focus={z_focus}, r={r}, z_min={z_min} -> {z_focus - r * z_min}; "
-            "move the focus point further away or reduce z_min or r"
-        )
+    f = focus_constants(z_focus, z_min, r)
     z = _check_depth("z", z)
-    dt = result_dtype(z)
-    near = z < z_focus
-    zmin_pm = np.where(near, dt.type(z_focus - z_min), dt.type(z_focus + z_min))
-    log_ratio = np.where(
-        near,
-        dt.type(np.log((z_focus - r * z_min) / (z_focus - z_min))),
-        dt.type(np.log((z_focus + r * z_min) / (z_focus + z_min))),
-    )
-    with np.errstate(divide="ignore", invalid="ignore"):
-        D = 1.0 - np.log(z / zmin_pm) / log_ratio  # sec. 3.1, depth-of-field, both branches
-    return np.clip(D, 0.0, 1.0).astype(dt, copy=False)
+    return elementwise(detail_focus.scalar, result_dtype(z), z, f)
 
 
+@njit
+def _detail_orientation(n_dot_v, r):
+    c = min(max(n_dot_v, -1.0), 1.0)
+    return min(abs(c), 1.0) ** r  # sec. 3.2: |n.v|^r
+
+
+@face(_detail_orientation)
 def detail_orientation(n_dot_v, r: float) -> np.ndarray:
     """Near-silhouette detail D = |n . v|^r, X-Toon sec. 3.2.
 
@@ -197,10 +268,17 @@ def detail_orientation(n_dot_v, r: float) -> np.ndarray:
     """
     r = check_scalar("r", r, lo=0.0, hint="X-Toon sec. 3.2 requires r >= 0")
     c = _check_no_nan("n_dot_v", n_dot_v)
-    dt = result_dtype(c)
-    return np.power(np.minimum(np.abs(c), 1.0), dt.type(r)).astype(dt, copy=False)  # sec. 3.2
+    return elementwise(detail_orientation.scalar, result_dtype(c), c, r)
 
 
+@njit
+def _detail_highlight(v_dot_r, s, one_sided):
+    c = min(max(v_dot_r, -1.0), 1.0)
+    base = max(c, 0.0) if one_sided else abs(c)
+    return min(base, 1.0) ** s  # sec. 3.2: |v.r|^s (Phong)
+
+
+@face(_detail_highlight)
 def detail_highlight(v_dot_r, s: float, *, one_sided: bool = False) -> np.ndarray:
     """Highlight detail D = |v . r|^s (Phong), X-Toon sec. 3.2.
 
@@ -220,14 +298,53 @@ def detail_highlight(v_dot_r, s: float, *, one_sided: bool = False) -> np.ndarra
     D : (...) float in [0, 1]
     """
     s = check_scalar("s", s, lo=1.0, hint="X-Toon sec. 3.2 requires shininess s >= 1")
+    if not isinstance(one_sided, (bool, np.bool_)):
+        raise TypeError(f"one_sided: expected a bool, got {one_sided!r}")
     c = _check_no_nan("v_dot_r", v_dot_r)
-    dt = result_dtype(c)
-    base = np.maximum(c, 0.0) if one_sided else np.abs(c)
-    return np.power(np.minimum(base, 1.0), dt.type(s)).astype(dt, copy=False)  # sec. 3.2, Phong
+    return elementwise(detail_highlight.scalar, result_dtype(c), c, s, bool(one_sided))
 
 
+@njit
+def _toon_lookup(texels, rows, cols, tone, detail):
+    # sec. 3: bilinear, edge-clamped lookup (texel centres, GL_LINEAR + CLAMP_TO_EDGE); the
+    # texel offsets are unsigned (non-negative by construction): no wraparound checks
+    tx = min(max(clip01(tone) * cols - 0.5, 0.0), cols - 1.0)
+    ty = min(max(clip01(detail) * rows - 0.5, 0.0), rows - 1.0)
+    j0 = min(int(math.floor(tx)), max(cols - 2, 0))
+    i0 = min(int(math.floor(ty)), max(rows - 2, 0))
+    j1 = min(j0 + 1, cols - 1)
+    i1 = min(i0 + 1, rows - 1)
+    fx = tx - j0
+    fy = ty - i0
+    a = (
+        np.uint64((i0 * cols + j0) * 4),
+        np.uint64((i0 * cols + j1) * 4),
+        np.uint64((i1 * cols + j0) * 4),
+        np.uint64((i1 * cols + j1) * 4),
+    )
+    return (
+        _bilerp(texels, a, np.uint64(0), fx, fy),
+        _bilerp(texels, a, np.uint64(1), fx, fy),
+        _bilerp(texels, a, np.uint64(2), fx, fy),
+        _bilerp(texels, a, np.uint64(3), fx, fy),
+    )
+
+
+@njit
+def _bilerp(texels, a, c, fx, fy):
+    """Channel ``c`` between the texels at flat offsets ``a = (a00, a01, a10, a11)``."""
+    top = texels[a[0] + c] * (1.0 - fx) + texels[a[1] + c] * fx
+    bottom = texels[a[2] + c] * (1.0 - fx) + texels[a[3] + c] * fx
+    return top * (1.0 - fy) + bottom * fy
+
+
+@face(_toon_lookup)
 def toon_lookup(texture, tone, detail) -> np.ndarray:
     """Bilinear, edge-clamped lookup in a 2D toon texture, X-Toon sec. 3.
+
+    ``toon_lookup.scalar(texels, rows, cols, tone, detail)`` is the device function: ``texels``
+    the (rows, cols, 4) RGBA texture as a flat C-ordered float64 array; it returns the 4
+    channels.
 
     Parameters
     ----------
@@ -258,23 +375,35 @@ def toon_lookup(texture, tone, detail) -> np.ndarray:
     u = _check_no_nan("tone", tone)
     v = _check_no_nan("detail", detail)
     dt = result_dtype(tex, u, v)
-    u, v = np.broadcast_arrays(u.astype(dt), v.astype(dt))
     rows, cols = tex.shape[:2]
-    tex = tex.astype(dt, copy=False)
-    x = np.clip(np.clip(u, 0.0, 1.0) * cols - 0.5, 0.0, cols - 1)  # texel-centre convention
-    y = np.clip(np.clip(v, 0.0, 1.0) * rows - 0.5, 0.0, rows - 1)
-    j0 = np.minimum(np.floor(x).astype(np.intp), max(cols - 2, 0))
-    i0 = np.minimum(np.floor(y).astype(np.intp), max(rows - 2, 0))
-    j1 = np.minimum(j0 + 1, cols - 1)
-    i1 = np.minimum(i0 + 1, rows - 1)
-    fx = (x - j0).astype(dt)
-    fy = (y - i0).astype(dt)
-    if tex.ndim == 3:
-        fx = fx[..., None]
-        fy = fy[..., None]
-    top = tex[i0, j0] * (1 - fx) + tex[i0, j1] * fx
-    bottom = tex[i1, j0] * (1 - fx) + tex[i1, j1] * fx
-    return (top * (1 - fy) + bottom * fy).astype(dt, copy=False)
+    planes = tex[..., None] if tex.ndim == 2 else tex
+    parts = []
+    for k in range(0, planes.shape[2], 4):  # four channels at a time
+        chunk = np.zeros((rows, cols, 4))
+        width = min(4, planes.shape[2] - k)
+        chunk[..., :width] = planes[..., k : k + width]
+        rgba = elementwise(toon_lookup.scalar, dt, Whole(chunk.reshape(-1)), rows, cols, u, v)
+        parts.append(rgba[..., :width])
+    out = np.concatenate(parts, axis=-1)
+    return out[..., 0] if tex.ndim == 2 else out
+
+
+@njit
+def _blend_normals(n, n_abstract, weight, normalize):
+    a = unit_scaled(n)
+    b = unit_scaled(n_abstract)
+    w = weight
+    m = ((1 - w) * a[0] + w * b[0], (1 - w) * a[1] + w * b[1], (1 - w) * a[2] + w * b[2])
+    if not normalize:
+        return m  # sec. 4: the linear blend (interpolated, then normalized)
+    norm = math.sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2])
+    if norm > _TINY_FLOAT:  # renormalized per pixel (sec. 4)
+        return (m[0] / norm, m[1] / norm, m[2] / norm)
+    return a if w < 0.5 else b
+
+
+#: The smallest normal float64.
+_TINY_FLOAT = float(np.finfo(np.float64).tiny)
 
 
 def _unit(name: str, value) -> np.ndarray:
@@ -290,9 +419,10 @@ def _unit(name: str, value) -> np.ndarray:
             f"{name}: expected non-zero vectors, got a zero vector at index {i}; "
             "repair degenerate normals before blending"
         )
-    return unit_vectors(arr)  # scaled first: no overflow or underflow of |v|
+    return arr
 
 
+@face(_blend_normals)
 def blend_normals(n, n_abstract, weight, *, normalize: bool = True) -> np.ndarray:
     """Blend the shading normal towards an abstracted shape's normal, X-Toon sec. 4.
 
@@ -300,6 +430,9 @@ def blend_normals(n, n_abstract, weight, *, normalize: bool = True) -> np.ndarra
     The paper blends linearly per vertex (vertex shader) and renormalizes per pixel after
     interpolation; ``normalize=False`` returns the unnormalized per-vertex blend for that order of
     operations (interpolate it, then normalize).
+
+    ``blend_normals.scalar(n, n_abstract, weight, normalize)`` is the device function (vectors
+    as 3-tuples).
 
     Parameters
     ----------
@@ -328,12 +461,11 @@ def blend_normals(n, n_abstract, weight, *, normalize: bool = True) -> np.ndarra
             "0 keeps the original normals, 1 uses the abstracted ones"
         )
     dt = result_dtype(a, b, w) if isinstance(weight, np.ndarray) else result_dtype(a, b)
-    a, b, w = a.astype(dt), b.astype(dt), w.astype(dt)[..., None]
-    m = (1 - w) * a + w * b  # sec. 4: linear blend of the two normals
-    if not normalize:
-        return m.astype(dt, copy=False)
-    norm = np.linalg.norm(m, axis=-1, keepdims=True)
-    tiny = np.finfo(dt).tiny
-    fallback = np.where(w < 0.5, a, b)
-    out = np.where(norm > tiny, m / np.maximum(norm, tiny), fallback)  # renormalized per pixel
-    return out.astype(dt, copy=False)
+    return elementwise(
+        blend_normals.scalar,
+        dt,
+        (a[..., 0], a[..., 1], a[..., 2]),
+        (b[..., 0], b[..., 1], b[..., 2]),
+        w,
+        bool(normalize),
+    )

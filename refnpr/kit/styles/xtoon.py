@@ -120,7 +120,7 @@ def _texture_spec(style: Any) -> Any:
 
 
 def _weight(cfg: Any, case_dir: Path, textures: dict[str, Any]) -> dict[str, Any]:
-    w = cfg.weight
+    w = cfg.p.shape_weight
     out: dict[str, Any] = {"kind": w.kind, "value": None, "texture": None, "uv_scale": None}
     if w.kind == "global":
         out["value"] = float(w.value)
@@ -174,17 +174,17 @@ def export(
         params, textures (``toon``; ``detail_map`` and ``shape_weight`` where used), derived
         texts, and ``_ABSTRACT_NORMAL`` per object when the style abstracts the shape.
     """
-    from refnpr.styles.xtoon.detail import FLOW_BEHIND, TINY, resolve_frame
+    from refnpr.styles.xtoon.detail import FLOW_BEHIND, TINY, style_record
     from refnpr.styles.xtoon.evaluation import _abstract, plan
     from refnpr.styles.xtoon.shape import unit_rows
 
     style = _unwrap(style)
     cfg = style._cfg
-    p = cfg.detail
+    p = cfg.p
     # a flow style without prev_camera is frame 0 of a sequence: zero flow (the current camera)
     prev_camera = p.prev_camera if p.prev_camera is not None else scene.camera
     moved = getattr(p, "prev_transforms", None)
-    if p.kind == "flow" and moved is not None:
+    if p.detail == "flow" and moved is not None:
         now = np.array([o.transform for o in scene.objects], dtype=np.float64)
         if not np.array_equal(np.asarray(moved, dtype=np.float64), now):
             raise ValueError(
@@ -195,7 +195,7 @@ def export(
     case_dir = Path(case_dir)
     camera = scene.camera
     plan(cfg, scene)  # validates the light index against the scene (clear error)
-    frame = resolve_frame(p, scene, camera)
+    record = style_record(p, cfg.texture, scene, camera)  # the frame's z_min, r and z_c
     textures: dict[str, Any] = {}
     textures["toon"] = write_texture_levels(
         case_dir,
@@ -210,14 +210,14 @@ def export(
         ),
         used_for="X-Toon 2D toon texture, bilinear clamp-to-edge lookup at (tone, D)",
     )
-    kind = p.kind
+    kind = p.detail
     uses_z = kind in ("depth", "focus")
     detail_map = None
     if kind == "map":
         textures["detail_map"] = write_texture_levels(
             case_dir,
             "detail_map",
-            [np.asarray(p.user_map, dtype=np.float32)],
+            [np.asarray(p.detail_map, dtype=np.float32)],
             encoding="linear",
             wrap="clamp",
             filter="nearest",
@@ -226,19 +226,19 @@ def export(
             used_for="X-Toon user detail map D per pixel or per sample (texelFetch)",
         )
         detail_map = "detail_map"
-    shaped = cfg.shape is not None
+    shaped = p.shape is not None
     params: dict[str, Any] = {
         "texture": "toon",
         "texture_spec": _texture_spec(style),
         "detail": kind,
-        "detail_mode": cfg.detail_mode,
+        "detail_mode": p.detail_mode,
         "distance": p.distance if uses_z else None,
-        "show": style._show,
-        "tone": cfg.tone,
-        "light": int(cfg.light),
-        "z_min": float(frame.z_min) if uses_z else None,
-        "r": float(frame.r) if kind in ("depth", "focus", "orientation") else None,
-        "z_focus": float(frame.z_focus) if kind == "focus" else None,
+        "show": p.show,
+        "tone": p.tone,
+        "light": int(p.light),
+        "z_min": float(record.z_min) if uses_z else None,
+        "r": float(record.r) if kind in ("depth", "focus", "orientation") else None,
+        "z_focus": float(record.focus[0]) if kind == "focus" else None,
         "focus_point": list(p.focus_point) if kind == "focus" else None,
         "s": float(p.s) if kind == "highlight" else None,
         "one_sided": bool(p.one_sided),
@@ -250,11 +250,11 @@ def export(
         "detail_map": detail_map,
         "shape": style.params().get("shape") if shaped else None,
         "shape_weight": _weight(cfg, case_dir, textures) if shaped else None,
-        "shape_blend": cfg.shape_blend if shaped else None,
-        "shape_frame": cfg.shape_frame if shaped else None,
-        "shape_iterations": int(cfg.shape_iterations) if shaped else None,
-        "shape_objects": list(cfg.shape_objects) if cfg.shape_objects is not None else None,
-        "modulate": bool(cfg.modulate),
+        "shape_blend": p.shape_blend if shaped else None,
+        "shape_frame": p.shape_frame if shaped else None,
+        "shape_iterations": int(p.shape_iterations) if shaped else None,
+        "shape_objects": list(p.shape_objects) if p.shape_objects is not None else None,
+        "modulate": bool(p.modulate),
         "abstract_normal_attribute": "_" + ABSTRACT_NORMAL.upper() if shaped else None,
     }
     vertex_attributes: dict[int, dict[str, np.ndarray]] = {}

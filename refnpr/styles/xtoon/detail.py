@@ -9,21 +9,25 @@ point, as the paper prefers; ``distance="axis"`` or ``"eye"`` picks either for e
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from refnpr.formulas import xtoon
+from refnpr.formulas._face import elementwise
 from refnpr.raster import Camera
 
+from . import _kernels as K
 from .geometry import view_axis_depth
+from .params import DISTANCES, PARAMS
 
 __all__ = [
     "DISTANCES",
-    "DetailParams",
-    "FrameDetail",
-    "resolve_frame",
+    "TINY",
+    "FLOW_BEHIND",
+    "DEFAULT_DISTANCE",
+    "style_record",
+    "texels",
     "detail_values",
     "flow_detail",
     "distances",
@@ -31,40 +35,11 @@ __all__ = [
 
 #: Distances are clamped to at least this before the log of sec. 3.1 (vertices at or behind
 #: the eye get D = 1 in the per-vertex mode instead of a NaN).
-TINY = 1e-9
+TINY = xtoon.TINY
 #: Flow length given to vertices behind the previous or current camera (no screen position).
 FLOW_BEHIND = 1e6
-#: The two depths of a point of X-Toon Fig. 2: along the view (focal) axis, or to the eye.
-DISTANCES = ("axis", "eye")
 #: The paper's choice per map (sec. 3.1): focal axis for LOA and aerial perspective, eye for focus.
 DEFAULT_DISTANCE = {"depth": "axis", "focus": "eye"}
-
-
-@dataclass(frozen=True, eq=False)
-class DetailParams:
-    """The style's validated detail-map parameters (see ``XToonStyle``)."""
-
-    kind: str
-    z_min: float | None = None
-    r: float | None = None
-    focus_point: tuple[float, float, float] | None = None
-    s: float = 16.0
-    one_sided: bool = False
-    prev_camera: Camera | None = None
-    flow_min: float = 0.0
-    flow_max: float = 16.0
-    user_map: np.ndarray | None = None
-    distance: str | None = None  # "axis" or "eye" for depth and focus (Fig. 2), else None
-    prev_transforms: np.ndarray | None = None  # (M, 4, 4) previous object transforms (flow)
-
-
-@dataclass(frozen=True)
-class FrameDetail:
-    """Per-frame constants: z_min and r after defaults, z_c for ``focus``."""
-
-    z_min: float = 1.0
-    r: float = 2.0
-    z_focus: float = 0.0
 
 
 def distances(points: np.ndarray, camera: Camera, distance: str) -> np.ndarray:
@@ -85,8 +60,9 @@ def _box_depths(scene: Any, camera: Camera, distance: str) -> tuple[float, float
     return near, max(float(z.max()), near)
 
 
-def resolve_frame(p: DetailParams, scene: Any, camera: Camera) -> FrameDetail:
-    """Defaults that depend on the frame, and the checks that need the camera.
+def _resolved(p: Any, scene: Any, camera: Camera) -> tuple[float, float, float]:
+    """``(z_min, r, z_c)`` after the defaults that depend on the frame, with the checks that
+    need the camera.
 
     ``depth``: z_min defaults to the nearest depth (``p.distance``) of the scene's bounding box
     corners (at least the near plane) and r to (farthest corner depth) / z_min (at least 1.01).
@@ -94,12 +70,12 @@ def resolve_frame(p: DetailParams, scene: Any, camera: Camera) -> FrameDetail:
     to 4; the focus point must lie in front of the camera and z_c - r z_min > 0 (footnote 2).
     ``orientation``: r defaults to 1.
     """
-    if p.kind == "depth":
+    if p.detail == "depth":
         near, far = _box_depths(scene, camera, p.distance)
         z_min = near if p.z_min is None else p.z_min
         r = max(far / z_min, 1.01) if p.r is None else p.r
-        return FrameDetail(z_min, r)
-    if p.kind == "focus":
+        return z_min, r, 0.0
+    if p.detail == "focus":
         c = np.asarray(p.focus_point, dtype=np.float64)
         ahead = float(np.dot(c - camera.eye, camera.forward))
         if ahead <= 0.0:
@@ -118,10 +94,35 @@ def resolve_frame(p: DetailParams, scene: Any, camera: Camera) -> FrameDetail:
                 f"{p.distance} distance of focus_point); reduce z_min or r, or move the focus "
                 "point away"
             )
-        return FrameDetail(z_min, r, z_c)
-    if p.kind == "orientation":
-        return FrameDetail(r=1.0 if p.r is None else p.r)
-    return FrameDetail()
+        return z_min, r, z_c
+    if p.detail == "orientation":
+        return 1.0, 1.0 if p.r is None else p.r, 0.0
+    return 1.0, 2.0, 0.0
+
+
+def style_record(p: Any, texture: np.ndarray, scene: Any, camera: Camera) -> Any:
+    """The style record of one frame (``PARAMS.Record``): the parameters ``p`` with z_min and
+    r resolved for the frame (:func:`_resolved`), log r, the focus map's constants
+    (``formulas.xtoon.focus_constants``) and the toon ``texture``'s rows and columns."""
+    z_min, r, z_c = _resolved(p, scene, camera)
+    focus = xtoon.focus_constants(z_c, z_min, r) if p.detail == "focus" else (0.0,) * 5
+    rows, cols = np.shape(texture)[:2]
+    return PARAMS.record(
+        p,
+        z_min=z_min,
+        r=r,
+        log_r=float(np.log(r)) if r > 0 else 0.0,
+        focus=focus,
+        rows=int(rows),
+        cols=int(cols),
+    )
+
+
+def texels(texture: np.ndarray) -> np.ndarray:
+    """The toon ``texture (rows, cols, 4)``'s float32 values as a flat float64 array (exact:
+    the kernel's loads need no conversion)."""
+    tex32 = np.asarray(texture, dtype=np.float32)
+    return np.ascontiguousarray(tex32, dtype=np.float64).reshape(-1)
 
 
 def flow_detail(length: np.ndarray, flow_min: float, flow_max: float) -> np.ndarray:
@@ -131,9 +132,18 @@ def flow_detail(length: np.ndarray, flow_min: float, flow_max: float) -> np.ndar
     return 1.0 - np.clip(np.nan_to_num(t, nan=1.0, posinf=1.0), 0.0, 1.0)
 
 
+def _rows(a: np.ndarray | None, count: int) -> tuple[np.ndarray, ...]:
+    if a is None:
+        z = np.zeros(count)
+        return z, z, z
+    a = np.asarray(a, dtype=np.float64)
+    a = np.broadcast_to(a, (count, 3)) if a.ndim == 1 else a
+    return a[:, 0], a[:, 1], a[:, 2]
+
+
 def detail_values(
-    p: DetailParams,
-    f: FrameDetail,
+    p: Any,
+    record: Any,
     camera: Camera,
     *,
     positions: np.ndarray | None = None,
@@ -144,10 +154,12 @@ def detail_values(
     user: np.ndarray | None = None,
     count: int = 0,
 ) -> np.ndarray:
-    """D in [0, 1] for K samples or vertices (float64 ``(K,)``).
+    """D in [0, 1] for K samples or vertices (float64 ``(K,)``), by the kernels' own
+    :func:`._kernels.detail_at` for the maps of a point's geometry.
 
     Parameters
     ----------
+    p : the style's parameter values; record : its :func:`style_record` for the frame
     positions : (K, 3) world positions (focus, orientation, highlight; depth if ``depth`` is None)
     depth : (K,) view-axis distances (depth and focus with ``distance="axis"``), optional
     normals : (K, 3) unit shading normals (orientation, highlight)
@@ -156,26 +168,23 @@ def detail_values(
     user : (K,) D values (map)
     count : K, for ``none``
     """
-    kind = p.kind
-    if kind in ("depth", "focus"):
-        if depth is not None and p.distance == "axis":
-            z = np.asarray(depth, dtype=np.float64)  # the G-buffer depth: Fig. 2b
-        else:
-            z = distances(positions, camera, p.distance)  # Fig. 2a or 2b
-        z = np.maximum(z, TINY)
-        if kind == "depth":
-            return xtoon.detail_depth(z, f.z_min, f.r)  # sec. 3.1: D = 1 - log_r(z / z_min)
-        return xtoon.detail_focus(z, f.z_focus, f.z_min, f.r)  # sec. 3.1, depth of field
-    if kind in ("orientation", "highlight"):
-        v = camera.eye - positions
-        v = v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), TINY)
-        if kind == "orientation":
-            n_dot_v = np.einsum("kc,kc->k", normals, v)
-            return xtoon.detail_orientation(np.clip(n_dot_v, -1.0, 1.0), f.r)  # sec. 3.2
-        n_dot_l = np.sum(normals * light, axis=-1, keepdims=True)
-        refl = 2.0 * n_dot_l * normals - light  # reflection of the light vector about n
-        v_dot_r = np.einsum("kc,kc->k", v, refl)
-        return xtoon.detail_highlight(np.clip(v_dot_r, -1.0, 1.0), p.s, one_sided=p.one_sided)
+    kind = p.detail
+    if kind in ("depth", "focus", "orientation", "highlight"):
+        k = len(positions) if positions is not None else len(depth)
+        if depth is None and kind in ("depth", "focus") and p.distance == "axis":
+            depth = view_axis_depth(positions, camera)  # Fig. 2b
+        z = np.zeros(k) if depth is None else np.asarray(depth, dtype=np.float64)
+        eye = tuple(float(c) for c in camera.eye)
+        return elementwise(
+            K.detail_at,
+            np.float64,
+            record,
+            eye,
+            _rows(positions, k),
+            _rows(normals, k),
+            _rows(light, k),
+            z,
+        )
     if kind == "flow":
         return flow_detail(np.linalg.norm(flow, axis=-1), p.flow_min, p.flow_max)  # sec. 5
     if kind == "map":

@@ -18,11 +18,12 @@ from typing import Any
 import numpy as np
 
 from refnpr.formulas import xtoon
+from refnpr.device.lights import LIGHT_POINT, light_dir, lights_record
+from refnpr.formulas._face import elementwise
 from refnpr.texture import sample_level
 
-from .detail import FLOW_BEHIND, DetailParams, detail_values, resolve_frame
+from .detail import FLOW_BEHIND, detail_values, style_record
 from .geometry import VertexGeometry, project_pixels
-from .params import WeightSpec
 from .shape import AbstractedNormals, abstract_normals, unit_rows
 
 __all__ = ["Config", "Plan", "plan", "vertex_values", "evaluate", "Evaluated"]
@@ -32,20 +33,11 @@ _POSITION_MAPS = ("orientation", "highlight", "flow")
 
 @dataclass(frozen=True, eq=False)
 class Config:
-    """A validated X-Toon configuration (built by ``XToonStyle.__init__``)."""
+    """A validated X-Toon configuration (built by ``XToonStyle.__init__``): the parameter
+    values ``p`` (``params.PARAMS``), the resolved toon texture, the shape weight's pyramid."""
 
+    p: Any
     texture: np.ndarray  # (rows, cols, 4) float32 RGBA, rows grow with D
-    detail: DetailParams
-    detail_mode: str
-    tone: str
-    light: int
-    shape: Any
-    weight: WeightSpec
-    shape_blend: str
-    shape_frame: str
-    shape_iterations: int
-    shape_objects: tuple[str, ...] | None
-    modulate: bool
     weight_pyramid: Any = None
     cache: dict = field(default_factory=dict)
 
@@ -59,12 +51,17 @@ class Plan:
     carried: frozenset[str]  # vertex quantities the meshes carry as attributes
 
 
-def _map_channels(p: DetailParams) -> set[str]:
+def _map_channels(p: Any) -> set[str]:
     """G-buffer channels the attribute map reads per sample: the view-axis ``depth`` for the
     focal-axis distance (Fig. 2b), ``position`` for the eye distance and the other maps."""
-    if p.kind in ("depth", "focus"):
+    if p.detail in ("depth", "focus"):
         return {"depth"} if p.distance == "axis" else {"position"}
-    return {"position"} if p.kind in _POSITION_MAPS else set()
+    return {"position"} if p.detail in _POSITION_MAPS else set()
+
+
+def _light_index(cfg: Config, scene: Any) -> int:
+    _light_of(cfg, scene)
+    return cfg.p.light
 
 
 def _light_of(cfg: Config, scene: Any):
@@ -73,19 +70,19 @@ def _light_of(cfg: Config, scene: Any):
             "light: X-Toon's tone is n.l of one light, but the scene has no lights; add a "
             "[[light]] table to the scene"
         )
-    if cfg.light >= len(scene.lights):
+    if cfg.p.light >= len(scene.lights):
         raise ValueError(
-            f"light: index {cfg.light} out of range; the scene has {len(scene.lights)} light(s) "
+            f"light: index {cfg.p.light} out of range; the scene has {len(scene.lights)} light(s) "
             f"(use 0..{len(scene.lights) - 1})"
         )
-    return scene.lights[cfg.light]
+    return scene.lights[cfg.p.light]
 
 
 def plan(cfg: Config, scene: Any) -> Plan:
     """The channels and per-vertex quantities ``cfg`` needs for ``scene`` (nothing more)."""
-    kind = cfg.detail.kind
-    shaped = cfg.shape is not None
-    vertex_blend = shaped and cfg.shape_blend == "vertex"
+    kind = cfg.p.detail
+    shaped = cfg.p.shape is not None
+    vertex_blend = shaped and cfg.p.shape_blend == "vertex"
     channels = {"mesh_id"}
     names: list[str] = []
     if vertex_blend:
@@ -94,14 +91,14 @@ def plan(cfg: Config, scene: Any) -> Plan:
         channels.add("normal")
     if _light_of(cfg, scene).kind == "point":
         channels.add("position")
-    if cfg.detail_mode == "pixel":
-        channels |= _map_channels(cfg.detail)
+    if cfg.p.detail_mode == "pixel":
+        channels |= _map_channels(cfg.p)
     elif kind not in ("map", "none"):
         names.append("xtoon_flow" if kind == "flow" else "xtoon_d")
     bary = shaped and not vertex_blend  # the abstracted normal, interpolated per pixel
-    if bary and cfg.weight.kind == "detail":
-        channels |= _map_channels(cfg.detail)
-    if bary and cfg.weight.kind == "texture":
+    if bary and cfg.p.shape_weight.kind == "detail":
+        channels |= _map_channels(cfg.p)
+    if bary and cfg.p.shape_weight.kind == "texture":
         channels.add("uv")
     meshes = scene.world_meshes()
     carried = frozenset(n for n in names if all(n in m.attributes for m in meshes))
@@ -113,27 +110,37 @@ def plan(cfg: Config, scene: Any) -> Plan:
 
 def _abstract(cfg: Config, scene: Any) -> list[np.ndarray | None]:
     meshes = scene.world_meshes()
-    if isinstance(cfg.shape, AbstractedNormals):
-        return cfg.shape.for_meshes(meshes)
+    if isinstance(cfg.p.shape, AbstractedNormals):
+        return cfg.p.shape.for_meshes(meshes)
     key = tuple(id(m) for m in meshes)
     hit = cfg.cache.get("abstract")
     if hit is None or hit[0] != key:
         an = abstract_normals(
             scene,
-            cfg.shape,
-            objects=cfg.shape_objects,
-            frame=cfg.shape_frame,
-            iterations=cfg.shape_iterations,
+            cfg.p.shape,
+            objects=cfg.p.shape_objects,
+            frame=cfg.p.shape_frame,
+            iterations=cfg.p.shape_iterations,
         )
         hit = (key, an, meshes)  # keeps the meshes alive so their ids stay unique
         cfg.cache["abstract"] = hit
     return list(hit[1].normals)
 
 
-def _light_dirs(light: Any, points: np.ndarray | None) -> np.ndarray:
-    if light.kind == "point":
-        return unit_rows(np.asarray(light.position) - points)
-    return np.asarray(light.direction, dtype=np.float64)
+def _cols(v: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The columns of ``v (N, 3)``: a vector argument of ``elementwise``."""
+    return v[:, 0], v[:, 1], v[:, 2]
+
+
+def _light_dirs(cfg: Config, scene: Any, points: np.ndarray | None) -> np.ndarray:
+    """Unit directions towards the style's light: (3,) for a directional light, (K, 3) at
+    ``points (K, 3)`` for a point light (``refnpr.device.lights.light_dir``, as the kernel)."""
+    lights = lights_record(scene.lights)
+    i = _light_index(cfg, scene)
+    if lights.kind[i] != LIGHT_POINT:
+        return lights.vec[i]
+    v = tuple(float(c) for c in lights.vec[i])
+    return elementwise(light_dir, np.float64, True, v, _cols(points))
 
 
 def _flow(
@@ -147,7 +154,7 @@ def _flow(
     """(K, 2) screen displacement in pixels since the previous frame (X-Toon sec. 5): world
     ``points (K, 3)`` through ``camera`` minus their previous world positions ``before`` (default:
     the same points, a still object) through the previous camera (default: ``camera``)."""
-    prev_camera = camera if cfg.detail.prev_camera is None else cfg.detail.prev_camera
+    prev_camera = camera if cfg.p.prev_camera is None else cfg.p.prev_camera
     now, _ = project_pixels(points, camera, width, height)
     then, _ = project_pixels(points if before is None else before, prev_camera, width, height)
     f = now - then
@@ -158,7 +165,7 @@ def _flow(
 
 def _prev_transforms(cfg: Config, scene: Any) -> np.ndarray | None:
     """The previous object transforms ``(M, 4, 4)``, checked against the scene (or None)."""
-    prev = cfg.detail.prev_transforms
+    prev = cfg.p.prev_transforms
     if prev is not None and len(prev) != len(scene.objects):
         raise ValueError(
             f"prev_transforms: got {len(prev)} transforms but the scene has "
@@ -211,19 +218,19 @@ def vertex_values(
     geom = VertexGeometry.of(scene.world_meshes()) if geom is None else geom
     p = geom.positions
     n_v = unit_rows(geom.normals())
-    light = _light_dirs(_light_of(cfg, scene), p)
-    frame = resolve_frame(cfg.detail, scene, camera)
+    light = _light_dirs(cfg, scene, p)
+    record = style_record(cfg.p, cfg.texture, scene, camera)
     out: dict[str, np.ndarray] = {}
 
     flow_v = None
-    if cfg.detail.kind == "flow":
+    if cfg.p.detail == "flow":
         flow_v = _flow(p, cfg, camera, width, height, _prev_vertices(cfg, scene))
 
     def d_at_vertices(normals: np.ndarray) -> np.ndarray:
         flow = flow_v
         return detail_values(
-            cfg.detail,
-            frame,
+            cfg.p,
+            record,
             camera,
             positions=p,
             normals=normals,
@@ -233,17 +240,20 @@ def vertex_values(
         )
 
     n_shade = n_v
-    if cfg.shape is not None:
+    if cfg.p.shape is not None:
         parts = _abstract(cfg, scene)
         n_abs = np.concatenate(
             [a if a is not None else b for a, b in zip(parts, geom.split(n_v), strict=True)]
         )
-        w: Any = cfg.weight.value
-        if cfg.weight.kind == "detail":
+        w: Any = cfg.p.shape_weight.value
+        if cfg.p.shape_weight.kind == "detail":
             w = (1.0 - d_at_vertices(n_v))[:, None]  # local weight from the same attribute map
-        elif cfg.weight.kind != "global":
+        elif cfg.p.shape_weight.kind != "global":
             w = 0.0  # per-pixel weights: vertex D uses the mesh normals
-        blend = (1.0 - w) * n_v + w * n_abs  # sec. 4: linear blend in the vertex shader
+        weight = w[:, 0] if np.ndim(w) else float(w)
+        blend = elementwise(  # sec. 4: the linear blend, in the vertex shader
+            xtoon.blend_normals.scalar, np.float64, _cols(n_v), _cols(n_abs), weight, False
+        )
         if "xtoon_normal" in names:
             out["xtoon_normal"] = blend
         n_shade = unit_rows(blend)
@@ -317,22 +327,22 @@ def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
             interp[name] = geom.interpolate(v, tri, bary)
 
     pos = at("position") if "position" in pl.channels else None
-    light = _light_dirs(_light_of(cfg, scene), pos)
-    frame = resolve_frame(cfg.detail, scene, camera)
+    light = _light_dirs(cfg, scene, pos)
+    record = style_record(cfg.p, cfg.texture, scene, camera)
     user = None
-    if cfg.detail.kind == "map":
-        user = _sample_grid(cfg.detail.user_map, gb, "detail_map")[mask]
+    if cfg.p.detail == "map":
+        user = _sample_grid(cfg.p.detail_map, gb, "detail_map")[mask]
 
     def d_at_pixels(normals: np.ndarray) -> np.ndarray:
-        kind = cfg.detail.kind
+        kind = cfg.p.detail
         flow = None
         if kind == "flow":
             before = _prev_pixels(cfg, scene, pos, gb["mesh_id"][mask])
             flow = _flow(pos, cfg, camera, gb.width, gb.height, before)
-        depth = at("depth") if "depth" in _map_channels(cfg.detail) else None
+        depth = at("depth") if "depth" in _map_channels(cfg.p) else None
         return detail_values(
-            cfg.detail,
-            frame,
+            cfg.p,
+            record,
             camera,
             positions=pos,
             depth=depth,
@@ -344,9 +354,9 @@ def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
         )
 
     weight = None
-    if cfg.shape is None:
+    if cfg.p.shape is None:
         n = unit_rows(at("normal"))
-    elif cfg.shape_blend == "vertex":
+    elif cfg.p.shape_blend == "vertex":
         n = unit_rows(interp["xtoon_normal"])  # renormalized per pixel (sec. 4)
     else:
         n0 = unit_rows(at("normal"))
@@ -366,15 +376,12 @@ def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
         n = xtoon.blend_normals(n0, na, w)  # per-pixel blend (refnpr option)
 
     n_dot_l = np.sum(n * light, axis=-1)
-    if cfg.tone == "half_lambert":
-        tone = 0.5 * (n_dot_l + 1.0)  # half-Lambert (Valve): n.l mapped to [0, 1]
-    else:
-        tone = np.clip(n_dot_l, 0.0, 1.0)  # sec. 3: tone from n.l, clamped
-    if cfg.detail_mode == "vertex" and "xtoon_d" in interp:
+    tone = xtoon.tone(n_dot_l, half_lambert=cfg.p.tone == "half_lambert")  # sec. 3
+    if cfg.p.detail_mode == "vertex" and "xtoon_d" in interp:
         detail = np.clip(interp["xtoon_d"], 0.0, 1.0)
-    elif cfg.detail_mode == "vertex" and "xtoon_flow" in interp:
+    elif cfg.p.detail_mode == "vertex" and "xtoon_flow" in interp:
         f = interp["xtoon_flow"]
-        detail = detail_values(cfg.detail, frame, camera, flow=f)  # |interpolated flow| -> D
+        detail = detail_values(cfg.p, record, camera, flow=f)  # |interpolated flow| -> D
     else:
         detail = d_at_pixels(n)
     if not lookup:
@@ -385,7 +392,7 @@ def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
 
 def _pixel_weight(cfg, gb, mask, n0, d_at_pixels, at) -> Any:
     """The shape weight at the samples: a scalar, or (K,) where it varies locally (sec. 5)."""
-    spec = cfg.weight
+    spec = cfg.p.shape_weight
     if spec.kind == "global":
         return spec.value
     if spec.kind == "detail":

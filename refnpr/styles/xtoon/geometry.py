@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from refnpr.formulas._face import Whole, elementwise
 from refnpr.raster import Camera
 
 __all__ = ["VertexGeometry", "project_pixels", "view_axis_depth"]
@@ -29,19 +30,19 @@ def project_pixels(
     points: np.ndarray, camera: Camera, width: int, height: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Pixel coordinates ``(N, 2)`` (x right, y down, pixel centres at +0.5) and w_clip ``(N,)``
-    of world ``points (N, 3)`` through ``camera`` for a ``width`` x ``height`` image.
+    of world ``points (N, 3)`` through ``camera`` for a ``width`` x ``height`` image, as the
+    rasterizer projects vertices (``refnpr.device.projection``).
 
     Points with w_clip <= 0 (behind the eye) get NaN coordinates.
     """
-    vp = camera.view_projection(width, height)
-    p = np.asarray(points, dtype=np.float64)
-    clip = p @ vp[:, :3].T + vp[:, 3]
-    w = clip[:, 3]
-    ok = w > 0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x = np.where(ok, (clip[:, 0] / w + 1.0) * 0.5 * width, np.nan)
-        y = np.where(ok, (1.0 - clip[:, 1] / w) * 0.5 * height, np.nan)
-    return np.stack([x, y], axis=1), w
+    vp = np.ascontiguousarray(camera.view_projection(width, height), dtype=np.float64)
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    from ._kernels import pixel
+
+    out = elementwise(
+        pixel, np.float64, Whole(vp), (p[:, 0], p[:, 1], p[:, 2]), (float(width), float(height))
+    )
+    return out[:, :2], out[:, 2]
 
 
 @dataclass(frozen=True, eq=False)

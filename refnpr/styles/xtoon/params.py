@@ -190,3 +190,140 @@ def weight_spec(value: Any) -> WeightSpec:
         f"{name}: expected a number in [0, 1], 'detail' (w = 1 - D), a table {{texture = ...}} or "
         f"a 2D array in [0, 1], got {value!r}"
     )
+
+
+# ---------------------------------------------------------------------- the declaration
+
+#: What ``show`` draws: the toon texture, or an attribute as a grey image whose displayed
+#: (sRGB) value is D ("detail", Fig. 4's convention: dark = low detail), 1 - D ("inverse_detail",
+#: Fig. 3's: near or in focus = dark) or the tone.
+SHOWS = ("color", "detail", "inverse_detail", "tone")
+#: The two depths of a point of X-Toon Fig. 2: along the view (focal) axis, or to the eye.
+DISTANCES = ("axis", "eye")
+_R_HINT = "r is the ratio z_max / z_min of X-Toon sec. 3.1 (coarsest detail at z_max = r z_min)"
+_FLOW = {"detail": ("flow",)}
+
+
+def _object_names(name: str, value: Any) -> tuple[str, ...]:
+    """``shape_objects`` as a tuple of object names (a list of str)."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+        raise TypeError(
+            f"{name}: expected a list of object names, got {type(value).__name__} {value!r}"
+        )
+    if not all(isinstance(o, str) for o in value):
+        raise TypeError(f"{name}: expected a list of object names (str), got {value!r}")
+    return tuple(value)
+
+
+def _shape(name: str, value: Any) -> Any:
+    from .shape import SHAPES, AbstractedNormals
+
+    if (
+        (isinstance(value, str) and value in SHAPES)
+        or isinstance(value, AbstractedNormals)
+        or (callable(value) and not isinstance(value, str))
+    ):
+        return value
+    raise ValueError(
+        f"{name}: expected None, one of {sorted(SHAPES)}, an AbstractedNormals "
+        f"(abstract_normals(scene, ...)) or a callable mesh -> (N, 3) normals, got {value!r}"
+    )
+
+
+def _shape_label(shape: Any) -> str | None:
+    from .shape import AbstractedNormals
+
+    if shape is None or isinstance(shape, str):
+        return shape
+    if isinstance(shape, AbstractedNormals):
+        return f"AbstractedNormals({shape.shape})"
+    return getattr(shape, "__name__", "callable")
+
+
+def camera_table(cam: Camera) -> dict[str, Any]:
+    """A camera as the table ``prev_camera`` accepts."""
+    return {
+        "eye": cam.eye.tolist(),
+        "target": cam.target.tolist(),
+        "up": cam.up.tolist(),
+        "fov_y": cam.fov_y,
+        "near": cam.near,
+        "far": cam.far,
+    }
+
+
+def _texture_label(spec: Any) -> Any:
+    if isinstance(spec, (str, dict)):
+        return spec
+    if hasattr(spec, "__fspath__"):
+        return str(spec)
+    return f"array{np.shape(spec)}"
+
+
+from refnpr.styles._declare import NOT_NONE, Param, Params  # noqa: E402  (below its parsers)
+
+PARAMS = Params(
+    "xtoon",
+    Param(
+        "texture", "loa_blur", "2D toon texture (rows grow with D, columns with tone): a preset, "
+        "an image path, {image, flip, srgb}, {recipe, ramp, ...} or an array", kind="any",
+        summary=_texture_label,
+    ),
+    Param("detail", "depth", "attribute map giving D (secs. 3.1, 3.2, 5)", kind="choice",
+          choices=DETAILS),
+    Param("detail_mode", "pixel", "evaluate D per sample, or per vertex and interpolate "
+          "(the paper's vertex shader)", kind="choice", choices=("pixel", "vertex")),
+    Param("distance", None, "depth of depth and focus maps (Fig. 2): view axis or eye; none: "
+          "the paper's (axis for depth, eye for focus)", kind="choice", choices=DISTANCES,
+          optional=True, used_when={"detail": ("depth", "focus")}),
+    Param("show", "color", "the toon texture, or D, 1 - D or the tone as grey (Figs. 3, 4)",
+          kind="choice", choices=SHOWS),
+    Param("tone", "clamped", "tone = clip(n.l, 0, 1) (sec. 3), or (n.l + 1) / 2",
+          kind="choice", choices=("clamped", "half_lambert")),
+    Param("light", 0, "index of the scene light giving l", kind="int", lo=0,
+          hint="it indexes the scene's lights"),
+    Param("z_min", None, "depth: distance where detail starts to fall (none: nearest depth of "
+          "the scene box); focus: half-width of the sharp region (none: 0.1 z_c)", lo=0.0,
+          lo_open=True, unit="world units", optional=True,
+          used_when={"detail": ("depth", "focus")},
+          hint="z_min is a distance (X-Toon sec. 3.1); give a positive value"),
+    Param("r", None, "depth/focus: z_max / z_min, > 1 (none: the scene box's depth range / "
+          "4); orientation: the exponent of |n.v|^r, >= 0 (none: 1)", optional=True,
+          used_when={"detail": ("depth", "focus", "orientation")}),
+    Param("focus_point", None, "world position of the focus point c (focus)", kind="any",
+          parse=lambda name, v: vec3(name, v), unit="world units",
+          used_when={"detail": ("focus",)}),
+    Param("s", 16.0, "shininess of the highlight map |v.r|^s (sec. 3.2)", lo=1.0,
+          hint="X-Toon sec. 3.2 takes a shininess s >= 1"),
+    Param("one_sided", False, "highlight with max(v.r, 0)^s instead of the paper's |v.r|^s",
+          kind="bool"),
+    Param("prev_camera", None, "the previous frame's camera (flow; none: the current one, or "
+          "the previous frame's in a sequence)", kind="any", parse=camera_spec,
+          summary=camera_table, used_when=_FLOW),
+    Param("prev_transforms", None, "the previous frame's object transforms, one 4x4 per "
+          "object (flow)", kind="any", parse=transforms_spec,
+          summary=lambda a: a.tolist(), used_when=_FLOW),
+    Param("flow_min", 0.0, "flow length where D starts to fall (sec. 5)", lo=0.0, unit="px",
+          hint="a flow length in pixels"),
+    Param("flow_max", 16.0, "flow length where D reaches 0 (sec. 5)", unit="px"),
+    Param("detail_map", None, "per-pixel (H, W) or per-sample map of D in [0, 1], or a grey "
+          "image path (map)", kind="any", parse=unit_map,
+          summary=lambda a: f"array{a.shape}", used_when={"detail": ("map",)}),
+    Param("shape", None, "abstracted shape of sec. 4: smoothed, ellipsoid, cylinder, sphere, "
+          "an AbstractedNormals or a callable", kind="any", parse=_shape, summary=_shape_label),
+    Param("shape_weight", 1.0, "blend weight towards the abstracted normals: a number in "
+          "[0, 1], 'detail' (1 - D), {texture, uv_scale} or an array", kind="any",
+          parse=lambda name, v: weight_spec(v), summary=lambda w: w.summary),
+    Param("shape_blend", "vertex", "blend per vertex and renormalize per pixel (the paper's), "
+          "or per pixel", kind="choice", choices=("vertex", "pixel")),
+    Param("shape_frame", "pca", "frame of the ellipsoid and cylinder shapes",
+          kind="choice", choices=("pca", "aabb")),
+    Param("shape_iterations", 10, "smoothing iterations of the smoothed shape", kind="int",
+          lo=0, hi=10_000, hint="a few tens of iterations already give a smooth field"),
+    Param("shape_objects", None, "names of the objects to abstract (none: all)", kind="any",
+          parse=_object_names, used_when={"shape": NOT_NONE}),
+    Param("modulate", False, "multiply the texture colour by each object's diffuse colour",
+          kind="bool"),
+    frame=("log_r", "focus", "rows", "cols"),
+    module=__name__,
+)

@@ -17,10 +17,11 @@ from typing import Any
 import numpy as np
 
 from refnpr.formulas import xtoon
+from refnpr.image import srgb_to_linear
 
 from .presets import COLS, PRESETS, ROWS, as_rgba, band_ramp
 
-__all__ = ["RECIPES", "resolve_texture", "srgb_to_linear"]
+__all__ = ["RECIPES", "resolve_texture"]
 
 #: Recipe name of a ``{"recipe": ...}`` table -> formula-layer builder.
 RECIPES = {
@@ -42,11 +43,6 @@ _HOW = (
 
 def _how() -> str:
     return _HOW.format(presets=", ".join(sorted(PRESETS)))
-
-
-def srgb_to_linear(x: np.ndarray) -> np.ndarray:
-    """sRGB-encoded values in [0, 1] -> linear (IEC 61966-2-1), same shape, float64."""
-    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)  # IEC 61966-2-1
 
 
 def _check_array(tex: Any, name: str) -> np.ndarray:
