@@ -36,9 +36,9 @@ import hashlib
 import itertools
 import os
 import stat
-import types
 import tempfile
 import threading
+import types
 import warnings
 from concurrent.futures import ThreadPoolExecutor
 

@@ -299,10 +299,19 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def _cmd_styles(args: argparse.Namespace) -> int:
-    from .styles import list_styles
+    from .styles import get_style_class, list_styles
 
-    for name, desc in list_styles().items():
-        print(f"{name:16s} {desc}")
+    if not args.name:
+        for name, desc in list_styles().items():
+            print(f"{name:16s} {desc}")
+        return 0
+    cls = get_style_class(args.name)
+    if cls.PARAMS is None:
+        print(f"{cls.name}: parameters {', '.join(cls.parameters())} (see its docstring)")
+        return 0
+    from .styles._declare import markdown_table, text_table
+
+    print(markdown_table(cls.PARAMS) if args.markdown else text_table(cls.PARAMS), end="")
     return 0
 
 
@@ -492,7 +501,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         type=_param,
         metavar="KEY=VALUE",
-        help="style parameter (TOML value), repeatable",
+        help="style parameter (TOML value), repeatable; `refnpr styles NAME` lists them",
     )
     r.add_argument("--size", type=_size, default=DEFAULT_SIZE, help="WxH (default 768x432, 16:9)")
     r.add_argument(
@@ -521,7 +530,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         type=_param,
         metavar="KEY=VALUE",
-        help="style parameter (TOML value), repeatable",
+        help="style parameter (TOML value), repeatable; `refnpr styles NAME` lists them",
     )
     a.add_argument("--size", type=_size, default=DEFAULT_SIZE, help="WxH (default 768x432)")
     a.add_argument(
@@ -560,7 +569,12 @@ def build_parser() -> argparse.ArgumentParser:
     a.set_defaults(func=_cmd_animate)
 
     sub.add_parser("scenes", help="list built-in scenes").set_defaults(func=_cmd_scenes)
-    sub.add_parser("styles", help="list styles").set_defaults(func=_cmd_styles)
+    st = sub.add_parser(
+        "styles", help="list styles, or one style's parameters (what --param takes)"
+    )
+    st.add_argument("name", nargs="?", help="a style: list its parameters")
+    st.add_argument("--markdown", action="store_true", help="as the table of the docs")
+    st.set_defaults(func=_cmd_styles)
     sub.add_parser("info", help="versions, numba threads, cache dir").set_defaults(func=_cmd_info)
 
     g = sub.add_parser("golden", help="check (default) or regenerate the golden images")

@@ -201,11 +201,7 @@ def elementwise(scalar: Any, dtype: Any, *args: Any) -> np.ndarray:
         return np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(size)
 
     packed = tuple(
-        flat(a)
-        if isinstance(a, np.ndarray)
-        else tuple(flat(c) for c in a)
-        if _is_vector(a)
-        else a
+        flat(a) if isinstance(a, np.ndarray) else tuple(flat(c) for c in a) if _is_vector(a) else a
         for a in args
     )
     out = _loop_of(scalar, len(packed))(packed, n)[:size]

@@ -34,7 +34,7 @@ import numpy as np
 
 from ._names import check_known, renamed_params, warn_caller
 
-__all__ = ["Param", "Params", "Values", "NOT_NONE", "markdown_table"]
+__all__ = ["Param", "Params", "Values", "NOT_NONE", "markdown_table", "text_table", "DOCS_MARK"]
 
 #: ``used_when={"bump": NOT_NONE}``: read only where that parameter is given (not None).
 NOT_NONE = "<not None>"
@@ -88,6 +88,8 @@ class Param:
         Whether the style record carries it (numbers, flags and choices by default).
     summary : callable ``value -> JSON-like``, optional
         How ``params()`` shows the value (an array as ``"array(shape)"``).
+    accepts : str
+        What a ``"any"`` parameter takes, for the tables ("3 floats", "table or array").
     """
 
     name: str
@@ -106,6 +108,7 @@ class Param:
     hint: str = ""
     record: bool | None = None
     summary: Callable[[Any], Any] | None = None
+    accepts: str = ""
 
     def __post_init__(self) -> None:
         if self.kind not in ("float", "int", "bool", "choice", "any"):
@@ -176,7 +179,7 @@ class Param:
         return ""
 
     def range_text(self) -> str:
-        """"a value in [0, 1]", "an integer in [1, 256]", "a value > 0", "a finite number"."""
+        """ "a value in [0, 1]", "an integer in [1, 256]", "a value > 0", "a finite number"."""
         bounds = self.bounds_text()
         if self.kind == "int":
             return "an integer" + bounds
@@ -191,7 +194,7 @@ class Param:
         elif self.kind == "bool":
             text = "bool"
         else:
-            text = "see doc"
+            text = self.accepts or "see doc"
         return text + (" or none" if self.optional and self.default is None else "")
 
     def show(self, value: Any) -> Any:
@@ -363,7 +366,10 @@ class Params:
         for other, allowed in p.used_when.items():
             v = values[other]
             if allowed == NOT_NONE and v is None:
-                return f"{other}=None", f"{p.name} applies with a {other} only; set {other} or remove {p.name}"
+                return (
+                    f"{other}=None",
+                    f"{p.name} applies with a {other} only; set {other} or remove {p.name}",
+                )
             if allowed != NOT_NONE and v not in allowed:
                 want = " or ".join(f"{other}={a!r}" for a in allowed)
                 return f"{other}={v!r}", f"remove {p.name} or use {want}"
@@ -378,6 +384,23 @@ class Params:
             else:
                 parts.append(f"{other} = {', '.join(allowed)}")
         return "; ".join(parts)
+
+    def resolved(self, values: Values, **overrides: Any) -> dict[str, Any]:
+        """The conformance kit's resolved parameters: every declared parameter in declaration
+        order, as ``params()`` shows it where the chosen modes read it (``used_when``) and None
+        where they do not; ``overrides`` give the value exported instead (a value the frame
+        resolves, a texture's role) for a declared parameter the modes read, and add the
+        entries that are not parameters (frame constants), after them."""
+        out: dict[str, Any] = {}
+        for p in self.params:
+            if not self._used(p, values._values):
+                out[p.name] = None
+            elif p.name in overrides:
+                out[p.name] = overrides[p.name]
+            else:
+                out[p.name] = p.show(values[p.name])
+        out.update({k: v for k, v in overrides.items() if k not in self.by_name})
+        return out
 
     def record(self, values: Values, **frame: Any) -> Any:
         """The style record: each declared number, flag and choice (a choice as its index) of
@@ -427,6 +450,27 @@ def _values_of(module: str, values: dict[str, Any], given: frozenset[str]) -> Va
     return Values(importlib.import_module(module).PARAMS, values, given)
 
 
+#: The docs hold each style's generated table between ``<!-- parameters: NAME -->`` and this.
+DOCS_MARK = "<!-- /parameters -->"
+
+
+def _default_text(p: Param) -> str:
+    d = list(p.default) if isinstance(p.default, tuple) else p.default
+    return "none" if d is None else f"`{d!r}`".replace("'", '"')
+
+
+def text_table(params: Params) -> str:
+    """The parameters of a style as plain text: name, default, type and range, when read, doc."""
+    lines = []
+    for p in params.params:
+        head = f"{p.name} = {_default_text(p).strip('`')}   ({p.type_text()}"
+        head += f", {p.unit})" if p.unit else ")"
+        used = params.used_text(p)
+        lines.append(head + (f"   read when {used}" if used else ""))
+        lines.append(f"    {p.doc}")
+    return "\n".join(lines) + "\n"
+
+
 def markdown_table(params: Params) -> str:
     """The parameter table of a style for ``docs/`` (generated; a test checks the docs)."""
     rows = [
@@ -434,11 +478,9 @@ def markdown_table(params: Params) -> str:
         "|---|---|---|---|---|---|",
     ]
     for p in params.params:
-        d = list(p.default) if isinstance(p.default, tuple) else p.default
-        default = "none" if d is None else f"`{d!r}`".replace("'", '"')
         cells = [
             f"`{p.name}`",
-            default,
+            _default_text(p),
             p.type_text(),
             p.unit or "",
             params.used_text(p),

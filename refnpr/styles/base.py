@@ -23,6 +23,7 @@ __all__ = [
     "ShadeContext",
     "register",
     "get_style",
+    "get_style_class",
     "list_styles",
     "style_from_spec",
     "nested_style",
@@ -233,6 +234,17 @@ def list_styles() -> dict[str, str]:
     from . import _all  # noqa: F401  (imports every style module so they register)
 
     return {name: cls.description for name, cls in sorted(_REGISTRY.items())}
+
+
+def get_style_class(name: str) -> type[Style]:
+    """The registered style class ``name`` (a ValueError listing the styles otherwise)."""
+    from . import _all  # noqa: F401
+
+    if not isinstance(name, str):
+        raise TypeError(f"style: expected a style name (str), got {type(name).__name__}")
+    if name not in _REGISTRY:
+        raise ValueError(f"style: unknown style {name!r}; available styles: {sorted(_REGISTRY)}")
+    return _REGISTRY[name]
 
 
 def get_style(name: str, **params: Any) -> Style:

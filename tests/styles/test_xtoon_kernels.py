@@ -16,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from refnpr.formulas import xtoon as fx
+from refnpr.image import srgb_to_linear
 from refnpr.raster import Camera, rasterize
 from refnpr.scenes import Light, Material, Scene, SceneObject, transform_matrix, uv_sphere
 from refnpr.styles._common import rgba_from
@@ -23,7 +24,6 @@ from refnpr.styles.base import ShadeContext
 from refnpr.styles.xtoon import XToonStyle
 from refnpr.styles.xtoon.evaluation import evaluate
 from refnpr.styles.xtoon.shading import fused
-from refnpr.image import srgb_to_linear
 
 # ------------------------------------------------------------------ oracle: the numpy shade()
 

@@ -556,12 +556,12 @@ def test_local_weights_from_the_detail_map_and_a_texture():
             r"shape_weight: expected a value >= 0 and <= 1, got 1.5",
         ),
         (
-            {"shape_weight": -0.1},
+            {"shape": "sphere", "shape_weight": -0.1},
             ValueError,
             r"shape_weight: expected a value >= 0 and <= 1, got -0.1",
         ),
         (
-            {"shape_weight": np.full((4, 4), 2.0), "shape_blend": "pixel"},
+            {"shape": "sphere", "shape_weight": np.full((4, 4), 2.0), "shape_blend": "pixel"},
             ValueError,
             r"shape_weight: values must be finite and lie in \[0, 1\]",
         ),
@@ -593,7 +593,11 @@ def test_local_weights_from_the_detail_map_and_a_texture():
             ValueError,
             r"prev_camera: target: equals eye",
         ),
-        ({"flow_min": 4.0, "flow_max": 4.0}, ValueError, r"flow_max: expected a value > 4"),
+        (
+            {"detail": "flow", "flow_min": 4.0, "flow_max": 4.0},
+            ValueError,
+            r"flow_max: expected a value > 4",
+        ),
         ({"detail": "highlight", "s": 0.5}, ValueError, r"s: expected a value >= 1, got 0.5"),
         ({"detail": "orientation", "r": -1}, ValueError, r"r: expected a value >= 0, got -1.0"),
         ({"detail": "map"}, ValueError, r"detail_map: detail='map' needs"),

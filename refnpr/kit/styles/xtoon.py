@@ -3,21 +3,18 @@
 Every parameter is resolved by the style's own code: the 2D toon texture (preset, recipe, image
 or array) is :attr:`XToonStyle.texture`, exported as the texture ``toon``; the frame-dependent
 defaults of the attribute map (z_min, r, and z_c of the focus map) come from
-:func:`refnpr.styles.xtoon.detail.resolve_frame` for the case's camera; the abstracted normals of
+:func:`refnpr.styles.xtoon.detail.style_record` for the case's camera; the abstracted normals of
 the shape (smoothed, ellipsoid, cylinder, sphere) from the style's own evaluation path
 (:func:`refnpr.styles.xtoon.evaluation._abstract`), exported per vertex as ``_ABSTRACT_NORMAL``.
 
-Params layout (``case.json`` ``style.params``)::
-
-    texture ("toon", the role), texture_spec (what the scene file said, for reference),
-    detail, detail_mode, distance, show, tone, light (index into case.lights), z_min, r,
-    z_focus, focus_point, s, one_sided, prev_camera ({eye, target, up, fov_y, near, far,
-    view_matrix, projection_matrix} or null), flow_min, flow_max, flow_behind, tiny,
-    detail_map (role or null), shape, shape_weight ({kind: global | detail | texture | map,
-    value, texture (role), uv_scale}), shape_blend, shape_frame, shape_iterations,
-    shape_objects, modulate, abstract_normal_attribute
-
-Values a detail map does not read are null.
+Params layout (``case.json`` ``style.params``): every parameter of the style's declaration
+(:data:`refnpr.styles.xtoon.params.PARAMS`, ``Params.resolved``) in its order, null where the
+detail map does not read it, with ``texture`` the role "toon", z_min and r resolved for the
+frame, ``prev_camera`` as {eye, target, up, fov_y, near, far, view_matrix, projection_matrix},
+``detail_map`` a role, ``shape_weight`` {kind: global | detail | texture | map, value, texture
+(role), uv_scale} (and no ``prev_transforms``: a kit moves cameras, not objects); then
+texture_spec (what the scene file said, for reference), z_focus,
+flow_behind, tiny and abstract_normal_attribute.
 """
 
 from __future__ import annotations
@@ -176,6 +173,7 @@ def export(
     """
     from refnpr.styles.xtoon.detail import FLOW_BEHIND, TINY, style_record
     from refnpr.styles.xtoon.evaluation import _abstract, plan
+    from refnpr.styles.xtoon.params import PARAMS
     from refnpr.styles.xtoon.shape import unit_rows
 
     style = _unwrap(style)
@@ -211,7 +209,6 @@ def export(
         used_for="X-Toon 2D toon texture, bilinear clamp-to-edge lookup at (tone, D)",
     )
     kind = p.detail
-    uses_z = kind in ("depth", "focus")
     detail_map = None
     if kind == "map":
         textures["detail_map"] = write_texture_levels(
@@ -227,36 +224,21 @@ def export(
         )
         detail_map = "detail_map"
     shaped = p.shape is not None
-    params: dict[str, Any] = {
-        "texture": "toon",
-        "texture_spec": _texture_spec(style),
-        "detail": kind,
-        "detail_mode": p.detail_mode,
-        "distance": p.distance if uses_z else None,
-        "show": p.show,
-        "tone": p.tone,
-        "light": int(p.light),
-        "z_min": float(record.z_min) if uses_z else None,
-        "r": float(record.r) if kind in ("depth", "focus", "orientation") else None,
-        "z_focus": float(record.focus[0]) if kind == "focus" else None,
-        "focus_point": list(p.focus_point) if kind == "focus" else None,
-        "s": float(p.s) if kind == "highlight" else None,
-        "one_sided": bool(p.one_sided),
-        "prev_camera": (_camera_table(prev_camera, width, height) if kind == "flow" else None),
-        "flow_min": float(p.flow_min) if kind == "flow" else None,
-        "flow_max": float(p.flow_max) if kind == "flow" else None,
-        "flow_behind": float(FLOW_BEHIND),
-        "tiny": float(TINY),
-        "detail_map": detail_map,
-        "shape": style.params().get("shape") if shaped else None,
-        "shape_weight": _weight(cfg, case_dir, textures) if shaped else None,
-        "shape_blend": p.shape_blend if shaped else None,
-        "shape_frame": p.shape_frame if shaped else None,
-        "shape_iterations": int(p.shape_iterations) if shaped else None,
-        "shape_objects": list(p.shape_objects) if p.shape_objects is not None else None,
-        "modulate": bool(p.modulate),
-        "abstract_normal_attribute": "_" + ABSTRACT_NORMAL.upper() if shaped else None,
-    }
+    params = PARAMS.resolved(  # every parameter, None where the detail map does not read it
+        p,
+        texture="toon",
+        z_min=float(record.z_min),
+        r=float(record.r),
+        prev_camera=_camera_table(prev_camera, width, height),
+        detail_map=detail_map,
+        shape_weight=_weight(cfg, case_dir, textures) if shaped else None,
+        texture_spec=_texture_spec(style),
+        z_focus=float(record.focus[0]) if kind == "focus" else None,
+        flow_behind=float(FLOW_BEHIND),
+        tiny=float(TINY),
+        abstract_normal_attribute="_" + ABSTRACT_NORMAL.upper() if shaped else None,
+    )
+    del params["prev_transforms"]  # the kit has no object transforms per frame (checked above)
     vertex_attributes: dict[int, dict[str, np.ndarray]] = {}
     if shaped:
         parts = _abstract(cfg, scene)

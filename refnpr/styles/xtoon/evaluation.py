@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.formulas import xtoon
 from refnpr.device.lights import LIGHT_POINT, light_dir, lights_record
+from refnpr.formulas import xtoon
 from refnpr.formulas._face import elementwise
 from refnpr.texture import sample_level
 

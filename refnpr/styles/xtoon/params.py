@@ -262,68 +262,236 @@ def _texture_label(spec: Any) -> Any:
 
 from refnpr.styles._declare import NOT_NONE, Param, Params  # noqa: E402  (below its parsers)
 
+_SHAPED = {"shape": NOT_NONE}
+
 PARAMS = Params(
     "xtoon",
     Param(
-        "texture", "loa_blur", "2D toon texture (rows grow with D, columns with tone): a preset, "
-        "an image path, {image, flip, srgb}, {recipe, ramp, ...} or an array", kind="any",
+        "texture",
+        "loa_blur",
+        "2D toon texture, rows growing with D and columns with tone: a "
+        "preset name, an image path, {preset}, {image, flip, srgb}, {recipe, ramp, ...}, or an "
+        "array (rows, cols[, C]) of linear values in [0, 1] (C = 1 grey, 2 grey + alpha, 3 RGB, "
+        "4 RGBA)",
+        kind="any",
         summary=_texture_label,
+        accepts="str, table or array",
     ),
-    Param("detail", "depth", "attribute map giving D (secs. 3.1, 3.2, 5)", kind="choice",
-          choices=DETAILS),
-    Param("detail_mode", "pixel", "evaluate D per sample, or per vertex and interpolate "
-          "(the paper's vertex shader)", kind="choice", choices=("pixel", "vertex")),
-    Param("distance", None, "depth of depth and focus maps (Fig. 2): view axis or eye; none: "
-          "the paper's (axis for depth, eye for focus)", kind="choice", choices=DISTANCES,
-          optional=True, used_when={"detail": ("depth", "focus")}),
-    Param("show", "color", "the toon texture, or D, 1 - D or the tone as grey (Figs. 3, 4)",
-          kind="choice", choices=SHOWS),
-    Param("tone", "clamped", "tone = clip(n.l, 0, 1) (sec. 3), or (n.l + 1) / 2",
-          kind="choice", choices=("clamped", "half_lambert")),
-    Param("light", 0, "index of the scene light giving l", kind="int", lo=0,
-          hint="it indexes the scene's lights"),
-    Param("z_min", None, "depth: distance where detail starts to fall (none: nearest depth of "
-          "the scene box); focus: half-width of the sharp region (none: 0.1 z_c)", lo=0.0,
-          lo_open=True, unit="world units", optional=True,
-          used_when={"detail": ("depth", "focus")},
-          hint="z_min is a distance (X-Toon sec. 3.1); give a positive value"),
-    Param("r", None, "depth/focus: z_max / z_min, > 1 (none: the scene box's depth range / "
-          "4); orientation: the exponent of |n.v|^r, >= 0 (none: 1)", optional=True,
-          used_when={"detail": ("depth", "focus", "orientation")}),
-    Param("focus_point", None, "world position of the focus point c (focus)", kind="any",
-          parse=lambda name, v: vec3(name, v), unit="world units",
-          used_when={"detail": ("focus",)}),
-    Param("s", 16.0, "shininess of the highlight map |v.r|^s (sec. 3.2)", lo=1.0,
-          hint="X-Toon sec. 3.2 takes a shininess s >= 1"),
-    Param("one_sided", False, "highlight with max(v.r, 0)^s instead of the paper's |v.r|^s",
-          kind="bool"),
-    Param("prev_camera", None, "the previous frame's camera (flow; none: the current one, or "
-          "the previous frame's in a sequence)", kind="any", parse=camera_spec,
-          summary=camera_table, used_when=_FLOW),
-    Param("prev_transforms", None, "the previous frame's object transforms, one 4x4 per "
-          "object (flow)", kind="any", parse=transforms_spec,
-          summary=lambda a: a.tolist(), used_when=_FLOW),
-    Param("flow_min", 0.0, "flow length where D starts to fall (sec. 5)", lo=0.0, unit="px",
-          hint="a flow length in pixels"),
-    Param("flow_max", 16.0, "flow length where D reaches 0 (sec. 5)", unit="px"),
-    Param("detail_map", None, "per-pixel (H, W) or per-sample map of D in [0, 1], or a grey "
-          "image path (map)", kind="any", parse=unit_map,
-          summary=lambda a: f"array{a.shape}", used_when={"detail": ("map",)}),
-    Param("shape", None, "abstracted shape of sec. 4: smoothed, ellipsoid, cylinder, sphere, "
-          "an AbstractedNormals or a callable", kind="any", parse=_shape, summary=_shape_label),
-    Param("shape_weight", 1.0, "blend weight towards the abstracted normals: a number in "
-          "[0, 1], 'detail' (1 - D), {texture, uv_scale} or an array", kind="any",
-          parse=lambda name, v: weight_spec(v), summary=lambda w: w.summary),
-    Param("shape_blend", "vertex", "blend per vertex and renormalize per pixel (the paper's), "
-          "or per pixel", kind="choice", choices=("vertex", "pixel")),
-    Param("shape_frame", "pca", "frame of the ellipsoid and cylinder shapes",
-          kind="choice", choices=("pca", "aabb")),
-    Param("shape_iterations", 10, "smoothing iterations of the smoothed shape", kind="int",
-          lo=0, hi=10_000, hint="a few tens of iterations already give a smooth field"),
-    Param("shape_objects", None, "names of the objects to abstract (none: all)", kind="any",
-          parse=_object_names, used_when={"shape": NOT_NONE}),
-    Param("modulate", False, "multiply the texture colour by each object's diffuse colour",
-          kind="bool"),
+    Param(
+        "detail",
+        "depth",
+        "the attribute map giving D: depth, focus (sec. 3.1), "
+        "orientation, highlight (sec. 3.2), flow (sec. 5), a user map, or none (D = 1)",
+        kind="choice",
+        choices=DETAILS,
+    ),
+    Param(
+        "detail_mode",
+        "pixel",
+        "pixel: D evaluated per sample from interpolated quantities "
+        "(exact); vertex: per vertex and interpolated perspective-correctly (the paper's "
+        "vertex shader; for flow the displacement vector)",
+        kind="choice",
+        choices=("pixel", "vertex"),
+    ),
+    Param(
+        "distance",
+        None,
+        "the depth of the depth and focus maps: axis, the view-axis "
+        "distance (Fig. 2b), or eye, the distance to the eye (Fig. 2a); none: the paper's "
+        "(axis for depth, eye for focus)",
+        kind="choice",
+        choices=DISTANCES,
+        optional=True,
+        used_when={"detail": ("depth", "focus")},
+    ),
+    Param(
+        "show",
+        "color",
+        "color: the toon texture; detail, inverse_detail, tone: D, 1 - D "
+        "or the tone as opaque grey whose displayed (sRGB) value is that quantity (the "
+        "attribute maps of Figs. 3, 4)",
+        kind="choice",
+        choices=SHOWS,
+    ),
+    Param(
+        "tone",
+        "clamped",
+        "the tone coordinate: clip(n.l, 0, 1) (sec. 3) or half_lambert (n.l + 1) / 2",
+        kind="choice",
+        choices=("clamped", "half_lambert"),
+    ),
+    Param(
+        "light",
+        0,
+        "index of the scene light giving l",
+        kind="int",
+        lo=0,
+        hint="it indexes the scene's lights",
+    ),
+    Param(
+        "z_min",
+        None,
+        "depth: where D starts to fall (none: the nearest depth of the "
+        "scene's bounding box, at least near); focus: half-width of the sharp region (none: "
+        "0.1 z_c)",
+        lo=0.0,
+        lo_open=True,
+        unit="world units",
+        optional=True,
+        used_when={"detail": ("depth", "focus")},
+        hint="z_min is a distance (X-Toon sec. 3.1); give a positive value",
+    ),
+    Param(
+        "r",
+        None,
+        "depth, focus: z_max / z_min > 1, coarsest detail at r z_min (none: the "
+        "scene box's far / near depth for depth, 4 for focus); orientation: the exponent of "
+        "|n.v|^r, >= 0 (none: 1)",
+        optional=True,
+        used_when={"detail": ("depth", "focus", "orientation")},
+    ),
+    Param(
+        "focus_point",
+        None,
+        "world position [x, y, z] of the focus point c (focus), in front "
+        "of the camera with z_c - r z_min > 0",
+        kind="any",
+        parse=lambda name, v: vec3(name, v),
+        unit="world units",
+        accepts="3 floats",
+        used_when={"detail": ("focus",)},
+    ),
+    Param(
+        "s",
+        16.0,
+        "shininess of the highlight map |v.r|^s (sec. 3.2)",
+        lo=1.0,
+        hint="X-Toon sec. 3.2 takes a shininess s >= 1",
+        used_when={"detail": ("highlight",)},
+    ),
+    Param(
+        "one_sided",
+        False,
+        "highlight with max(v.r, 0)^s instead of the paper's |v.r|^s, "
+        "which also lights v.r near -1",
+        kind="bool",
+    ),
+    Param(
+        "prev_camera",
+        None,
+        "the previous frame's camera (flow): a Camera or {eye, target, "
+        "up, fov_y, near, far}; none: the current camera (a still is frame 0), or in a "
+        "sequence the previous frame's",
+        kind="any",
+        parse=camera_spec,
+        accepts="Camera or table",
+        summary=camera_table,
+        used_when=_FLOW,
+    ),
+    Param(
+        "prev_transforms",
+        None,
+        "the previous frame's object-to-world matrices, one 4x4 per "
+        "scene object (flow with moving objects); in a sequence the previous frame's",
+        kind="any",
+        parse=transforms_spec,
+        accepts="(M, 4, 4) floats",
+        summary=lambda a: a.tolist(),
+        used_when=_FLOW,
+    ),
+    Param(
+        "flow_min",
+        0.0,
+        "flow length where D starts to fall (sec. 5)",
+        lo=0.0,
+        unit="px",
+        hint="a flow length in pixels",
+        used_when=_FLOW,
+    ),
+    Param(
+        "flow_max",
+        16.0,
+        "flow length where D reaches 0 (sec. 5), > flow_min",
+        unit="px",
+        used_when=_FLOW,
+    ),
+    Param(
+        "detail_map",
+        None,
+        "D per pixel (H, W), repeated over the samples, or per sample "
+        "(nH, nW), values in [0, 1], or a grey image path (map)",
+        kind="any",
+        parse=unit_map,
+        summary=lambda a: f"array{a.shape}",
+        accepts="array or path",
+        used_when={"detail": ("map",)},
+    ),
+    Param(
+        "shape",
+        None,
+        "the abstracted shape of sec. 4: smoothed, ellipsoid, cylinder, "
+        "sphere, an AbstractedNormals (precomputed) or a callable mesh -> (N, 3) normals",
+        kind="any",
+        parse=_shape,
+        summary=_shape_label,
+        accepts="str, object or callable",
+    ),
+    Param(
+        "shape_weight",
+        1.0,
+        "weight of the abstracted normals: a number in [0, 1]; detail "
+        "(w = 1 - D of the same map, with the mesh normals); {texture, uv_scale} (a grey "
+        "texture at uv, per pixel); or an (H, W) array",
+        kind="any",
+        parse=lambda name, v: weight_spec(v),
+        summary=lambda w: w.summary,
+        accepts="float, str, table or array",
+        used_when=_SHAPED,
+    ),
+    Param(
+        "shape_blend",
+        "vertex",
+        "vertex: (1 - w) n + w n_abstract per vertex, interpolated, "
+        "renormalized per pixel (the paper's); pixel: both normals interpolated and "
+        "renormalized, then blended (blend_normals)",
+        kind="choice",
+        choices=("vertex", "pixel"),
+        used_when=_SHAPED,
+    ),
+    Param(
+        "shape_frame",
+        "pca",
+        "box frame of the ellipsoid, cylinder and sphere shapes",
+        kind="choice",
+        choices=("pca", "aabb"),
+        used_when=_SHAPED,
+    ),
+    Param(
+        "shape_iterations",
+        10,
+        "neighbour-averaging iterations of the smoothed shape",
+        kind="int",
+        lo=0,
+        hi=10_000,
+        hint="a few tens of iterations already give a smooth field",
+        used_when=_SHAPED,
+    ),
+    Param(
+        "shape_objects",
+        None,
+        "names of the objects to abstract (none: all)",
+        kind="any",
+        parse=_object_names,
+        used_when=_SHAPED,
+        accepts="list of str",
+    ),
+    Param(
+        "modulate",
+        False,
+        "multiply the texture colour by each object's diffuse colour",
+        kind="bool",
+    ),
     frame=("log_r", "focus", "rows", "cols"),
     module=__name__,
 )

@@ -14,7 +14,7 @@ from ..base import ShadeContext, Style, register
 from .detail import DEFAULT_DISTANCE
 from .evaluation import Config, evaluate, plan, vertex_values
 from .geometry import VertexGeometry
-from .params import PARAMS, SHOWS, camera_table
+from .params import PARAMS, SHOWS
 from .shading import shade_rgba
 from .texture import resolve_texture
 
@@ -33,7 +33,9 @@ def _checked(p: Any) -> Any:
         if p.detail in ("depth", "focus"):
             rng = Param("r", None, "", lo=1.0, lo_open=True, hint=_R_HINT + "; use r > 1, e.g. 4")
         else:
-            rng = Param("r", None, "", lo=0.0, hint="the near-silhouette exponent of |n.v|^r is >= 0")
+            rng = Param(
+                "r", None, "", lo=0.0, hint="the near-silhouette exponent of |n.v|^r is >= 0"
+            )
         rng.check(p.r)
     if p.detail == "focus" and p.focus_point is None:
         raise ValueError("focus_point: detail='focus' needs the focus point [x, y, z]")
