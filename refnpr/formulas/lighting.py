@@ -21,15 +21,23 @@ a few constant runs gives hard-edged n-tone shading: ``toon_ramp_texture`` build
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ._shading_checks import broadcast, check_range, real, trailing, unit_vectors
+from refnpr._jit import njit
+from refnpr.device.vectors import dot, reflect, unit_scaled
+
+from ._face import elementwise, face
+from ._shading_checks import broadcast, check_range, real, trailing
 from ._validate import check_int, check_scalar, describe, result_dtype
 
 __all__ = [
     "ambient",
     "diffuse",
+    "specular_base",
     "specular",
+    "illumination_term",
     "illumination",
     "toon_ramp_texture",
     "toon_ramp",
@@ -42,20 +50,24 @@ _MODELS = ("blinn-phong", "phong")
 LUMA_709 = (0.2126, 0.7152, 0.0722)
 
 
-def _vectors(dtype: np.dtype, normalize: bool, **named) -> list[np.ndarray]:
+def _vectors(dtype: np.dtype, **named) -> list[tuple[np.ndarray, ...]]:
+    """Each named (..., 3) array, checked and broadcast together, as a vector argument of
+    ``elementwise`` (a tuple of its three components)."""
     out = []
     for name, value in named.items():
         arr = real(name, value, dtype)
         trailing(name, arr, 3, "a 3-vector per element")
-        out.append(unit_vectors(arr) if normalize else arr)
-    broadcast(**dict(zip(named, out, strict=True)))
-    return out
+        out.append(arr)
+    broadcast(**{k: a[..., 0] for k, a in zip(named, out, strict=True)})
+    return [(a[..., 0], a[..., 1], a[..., 2]) for a in out]
 
 
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.sum(a * b, axis=-1)
+@njit
+def _ambient(m_a, l_a):
+    return m_a * l_a  # eq. 1: m_a l_a
 
 
+@face(_ambient)
 def ambient(m_a, l_a) -> np.ndarray:
     """Ambient term of Veryovka eq. 1: ``m_a * l_a``.
 
@@ -72,11 +84,26 @@ def ambient(m_a, l_a) -> np.ndarray:
     m_a = real("m_a", m_a, dt)
     l_a = real("l_a", l_a, dt)
     broadcast(m_a=m_a, l_a=l_a)
-    return np.asarray(m_a * l_a, dtype=dt)  # eq. 1
+    return elementwise(ambient.scalar, dt, m_a, l_a)
 
 
+@njit
+def _diffuse(n, l, normalize):
+    if normalize:
+        n = unit_scaled(n)
+        l = unit_scaled(l)
+    d = dot(n, l)
+    f_d = d if d >= 0.0 else 0.0  # eq. 1: f_d = max(N.L, 0)
+    if normalize and f_d > 1.0:
+        f_d = 1.0  # unit vectors: N.L <= 1 up to rounding
+    return f_d
+
+
+@face(_diffuse)
 def diffuse(normal, light, *, normalize: bool = True) -> np.ndarray:
     """Diffuse (Lambert) term of Veryovka eq. 1: ``f_d(N, L) = max(N.L, 0)``.
+
+    ``diffuse.scalar(n, l, normalize)`` is the device function (vectors as 3-tuples).
 
     Parameters
     ----------
@@ -85,20 +112,61 @@ def diffuse(normal, light, *, normalize: bool = True) -> np.ndarray:
     light : (..., 3) array
         Directions from the surface towards the light, L; broadcasts against ``normal``.
     normalize : bool, keyword-only
-        Normalize N and L first (zero vectors give 0).
+        Normalize N and L first (scaled by their largest component, so no overflow; zero
+        vectors give 0) and clamp to 1 (the rounding of unit vectors).
 
     Returns
     -------
     (...) ndarray in [0, 1], float64 (float32 if the inputs are float32)
     """
     dt = result_dtype(normal, light)
-    n, l = _vectors(dt, normalize, normal=normal, light=light)
-    f_d = np.maximum(_dot(n, l), 0)  # eq. 1: f_d
+    n, l = _vectors(dt, normal=normal, light=light)
+    return elementwise(diffuse.scalar, dt, n, l, bool(normalize))
+
+
+@njit
+def _specular_base(n, l, v, phong, normalize):
     if normalize:
-        f_d = np.minimum(f_d, 1)  # unit vectors: N.L <= 1 up to rounding
-    return np.asarray(f_d, dtype=dt)
+        n = unit_scaled(n)
+        l = unit_scaled(l)
+        v = unit_scaled(v)
+    if phong:  # R = 2 (N.L) N - L
+        b = dot(reflect(l, n, dot(n, l)), v)
+    else:  # H = normalize(L + V)
+        b = dot(n, unit_scaled((l[0] + v[0], l[1] + v[1], l[2] + v[2])))
+    b = b if b >= 0.0 else 0.0
+    if normalize and b > 1.0:
+        b = 1.0
+    return b
 
 
+@face(_specular_base)
+def specular_base(normal, light, view, *, model: str = "blinn-phong", normalize: bool = True):
+    """The base of the specular term of Veryovka eq. 1, raised to the shininess by
+    :func:`specular`: ``max(N.H, 0)`` with H = normalize(L + V) (Blinn-Phong) or ``max(R.V,
+    0)`` with R = 2 (N.L) N - L (Phong); clamped to 1 when the vectors are normalized.
+
+    ``specular_base.scalar(n, l, v, phong, normalize)`` is the device function.
+
+    Parameters and returns as :func:`specular`.
+    """
+    if model not in _MODELS:
+        raise ValueError(f"model: expected one of {_MODELS}, got {describe(model)}")
+    dt = result_dtype(normal, light, view)
+    n, l, v = _vectors(dt, normal=normal, light=light, view=view)
+    return elementwise(specular_base.scalar, dt, n, l, v, model == "phong", bool(normalize))
+
+
+@njit
+def _specular(n, l, v, shininess, phong, normalize):
+    base = _specular_base(n, l, v, phong, normalize)
+    if normalize:
+        n = unit_scaled(n)
+        l = unit_scaled(l)
+    return base**shininess if dot(n, l) > 0.0 else 0.0  # eq. 1: f_s, 0 where N.L <= 0
+
+
+@face(_specular)
 def specular(
     normal, light, view, *, shininess: float, model: str = "blinn-phong", normalize: bool = True
 ) -> np.ndarray:
@@ -107,6 +175,8 @@ def specular(
     ``model="blinn-phong"`` (default): ``max(N.H, 0)**shininess`` with H = normalize(L + V).
     ``model="phong"``: ``max(R.V, 0)**shininess`` with R = 2 (N.L) N - L.
     Both are 0 where N.L <= 0 (the light is behind the surface).
+
+    ``specular.scalar(n, l, v, shininess, phong, normalize)`` is the device function.
 
     Parameters
     ----------
@@ -126,17 +196,31 @@ def specular(
         raise ValueError(f"model: expected one of {_MODELS}, got {describe(model)}")
     p = check_scalar("shininess", shininess, lo=0, lo_open=True, hint="use e.g. 32.0")
     dt = result_dtype(normal, light, view)
-    n, l, v = _vectors(dt, normalize, normal=normal, light=light, view=view)
-    n_dot_l = _dot(n, l)
-    if model == "phong":
-        r = 2 * n_dot_l[..., None] * n - l
-        base = _dot(r, v)
-    else:
-        h = unit_vectors(l + v)
-        base = _dot(n, h)
-    base = np.clip(base, 0, 1) if normalize else np.maximum(base, 0)
-    f_s = np.where(n_dot_l > 0, base**p, 0)  # eq. 1: f_s
-    return np.asarray(f_s, dtype=dt)
+    n, l, v = _vectors(dt, normal=normal, light=light, view=view)
+    return elementwise(specular.scalar, dt, n, l, v, p, model == "phong", bool(normalize))
+
+
+@njit
+def _illumination_term(acc, m, f, l):
+    return acc + m * f * l  # eq. 1: one light's term, m f l, added to the sum
+
+
+@face(_illumination_term)
+def illumination_term(acc, m, f, l) -> np.ndarray:
+    """One term of the sums of Veryovka eq. 1 added to ``acc``: ``acc + m f l`` (a diffuse
+    term m_d f_d l_i, or a specular one m_s f_s l_i), for one channel.
+
+    ``illumination_term.scalar(acc, m, f, l)`` is the device function; kernels add each light's
+    diffuse and then specular term, per channel, in that order.
+
+    Returns
+    -------
+    ndarray of the broadcast shape, float64 (float32 if every input is float32)
+    """
+    dt = result_dtype(acc, m, f, l)
+    arrays = {k: real(k, v, dt) for k, v in (("acc", acc), ("m", m), ("f", f), ("l", l))}
+    broadcast(**arrays)
+    return elementwise(illumination_term.scalar, dt, *arrays.values())
 
 
 def _lights(name: str, value) -> list:
@@ -213,12 +297,12 @@ def illumination(f_d, f_s=None, *, m_a=0.0, l_a=0.0, m_d=1.0, m_s=1.0, l=1.0) ->
     def lift(x: np.ndarray) -> np.ndarray:
         return x[..., None] if rgb else x
 
-    total = np.zeros(shape + ((channels,) if rgb else ()), dtype=dt)
-    total = total + m_a * l_a  # eq. 1: ambient
+    shape = shape + ((channels,) if rgb else ())
+    total = np.broadcast_to(ambient(m_a, l_a), shape).astype(np.float64)  # eq. 1: ambient
     for i in range(len(fd)):
-        total = total + m_d * lift(fd[i]) * cl[i]  # eq. 1: diffuse sum
+        total = illumination_term(total, m_d, lift(fd[i]), cl[i])  # eq. 1: diffuse sum
         if fs:
-            total = total + m_s * lift(fs[i]) * cl[i]  # eq. 1: specular sum
+            total = illumination_term(total, m_s, lift(fs[i]), cl[i])  # eq. 1: specular sum
     return np.asarray(total, dtype=dt)
 
 
@@ -259,11 +343,20 @@ def toon_ramp_texture(boundaries, tones, *, size: int = 256) -> np.ndarray:
     return tones[np.searchsorted(b, centres, side="right")]
 
 
+@njit
+def _toon_ramp(n_dot_l, k):
+    x = min(max(n_dot_l, 0.0), 1.0)  # nearest texel of clip(N.L, 0, 1), clamp-to-edge
+    j = math.floor(x * k)
+    return j if j < k - 1 else k - 1
+
+
+@face(_toon_ramp)
 def toon_ramp(n_dot_l, ramp) -> np.ndarray:
     """Lake et al. 2000 toon shading: nearest-texel lookup of ``max(N.L, 0)`` in a 1D ramp.
 
     The texture coordinate is ``x = clip(N.L, 0, 1)`` and the texel ``min(floor(x * K), K - 1)``
     (OpenGL ``GL_NEAREST`` with clamp-to-edge) for a ramp of K texels.
+    ``toon_ramp.scalar(n_dot_l, k)`` is the device function: the texel index.
 
     Parameters
     ----------
@@ -283,18 +376,23 @@ def toon_ramp(n_dot_l, ramp) -> np.ndarray:
         raise ValueError(
             f"ramp: expected a (K,) or (K, C) texture with K >= 1, got shape {ramp.shape}"
         )
-    k = ramp.shape[0]
-    x = np.clip(x, 0, 1)
-    index = np.minimum(np.floor(x * k), k - 1).astype(np.intp)
+    index = elementwise(toon_ramp.scalar, np.int64, x, ramp.shape[0])
     return np.asarray(ramp[index], dtype=dt)
 
 
+@njit
+def _luminance(r, g, b):
+    return (r * 0.2126 + g * 0.7152) + b * 0.0722  # Rec. 709, summed r, g, then b
+
+
+@face(_luminance)
 def luminance(rgb) -> np.ndarray:
     """Rec. 709 luminance ``Y = 0.2126 R + 0.7152 G + 0.0722 B`` of linear RGB, in float64.
 
     Summed r, g, then b, every time: not ``rgb @ weights``, which BLAS may fuse (FMA) or reorder
     depending on the CPU, giving other bits on other machines (and whose worker threads spin
     after a large call, taking the cores from the numba kernels that follow).
+    ``luminance.scalar(r, g, b)`` is the device function.
 
     Parameters
     ----------
@@ -310,7 +408,4 @@ def luminance(rgb) -> np.ndarray:
         raise ValueError(
             f"rgb: expected an array of shape (..., C) with C >= 3 channels, got shape {a.shape}"
         )
-    r = a[..., 0].astype(np.float64, copy=False)
-    g = a[..., 1].astype(np.float64, copy=False)
-    b = a[..., 2].astype(np.float64, copy=False)
-    return (r * LUMA_709[0] + g * LUMA_709[1]) + b * LUMA_709[2]
+    return elementwise(luminance.scalar, np.float64, a[..., 0], a[..., 1], a[..., 2])

@@ -230,12 +230,12 @@ def _step_edges(
 
     Returns ``edge_lo (O, B)``, ``edge_hi (O, B)``, ``tones (B + 1,)``, float64.
     """
-    from refnpr.formulas.threshold.lines import step_n_kernel
+    from refnpr.formulas.threshold import step_n
 
     k = np.arange(n + 2, dtype=np.float64)
     c = np.unique(np.concatenate([k / n, (k[: n + 1] + t) / n]))
     mid = np.concatenate([[-1.0], (c[:-1] + c[1:]) / 2, [2.0]])
-    tones = step_n_kernel(mid, t, n).astype(np.float64)
+    tones = step_n(mid, t, n).astype(np.float64)
     tones[0] = tones[-1] = -1.0  # below 0 (unreachable), above every breakpoint
     if t == 0.0:
         tones[1] = -1.0

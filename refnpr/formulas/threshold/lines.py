@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from refnpr._jit import njit
+
+from .._face import elementwise, face
 from .._shading_checks import (
     broadcast,
     check_positive,
@@ -35,24 +38,31 @@ __all__ = [
 # ---------------------------------------------------------------- unvalidated kernels (private)
 
 
-def step_n_kernel(x: np.ndarray, t: np.ndarray, n: int) -> np.ndarray:
-    """T_n(x, t) of eq. 4, bounded by ceil(x n) / n; no validation.
+@njit
+def _step(x, t):
+    return 1.0 if x >= t else 0.0  # eq. 3: 0 where x < t, 1 otherwise
 
-    The bound only acts where x n is an integer and t <= 0, where eq. 4 would jump a level above
-    x (x = 1 would give (n + 1) / n); with it T_n(x, t) is always floor(x n) / n or
-    ceil(x n) / n, the two levels that bracket x.
-    """
+
+@njit
+def _step_n(x, t, n):
     xn = x * n
     whole = np.floor(xn)
-    levels = whole + (xn - whole >= t)  # eq. 4: floor(x n) + T(Frac(x n), t)
-    return np.minimum(levels, np.ceil(xn)) / n  # eq. 4, divided by n
+    levels = whole + (1.0 if xn - whole >= t else 0.0)  # eq. 4: floor(x n) + T(Frac(x n), t)
+    top = np.ceil(xn)  # bounded by ceil(x n): eq. 4 jumps a level above x at t <= 0, x n whole
+    return (levels if levels <= top else top) / n  # eq. 4, divided by n
+
+
+@njit
+def step_any(x, t, n):
+    """T(x, t) (eq. 3) for n == 1, T_n(x, t) (eq. 4) otherwise (device function)."""
+    return _step(x, t) if n == 1 else _step_n(x, t, n)
 
 
 def step_kernel(x: np.ndarray, t: np.ndarray, n: int) -> np.ndarray:
-    """T(x, t) (eq. 3) for n == 1, T_n(x, t) (eq. 4) otherwise; no validation."""
-    if n == 1:
-        return (x >= t).astype(np.result_type(x, t))  # eq. 3
-    return step_n_kernel(x, t, n)
+    """:func:`step_any` over broadcast arrays, float64 (no validation)."""
+    x = np.asarray(x, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
+    return elementwise(step_any, np.float64, x, t, int(n))
 
 
 def multiscale_kernel(v: np.ndarray, t: np.ndarray, uniform: bool) -> np.ndarray:
@@ -75,8 +85,11 @@ def scale_split(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 # ---------------------------------------------------------------------------- public functions
 
 
+@face(_step)
 def step(x, t) -> np.ndarray:
     """Threshold function T(x, t) of Veryovka eq. 3: 0 where ``x < t``, 1 otherwise.
+
+    ``step.scalar(x, t)`` is the device function.
 
     Parameters
     ----------
@@ -93,16 +106,17 @@ def step(x, t) -> np.ndarray:
     x = real("x", x, dt)
     t = real("t", t, dt)
     broadcast(x=x, t=t)
-    return np.asarray(step_kernel(x, t, 1), dtype=dt)
+    return elementwise(step.scalar, dt, x, t)
 
 
+@face(_step_n)
 def step_n(x, t, n: int) -> np.ndarray:
     """n-level step function T_n(x, t) of Veryovka eq. 4: ``(floor(x n) + T(Frac(x n), t)) / n``.
 
     For x in [0, 1] the result takes the n + 1 values k / n (n + 1 discrete colours), always
     floor(x n) / n or ceil(x n) / n (refnpr bounds eq. 4 by ceil(x n) / n, which matters only
     for t = 0 at x n integer, where eq. 4 jumps a level above x); with t uniform on (0, 1) its
-    mean over t is x (tone preservation).
+    mean over t is x (tone preservation). ``step_n.scalar(x, t, n)`` is the device function.
 
     Parameters
     ----------
@@ -122,7 +136,7 @@ def step_n(x, t, n: int) -> np.ndarray:
     x = real("x", x, dt)
     t = real("t", t, dt)
     broadcast(x=x, t=t)
-    return np.asarray(step_n_kernel(x, t, n), dtype=dt)  # eq. 4
+    return elementwise(step_n.scalar, dt, x, t, n)  # eq. 4
 
 
 def dyadic_scale(d, w) -> np.ndarray:
