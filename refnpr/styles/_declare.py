@@ -229,7 +229,8 @@ class Values:
 
     def __reduce__(self) -> tuple:
         # the declaration by reference (its module's PARAMS): it holds functions and a class
-        return (_values_of, (self._params.module, self._values, self.given))
+        p = self._params
+        return (_values_of, (p.module, p.name, self._values, self.given))
 
     def __getitem__(self, name: str) -> Any:
         return self._values[name]
@@ -274,9 +275,13 @@ class Params:
         Names of the values a style adds to its record per frame (resolved defaults, frame
         constants of its formulas, packed textures), after the declared ones.
     module : str
-        The module declaring them (``__name__``), which binds them to the name ``PARAMS``: the
-        record type is bound there under its name, so that it pickles by reference (numba's
-        cache keys hold it), and parameter values pickle with a reference to ``PARAMS``.
+        The module declaring them (``__name__``), which binds them to ``name``: the record type
+        is bound there under its own name, so that it pickles by reference (numba's cache keys
+        hold it), and parameter values pickle with a reference to ``module.name``.
+    name : str
+        The module attribute holding this declaration (``PARAMS``).
+    where : str
+        How messages name the owner (default ``style 'NAME'``).
     """
 
     def __init__(
@@ -286,6 +291,8 @@ class Params:
         renamed: Mapping[str, str] | None = None,
         frame: Iterable[str] = (),
         module: str,
+        name: str = "PARAMS",
+        where: str | None = None,
     ) -> None:
         self.style = style
         self.params = tuple(params)
@@ -295,6 +302,8 @@ class Params:
         self.renamed = dict(renamed or {})
         self.frame = tuple(frame)
         self.module = module
+        self.name = name
+        self.where = f"style {style!r}" if where is None else where
         fields = [p.name for p in self.params if p.in_record] + list(self.frame)
         name = "".join(w.capitalize() for w in style.split("_")) + "Record"
         #: The style record type (a named tuple; see :meth:`record`).
@@ -328,7 +337,7 @@ class Params:
         checked by its declaration, and every given parameter that the chosen modes ignore
         (``used_when``) warned about and reset to its default.
         """
-        where = f"style {self.style!r}"
+        where = self.where
         kw = renamed_params(where, given, self.renamed)
         check_known(where, set(kw) - set(extra), self.names)
         values: dict[str, Any] = {}
@@ -443,11 +452,11 @@ class Params:
         )
 
 
-def _values_of(module: str, values: dict[str, Any], given: frozenset[str]) -> Values:
-    """Unpickle :class:`Values` against the declaration ``PARAMS`` of ``module``."""
+def _values_of(module: str, name: str, values: dict[str, Any], given: frozenset[str]) -> Values:
+    """Unpickle :class:`Values` against the declaration ``name`` of ``module``."""
     import importlib
 
-    return Values(importlib.import_module(module).PARAMS, values, given)
+    return Values(getattr(importlib.import_module(module), name), values, given)
 
 
 #: The docs hold each style's generated table between ``<!-- parameters: NAME -->`` and this.

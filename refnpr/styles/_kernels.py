@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from refnpr._jit import banded, njit
+from refnpr.device.projection import clip_of, pixel_of
 
 
 @njit
@@ -29,9 +31,12 @@ def _visible(depth, x, y, w, rel_tol):
 
 
 @njit
-def _splat_capsule(cov, ax, ay, bx, by, radius):
-    """cov = max(cov, clamp(radius + 0.5 - distance(sample centre, segment ab), 0, 1))."""
+def _splat_capsule(cov, a, b, radius):
+    """cov = max(cov, clamp(radius + 0.5 - distance(sample centre, segment ab), 0, 1)), with
+    ``a``, ``b`` the segment's ends in sample coordinates."""
     nh, nw = cov.shape
+    ax, ay = a
+    bx, by = b
     x0 = max(int(math.floor(min(ax, bx) - radius - 1.0)), 0)
     x1 = min(int(math.ceil(max(ax, bx) + radius + 1.0)), nw - 1)
     y0 = max(int(math.floor(min(ay, by) - radius - 1.0)), 0)
@@ -57,16 +62,26 @@ def _splat_capsule(cov, ax, ay, bx, by, radius):
 
 
 @njit
-def draw_edges(clip, edges, depth, nw, nh, radius, rel_tol, step, cov):
+def _vertex(positions, i):
+    return positions[i, 0], positions[i, 1], positions[i, 2]
+
+
+@njit
+def draw_edges(positions, vp, edges, depth, line, cov):
     """Anti-aliased, depth-tested edges into cov (nH, nW) (serial: deterministic max-blend).
 
-    clip (N, 4): clip coordinates of the vertices; edges (E, 2) vertex indices. Each edge is
-    clipped to the near plane (z >= -w), projected to the sample grid, walked in pieces of at
+    positions (N, 3) float64: world vertices, projected through ``vp`` (the sample grid's
+    view-projection matrix) as the rasterizer projects them (``device.projection``); edges
+    (E, 2) vertex indices; depth (nH, nW) float64; line = (radius, rel_tol, step): the capsule
+    radius in samples, the visibility test's relative depth slack, the piece length. Each edge
+    is clipped to the near plane (z >= -w), projected to the sample grid, walked in pieces of at
     most ``step`` samples, and every piece whose midpoint is visible is drawn as a capsule.
     """
+    radius, rel_tol, step = line
+    nh, nw = cov.shape
     for e in range(edges.shape[0]):
-        a = clip[edges[e, 0]]
-        b = clip[edges[e, 1]]
+        a = clip_of(vp, _vertex(positions, edges[e, 0]))
+        b = clip_of(vp, _vertex(positions, edges[e, 1]))
         da = a[2] + a[3]
         db = b[2] + b[3]
         if da < 0.0 and db < 0.0:
@@ -87,10 +102,8 @@ def draw_edges(clip, edges, depth, nw, nh, radius, rel_tol, step, cov):
         if aw <= 0.0 or bw <= 0.0:
             continue
         # sample-grid coordinates (continuous; sample s has its centre at s + 0.5)
-        sax = (ax / aw + 1.0) * 0.5 * nw
-        say = (1.0 - ay / aw) * 0.5 * nh
-        sbx = (bx / bw + 1.0) * 0.5 * nw
-        sby = (1.0 - by / bw) * 0.5 * nh
+        sax, say = pixel_of(ax, ay, aw, nw, nh)
+        sbx, sby = pixel_of(bx, by, bw, nw, nh)
         length = math.sqrt((sbx - sax) ** 2 + (sby - say) ** 2)
         if not math.isfinite(length):
             continue
@@ -109,10 +122,8 @@ def draw_edges(clip, edges, depth, nw, nh, radius, rel_tol, step, cov):
             if _visible(depth, px, py, w, rel_tol):
                 _splat_capsule(
                     cov,
-                    sax + s0 * (sbx - sax),
-                    say + s0 * (sby - say),
-                    sax + s1 * (sbx - sax),
-                    say + s1 * (sby - say),
+                    (sax + s0 * (sbx - sax), say + s0 * (sby - say)),
+                    (sax + s1 * (sbx - sax), say + s1 * (sby - say)),
                     radius,
                 )
 
@@ -137,49 +148,61 @@ def ink_over(lo, hi, rgba, cov, ink):
             rgba[j, i, 3] = a
 
 
-#: ``mode`` codes of :func:`ink_composite`: what the ink is drawn over.
+#: ``Under.mode`` codes of :func:`ink_composite`: what the ink is drawn over.
 UNDER_RGBA = 0
 UNDER_PAPER = 1
 UNDER_NONE = 2
 
 
-@banded("ink")
-def ink_composite(lo, hi, mode, under, mask, paper, ink, ink_rgb, out):
+class Under(NamedTuple):
+    """What :func:`ink_composite` draws the ink over: ``mode`` UNDER_RGBA (``rgba (nH, nW, 4)``
+    float32, a base style's RGBA), UNDER_PAPER (``paper (3,)`` float64, already clipped and
+    rounded to float32, on the samples where ``mask (nH, nW)`` bool; transparent elsewhere) or
+    UNDER_NONE (transparent; the arrays unused)."""
+
+    mode: int
+    rgba: np.ndarray
+    mask: np.ndarray
+    paper: np.ndarray
+
+
+@njit
+def _base(under, j, i):
+    """The straight-alpha base colour ``(r, g, b, a)`` under sample (j, i)."""
+    if under.mode == UNDER_RGBA:
+        rgba = under.rgba
+        return (
+            np.float64(rgba[j, i, 0]),
+            np.float64(rgba[j, i, 1]),
+            np.float64(rgba[j, i, 2]),
+            np.float64(rgba[j, i, 3]),
+        )
+    if under.mode == UNDER_PAPER and under.mask[j, i]:
+        return under.paper[0], under.paper[1], under.paper[2], 1.0
+    return 0.0, 0.0, 0.0, 0.0
+
+
+@banded("out")
+def ink_composite(lo, hi, under, ink, out):
     """Straight-alpha "over" of ink on top of a base, one pass (``tamiss.compose.composite_ink``).
 
-    mode : UNDER_RGBA (under (nH, nW, 4) float32, a base style's RGBA), UNDER_PAPER (paper (3,)
-    float64, already clipped and rounded to float32, on the samples where mask (nH, nW) bool;
-    transparent elsewhere) or UNDER_NONE (transparent; under and mask unused). ink : (nH, nW)
-    float64 coverage; ink_rgb : (1, 3) one colour or (nH * nW, 3) one per sample, float64.
-    out : (nH, nW, 4) float32. Per sample, in float64 and in the numpy expression's order:
-    a = clip(ink, 0, 1); k = a_b (1 - a); alpha = a + k; rgb = clip((ink_rgb a + rgb_b k) /
-    alpha, 0, 1), 0 where alpha = 0.
+    under : :class:`Under`; ink = (coverage, rgb): coverage (nH, nW) float64, rgb (1, 3) one
+    colour or (nH * nW, 3) one per sample, float64. out : (nH, nW, 4) float32. Per sample, in
+    float64 and in the numpy expression's order: a = clip(coverage, 0, 1); k = a_b (1 - a);
+    alpha = a + k; rgb = clip((ink_rgb a + rgb_b k) / alpha, 0, 1), 0 where alpha = 0.
     """
-    nh, nw = ink.shape
+    coverage, ink_rgb = ink
+    nw = coverage.shape[1]
     per_sample = ink_rgb.shape[0] > 1
     for j in range(lo, hi):
         for i in range(nw):
-            a = min(max(ink[j, i], 0.0), 1.0)
-            rb = 0.0
-            gb = 0.0
-            bb = 0.0
-            ab = 0.0
-            if mode == UNDER_RGBA:
-                rb = np.float64(under[j, i, 0])
-                gb = np.float64(under[j, i, 1])
-                bb = np.float64(under[j, i, 2])
-                ab = np.float64(under[j, i, 3])
-            elif mode == UNDER_PAPER and mask[j, i]:
-                rb = paper[0]
-                gb = paper[1]
-                bb = paper[2]
-                ab = 1.0
-            k = ab * (1.0 - a)
+            a = min(max(coverage[j, i], 0.0), 1.0)
+            base = _base(under, j, i)
+            k = base[3] * (1.0 - a)
             alpha = a + k
             s = j * nw + i if per_sample else 0
             for c in range(3):
-                base = rb if c == 0 else (gb if c == 1 else bb)
-                premult = ink_rgb[s, c] * a + base * k
+                premult = ink_rgb[s, c] * a + base[c] * k
                 v = premult / alpha if alpha > 0.0 else 0.0
                 out[j, i, c] = min(max(v, 0.0), 1.0)
             out[j, i, 3] = alpha

@@ -14,20 +14,19 @@ silhouette borders a farther surface or the background); ``depth_tolerance`` is 
 from __future__ import annotations
 
 import copy
-import functools
 import threading
 import weakref
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from . import _kernels as K
-from ._common import check_number
-from ._names import renamed_params, warn_deprecated
+from ._declare import Param, Params
+from ._names import warn_deprecated
 from .base import ShadeContext, Style, get_style, nested_style, register
 
-__all__ = ["EdgeTable", "ContourLayer", "Contoured", "edge_table"]
+__all__ = ["EdgeTable", "ContourLayer", "CONTOURS", "Contoured", "edge_table"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,45 +118,74 @@ def _mesh_edges(mesh: Any) -> _MeshEdges:
 _MAX_WIDTH = 256.0
 
 
-@dataclass(frozen=True)
+def _rgb(name: str, value: Any) -> tuple[float, float, float]:
+    try:
+        c = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        c = np.full(1, np.nan)
+    if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
+        raise ValueError(f"{name}: expected 3 values in [0, 1] (linear RGB), got {value!r}")
+    return (float(c[0]), float(c[1]), float(c[2]))
+
+
+#: The contour layer's parameters, each declared once (``refnpr styles contoured`` lists the
+#: wrapper's; ``docs/paper-notes.md`` and the kit describe the layer).
+CONTOURS = Params(
+    "contours",
+    Param("width", 1.5, "line width", lo=0.0, lo_open=True, hi=_MAX_WIDTH, unit="px"),
+    Param(
+        "ink",
+        (0.0, 0.0, 0.0),
+        "linear RGB of the lines (the name every style uses for its "
+        "line colour; color is its deprecated alias)",
+        kind="any",
+        parse=_rgb,
+        accepts="3 floats in [0, 1]",
+    ),
+    Param("silhouettes", True, "draw edges between a front- and a back-facing face", kind="bool"),
+    Param("boundaries", True, "draw edges with one face", kind="bool"),
+    Param(
+        "crease_angle",
+        None,
+        "draw edges whose dihedral angle exceeds this (none: no creases)",
+        lo=0.0,
+        lo_open=True,
+        hi=180.0,
+        unit="degrees",
+        optional=True,
+    ),
+    Param("depth_tolerance", 0.01, "relative depth slack of the visibility test", lo=0.0),
+    renamed={"color": "ink"},
+    module=__name__,
+    name="CONTOURS",
+    where="contours",
+)
+
+
 class ContourLayer:
-    """Parameters of the contour layer.
+    """Parameters of the contour layer (:data:`CONTOURS`: width, ink, silhouettes,
+    boundaries, crease_angle, depth_tolerance), as attributes."""
 
-    Attributes
-    ----------
-    width : float
-        Line width in pixels (> 0).
-    ink : (3,) float
-        Linear RGB of the lines (the name every style uses for its line colour; ``color`` is
-        accepted as a deprecated alias).
-    silhouettes, boundaries : bool
-    crease_angle : float or None
-        Draw edges whose dihedral angle exceeds this (degrees, in (0, 180)); None: no creases.
-    depth_tolerance : float
-        Relative depth slack of the visibility test (>= 0).
-    """
+    def __init__(self, **params: Any) -> None:
+        self.p = CONTOURS.validate(params)
 
-    width: float = 1.5
-    ink: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    silhouettes: bool = True
-    boundaries: bool = True
-    crease_angle: float | None = None
-    depth_tolerance: float = 0.01
+    def __getattr__(self, name: str) -> Any:
+        if name in CONTOURS.by_name:
+            return self.p[name]
+        raise AttributeError(name)
 
-    def __post_init__(self) -> None:
-        check_number("width", self.width, lo=0.0, lo_open=True, hi=_MAX_WIDTH)
-        try:
-            c = np.asarray(self.ink, dtype=np.float64)
-        except (TypeError, ValueError):
-            c = np.full(1, np.nan)
-        if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
-            raise ValueError(f"ink: expected 3 values in [0, 1] (linear RGB), got {self.ink!r}")
-        for flag in ("silhouettes", "boundaries"):
-            if not isinstance(getattr(self, flag), bool):
-                raise TypeError(f"{flag}: expected true or false, got {getattr(self, flag)!r}")
-        if self.crease_angle is not None:
-            check_number("crease_angle", self.crease_angle, lo=0.0, lo_open=True, hi=180.0)
-        check_number("depth_tolerance", self.depth_tolerance, lo=0.0)
+    def params(self) -> dict[str, Any]:
+        """``{name: value}`` of every parameter (tuples as lists; None kept)."""
+        return self.p.as_dict(keep_none=True)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, ContourLayer) and self.params() == other.params()
+
+    def __hash__(self) -> int:
+        return hash(repr(self))
+
+    def __repr__(self) -> str:
+        return "ContourLayer(" + ", ".join(f"{k}={v!r}" for k, v in self.params().items()) + ")"
 
     @property
     def color(self) -> tuple[float, float, float]:
@@ -166,12 +194,6 @@ class ContourLayer:
             "contours: attribute 'color' is deprecated, use 'ink' (one name across styles)"
         )
         return self.ink
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        state = dict(state)
-        if "color" in state:  # pickled before the rename
-            state.setdefault("ink", state.pop("color"))
-        self.__dict__.update(state)
 
     def selected_edges(
         self,
@@ -212,9 +234,9 @@ class ContourLayer:
             tables = [k.table for k in known]
         eye = np.asarray(ctx.scene.camera.eye, dtype=np.float64)
         depth = np.ascontiguousarray(gb["depth"], dtype=np.float64)
-        nh, nw = depth.shape
-        cov = np.zeros((nh, nw))
-        vp = gb.view_projection
+        cov = np.zeros(depth.shape)
+        vp = np.ascontiguousarray(gb.view_projection, dtype=np.float64)
+        line = (0.5 * self.width * gb.n, self.depth_tolerance, 0.5)  # radius, slack, piece
         for mesh, table, k in zip(meshes, tables, known, strict=True):
             edges = self.selected_edges(
                 table,
@@ -226,30 +248,9 @@ class ContourLayer:
             )
             if edges.size == 0:
                 continue
-            clip = np.ascontiguousarray(mesh.positions @ vp[:, :3].T + vp[:, 3])
-            K.draw_edges(
-                clip,
-                np.ascontiguousarray(edges),
-                depth,
-                nw,
-                nh,
-                0.5 * self.width * gb.n,
-                self.depth_tolerance,
-                0.5,
-                cov,
-            )
+            positions = np.ascontiguousarray(mesh.positions, dtype=np.float64)
+            K.draw_edges(positions, vp, np.ascontiguousarray(edges), depth, line, cov)
         return cov
-
-
-_layer_init = ContourLayer.__init__
-
-
-@functools.wraps(_layer_init)
-def _layer_init_renamed(self: ContourLayer, *args: Any, **params: Any) -> None:
-    _layer_init(self, *args, **renamed_params("contours", params, {"color": "ink"}))
-
-
-ContourLayer.__init__ = _layer_init_renamed  # deprecated ``color`` -> ``ink``, with a warning
 
 
 @register
@@ -272,21 +273,17 @@ class Contoured(Style):
         if contours is True:
             contours = ContourLayer()
         elif isinstance(contours, dict):
-            contours = renamed_params("contours", contours, {"color": "ink"})
-            valid = sorted(f.name for f in fields(ContourLayer))
-            unknown = sorted(set(contours) - set(valid))
-            if unknown:
-                raise ValueError(f"contours: unknown keys {unknown}; valid keys are {valid}")
             try:
                 contours = ContourLayer(**contours)
             except (TypeError, ValueError) as exc:  # name the key as the user wrote it
-                raise type(exc)(f"contours.{exc}") from None
+                msg = str(exc)
+                raise type(exc)(msg if msg.startswith("contours") else f"contours.{msg}") from None
         elif not isinstance(contours, ContourLayer):
             raise TypeError(f"contours: expected a ContourLayer, a table or True, got {contours!r}")
         self.layer = contours
         self._params = {
             "base": self.base.params() | {"name": self.base.name},
-            "contours": {f.name: getattr(contours, f.name) for f in fields(contours)},
+            "contours": contours.params(),
         }
 
     def requires(self, scene: Any) -> frozenset[str]:

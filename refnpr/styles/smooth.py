@@ -6,8 +6,10 @@ from typing import Any
 
 import numpy as np
 
-from ._common import check_choice, lit_rgba, needs_position
+from ._common import needs_position
 from .base import ShadeContext, Style, register
+from .lit.params import SMOOTH
+from .lit.shading import lit_rgba
 
 __all__ = ["SmoothStyle"]
 
@@ -16,23 +18,18 @@ __all__ = ["SmoothStyle"]
 class SmoothStyle(Style):
     """``I = m_a l_a + sum_i m_d f_d(N, L_i) l_i + sum_i m_s f_s(N, L_i, V) l_i`` (Veryovka eq. 1).
 
-    Parameters
-    ----------
-    specular : bool
-        Include the specular sum (needs the ``position`` channel for V).
-    model : {"blinn-phong", "phong"}
-        Specular model of f_s.
+    Parameters: :data:`refnpr.styles.lit.params.SMOOTH` (``refnpr styles smooth``).
     """
 
     name = "smooth"
     description = "continuous ambient + diffuse + specular shading (Veryovka eq. 1)"
+    PARAMS = SMOOTH
 
-    def __init__(self, *, specular: bool = True, model: str = "blinn-phong") -> None:
-        if not isinstance(specular, (bool, np.bool_)):  # 1 and 0 are not flags
-            raise TypeError(f"specular: expected a bool, got {specular!r}")
-        self.specular = bool(specular)
-        self.model = check_choice("model", model, ("blinn-phong", "phong"))
-        self._params = {"specular": self.specular, "model": self.model}
+    def __init__(self, **params: Any) -> None:
+        p = SMOOTH.validate(params)
+        self.p = p
+        self.specular, self.model = p.specular, p.model
+        self._params = p.as_dict()
 
     def requires(self, scene: Any) -> frozenset[str]:
         req = {"normal", "mesh_id"}
@@ -40,7 +37,5 @@ class SmoothStyle(Style):
             req.add("position")
         return frozenset(req)
 
-    def shade(self, ctx: ShadeContext) -> np.ndarray:
-        return lit_rgba(  # eq. 1 in one numba pass over the samples
-            ctx, mode="smooth", specular=self.specular, model=self.model
-        )
+    def shade(self, ctx: ShadeContext, out: np.ndarray | None = None) -> np.ndarray:
+        return lit_rgba(ctx, SMOOTH.record(self.p), smooth=True, out=out)  # eq. 1, one pass

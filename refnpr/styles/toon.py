@@ -6,10 +6,10 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.formulas import lighting
-
-from ._common import check_choice, check_count, check_number, lit_rgba, needs_position
+from ._common import needs_position
 from .base import ShadeContext, Style, register
+from .lit.params import TOON
+from .lit.shading import lit_rgba
 
 __all__ = ["ToonStyle"]
 
@@ -22,31 +22,20 @@ class ToonStyle(Style):
     T_n(f_s, t) l_i`` with the multi-tone step T_n of eq. 4 and a constant threshold t.
     ``mode="lake"`` (Lake et al. 2000): ``I = m_a l_a + sum m_d ramp(N.L) l_i`` with a hard-edged
     ramp of ``n + 1`` tones ``0, 1/n, ..., 1`` split at ``(k + t) / n`` (nearest texel lookup).
-
-    Parameters
-    ----------
-    n : int >= 1
-        Steps: the diffuse term takes the n + 1 values k / n.
-    t : float in [0, 1]
-        Threshold within each step (eq. 3's t; 0.5 is Lake's suggestion).
-    mode : {"step", "lake"}
-    specular : bool
-        Thresholded specular term ("step" mode only; needs ``position`` for V).
+    Parameters: :data:`refnpr.styles.lit.params.TOON` (``refnpr styles toon``).
     """
 
     name = "toon"
     description = "n-tone toon shading (Veryovka eqs. 2-4 step, or Lake et al. 2000 ramp)"
+    PARAMS = TOON
 
-    def __init__(
-        self, *, n: int = 2, t: float = 0.5, mode: str = "step", specular: bool = True
-    ) -> None:
-        self.n = check_count("n", n, lo=1, hi=256)
-        self.t = check_number("t", t, lo=0.0, hi=1.0)
-        self.mode = check_choice("mode", mode, ("step", "lake"))
-        if not isinstance(specular, (bool, np.bool_)):  # 1 and 0 are not flags
-            raise TypeError(f"specular: expected a bool, got {specular!r}")
-        self.specular = bool(specular) and self.mode == "step"
-        self._params = {"n": self.n, "t": self.t, "mode": self.mode, "specular": self.specular}
+    def __init__(self, **params: Any) -> None:
+        p = TOON.validate(params)
+        if p.mode != "step":
+            p = p.replace(specular=False)  # Lake's ramp has no specular term
+        self.p = p
+        self.n, self.t, self.mode, self.specular = p.n, p.t, p.mode, p.specular
+        self._params = p.as_dict()
 
     def requires(self, scene: Any) -> frozenset[str]:
         req = {"normal", "mesh_id"}
@@ -54,11 +43,6 @@ class ToonStyle(Style):
             req.add("position")
         return frozenset(req)
 
-    def shade(self, ctx: ShadeContext) -> np.ndarray:
-        ramp = None
-        if self.mode == "lake":
-            bounds = (np.arange(self.n) + self.t) / self.n
-            ramp = lighting.toon_ramp_texture(bounds, np.arange(self.n + 1) / self.n, size=1024)
-        return lit_rgba(  # eq. 2 with eq. 4's T_n, or Lake's ramp: one numba pass
-            ctx, mode=self.mode, specular=self.specular, n=self.n, t=self.t, ramp=ramp
-        )
+    def shade(self, ctx: ShadeContext, out: np.ndarray | None = None) -> np.ndarray:
+        # eq. 2 with eq. 4's T_n, or Lake's ramp: one numba pass
+        return lit_rgba(ctx, TOON.record(self.p), smooth=False, out=out)

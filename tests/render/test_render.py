@@ -73,7 +73,7 @@ def test_unknown_style_lists_available(plane_scene):
     ("params", "match"),
     [
         ({"n": 0}, r"n: expected an integer in \[1, 256\], got 0"),
-        ({"t": 1.5}, r"t: expected a value <= 1.0, got 1.5"),
+        ({"t": 1.5}, r"t: expected a value in \[0, 1\], got 1.5"),
         ({"mode": "flat"}, r"mode: expected one of \['step', 'lake'\], got 'flat'"),
     ],
 )

@@ -1,5 +1,5 @@
-"""toon and smooth shading in one numba pass (``_common.lit_rgba``) against the numpy code it
-replaced (kept here verbatim as the oracle): exact float32 equality on random G-buffers with
+"""toon and smooth shading in one numba pass (``lit.shading.lit_rgba``) against the formulas'
+numpy faces assembled in numpy (the oracle): exact float32 equality on random G-buffers with
 point and directional lights, several materials, both toon modes, both specular models, and
 the same result for 1 and 2 numba threads."""
 
@@ -14,7 +14,7 @@ import pytest
 
 from refnpr.formulas import lighting, threshold
 from refnpr.scenes.scene import Light, Material
-from refnpr.styles._common import lit_rgba, scatter_rgba, specular_field
+from refnpr.styles._common import scatter_rgba, specular_field
 from refnpr.styles.base import ShadeContext
 from refnpr.styles.smooth import SmoothStyle
 from refnpr.styles.toon import ToonStyle
@@ -203,9 +203,9 @@ def test_inconsistent_gbuffer_is_refused():
         ToonStyle().shade(ctx)
 
 
-def test_lit_rgba_checks_its_mode():
-    with pytest.raises(ValueError, match="mode: expected one of"):
-        lit_rgba(random_ctx(6, "point", shape=(3, 3)), mode="flat", specular=False)
+def test_toon_checks_its_mode():
+    with pytest.raises(ValueError, match=r"mode: expected one of \['step', 'lake'\], got 'flat'"):
+        ToonStyle(mode="flat")
 
 
 # ------------------------------------------------------------------ float64: the order of operations
@@ -266,14 +266,8 @@ def oracle_float64(style, ctx) -> np.ndarray:
 def test_kernel_float64_arithmetic_equals_the_formulas(style, lights):
     """Every float64 operation in the formulas' order: equal bits before the float32 cast."""
     ctx = random_ctx(2, lights)
-    kw = {"mode": style.mode, "n": style.n, "t": style.t} if isinstance(style, ToonStyle) else {}
-    if kw.get("mode") == "lake":
-        bounds = (np.arange(style.n) + style.t) / style.n
-        kw["ramp"] = lighting.toon_ramp_texture(bounds, np.arange(style.n + 1) / style.n, size=1024)
-    if not kw:
-        kw = {"mode": "smooth", "model": style.model}
     out = np.full(ctx.mask.shape + (4,), np.nan)
-    got = lit_rgba(ctx, specular=style.specular, out=out, **kw)
+    got = style.shade(ctx, out=out)
     assert got is out
     want = oracle_float64(style, ctx)
     bad = np.argwhere(np.any(got.view(np.uint64) != want.view(np.uint64), axis=-1))
@@ -283,14 +277,14 @@ def test_kernel_float64_arithmetic_equals_the_formulas(style, lights):
 def test_out_is_checked():
     ctx = random_ctx(7, "point", shape=(4, 5))
     with pytest.raises(ValueError, match=r"out: expected a writable C-contiguous \(4, 5, 4\)"):
-        lit_rgba(ctx, mode="smooth", specular=True, out=np.zeros((4, 5, 3), np.float32))
+        SmoothStyle().shade(ctx, out=np.zeros((4, 5, 3), np.float32))
 
 
 @pytest.mark.parametrize(("n", "t"), [(1, 0.0), (2, 0.5), (3, 0.25), (4, 1.0), (7, 0.6180339887)])
 def test_step_edges_give_the_tone_of_pow_near_every_breakpoint(n, t):
     """Where the table answers (the kernel's lookup, emulated), it equals T_n(pow(base, p))
     for bases crowding each breakpoint, each widened edge and their float neighbours."""
-    from refnpr.styles._common import _step_edges
+    from refnpr.styles.lit.shading import _step_edges
 
     shininess = np.array([40.0, 2.0, 0.5, 1.0, 7.3, 1e-3, 1e-5, 300.0])
     edge_lo, edge_hi, tones = _step_edges(shininess, n, t)
@@ -318,7 +312,7 @@ def test_step_edges_give_the_tone_of_pow_near_every_breakpoint(n, t):
 
 def test_objects_without_a_specular_colour_skip_the_term_with_the_same_bits():
     """The kernels skip m_s f_s l_i where m_s or the light's colour is zero in every channel
-    (``_shade_kernels._spec_term``): the numpy formulas add that signed zero, which changes a
+    (``lit._kernels._spec_term``): the numpy formulas add that signed zero, which changes a
     sum only where the sum is itself -0 (here from -0 ambient and diffuse colours): exact."""
     mats = (
         Material(ambient=(0.1, 0.1, 0.1), diffuse=(0.8, 0.7, 0.6), specular=(0.0, 0.0, 0.0)),

@@ -1,8 +1,8 @@
-"""Smooth shading's own kernel (``_shade_kernels.shade_smooth``): f_s = base ** k by
-multiplications for integer shininess, checked against pow. Oracles: the numpy shade() of
-tests/styles/test_shade_kernels.py and the pow kernel (``shade_lit`` in MODE_SMOOTH, itself
-checked against numpy there), exact float32 equality; the fallback to pow forced by an inflated
-error bound; 1 vs 2 numba threads."""
+"""Smooth shading's kernel (``lit._kernels.shade_smooth``): f_s = base ** k by multiplications
+for integer shininess, checked against pow. Oracles: the numpy shade() of
+tests/styles/test_shade_kernels.py and the same kernel with pow for every f_s (``pow_int=False``),
+exact float32 equality; the fallback to pow forced by an inflated error bound; 1 vs 2 numba
+threads."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ import pytest
 
 from refnpr._jit import Banded
 from refnpr.scenes.scene import Light, Material
-from refnpr.styles import _shade_kernels as K
-from refnpr.styles._common import lit_rgba
 from refnpr.styles.base import ShadeContext
+from refnpr.styles.lit import _kernels as K
+from refnpr.styles.lit.shading import lit_rgba
 from refnpr.styles.smooth import SmoothStyle
 
 from .test_shade_kernels import LIGHTS, oracle_smooth
@@ -46,48 +46,9 @@ def shiny_ctx(seed: int, lights: str, shape=(67, 91)) -> ShadeContext:
 
 
 def pow_kernel(ctx: ShadeContext, model: str) -> np.ndarray:
-    """The same frame through ``shade_lit`` (MODE_SMOOTH: libm pow for every f_s)."""
-    gb, scene = ctx.gb, ctx.scene
-    objs = scene.objects
-    table = lambda a: np.array(  # noqa: E731
-        [np.asarray(getattr(o.material, a), dtype=np.float64) for o in objs]
-    ).reshape(len(objs), -1)
-    kinds, vecs = [], []
-    for light in scene.lights:
-        if light.kind == "point":
-            kinds.append(K.LIGHT_POINT)
-            vecs.append(light.position)
-        else:
-            d = np.asarray(light.direction, dtype=np.float64)
-            kinds.append(K.LIGHT_DIRECTIONAL)
-            vecs.append(d / np.linalg.norm(d))
-    out = np.empty(gb["mesh_id"].shape + (4,), dtype=np.float32)
-    K.shade_lit(
-        gb["mesh_id"],
-        gb["mesh_id"],
-        gb["normal"],
-        gb["position"],
-        np.ascontiguousarray(table("ambient") * np.asarray(scene.ambient, float)),
-        np.ascontiguousarray(table("diffuse")),
-        np.ascontiguousarray(table("specular")),
-        np.ascontiguousarray(table("shininess").reshape(-1)),
-        np.ones((len(objs), len(kinds)), dtype=np.bool_),  # every specular term added
-        np.array(kinds, dtype=np.int64),
-        np.array(vecs, dtype=np.float64).reshape(-1, 3),
-        np.array([lt.color for lt in scene.lights], dtype=np.float64).reshape(-1, 3),
-        np.asarray(scene.camera.eye, dtype=np.float64),
-        K.MODE_SMOOTH,
-        1,
-        0.5,
-        np.zeros(1),
-        True,
-        model == "phong",
-        np.zeros((1, 0)),
-        np.zeros((1, 0)),
-        np.zeros(1),
-        out,
-    )
-    return out
+    """The same frame with libm's pow for every f_s."""
+    style = SmoothStyle(model=model)
+    return lit_rgba(ctx, style.PARAMS.record(style.p), smooth=True, pow_int=False)
 
 
 def same_bits(a: np.ndarray, b: np.ndarray) -> None:
@@ -109,7 +70,7 @@ def test_fallback_to_pow_when_in_doubt():
     """An error bound inflated 1e12 times sends most samples back to pow: still exact."""
     ctx = shiny_ctx(2, "mixed")
     want = pow_kernel(ctx, "blinn-phong")
-    got = lit_rgba(ctx, mode="smooth", specular=True)
+    got = SmoothStyle().shade(ctx)
     same_bits(got, want)
     real = K._POW_REL
     try:  # module constants are frozen into the compiled kernel: rebuild it uncached
@@ -117,7 +78,7 @@ def test_fallback_to_pow_when_in_doubt():
         body = numba.njit(error_model="numpy", nogil=True)(K.shade_smooth.py_func)
         inflated = Banded(body, K.shade_smooth.count)
         saved, K.shade_smooth = K.shade_smooth, inflated
-        same_bits(lit_rgba(ctx, mode="smooth", specular=True), want)
+        same_bits(SmoothStyle().shade(ctx), want)
     finally:
         K._POW_REL = real
         K.shade_smooth = saved
@@ -141,7 +102,7 @@ def test_float64_out_uses_pow():
     float64 values, which the float32 path rounds."""
     ctx = shiny_ctx(4, "directional", shape=(9, 11))
     out = np.empty((9, 11, 4))
-    lit_rgba(ctx, mode="smooth", specular=True, out=out)
+    SmoothStyle().shade(ctx, out=out)
     same_bits(out.astype(np.float32), pow_kernel(ctx, "blinn-phong"))
 
 

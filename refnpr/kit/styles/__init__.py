@@ -16,7 +16,6 @@ the base style's name.
 from __future__ import annotations
 
 import importlib
-from dataclasses import fields
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -60,9 +59,7 @@ def _export_contours(layer: Any, scene: Any, case_dir: Path, **size: int) -> Sty
     mod = _contours_module()
     if mod is not None and hasattr(mod, "export_contours"):
         return mod.export_contours(layer, scene, case_dir, **size)
-    params = {
-        f.name: jsonable(getattr(layer, f.name), where=f"contours.{f.name}") for f in fields(layer)
-    }
+    params = {k: jsonable(v, where=f"contours.{k}") for k, v in layer.params().items()}
     return StyleExport(params=params)
 
 

@@ -12,7 +12,6 @@ themselves are derived by the backend from the meshes (``derived["contour_edges"
 from __future__ import annotations
 
 import math
-from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -78,9 +77,7 @@ def export_contours(
         ``params``: every layer field plus ``radius_samples`` and ``piece_samples``.
     """
     n = math.isqrt(int(spp))
-    params = {f.name: getattr(layer, f.name) for f in fields(layer)}
-    params["ink"] = [float(c) for c in layer.ink]
-    params["crease_angle"] = None if layer.crease_angle is None else float(layer.crease_angle)
+    params = layer.p._params.resolved(layer.p)  # every parameter of the layer's declaration
     params["radius_samples"] = 0.5 * float(layer.width) * n
     params["piece_samples"] = PIECE_SAMPLES
     return StyleExport(params=jsonable(params, where="contours params"), derived=dict(DERIVED))

@@ -50,7 +50,7 @@ def export(
     -------
     StyleExport
     """
-    params = {"specular": bool(style.specular), "model": str(style.model)}
+    params = style.PARAMS.resolved(style.p)  # every parameter of the declaration, as used
     return StyleExport(params=jsonable(params, where="smooth params"), derived=dict(DERIVED))
 
 

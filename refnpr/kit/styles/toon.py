@@ -14,8 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.formulas import lighting
-
 from .._json import jsonable
 from ..textures import write_texture_levels
 from ._export import StyleExport
@@ -42,9 +40,10 @@ DERIVED = {
 
 
 def ramp_texture(n: int, t: float, size: int = RAMP_SIZE) -> np.ndarray:
-    """The lake-mode ramp exactly as refnpr's ToonStyle builds it: (size,) float64."""
-    bounds = (np.arange(n) + t) / n
-    return lighting.toon_ramp_texture(bounds, np.arange(n + 1) / n, size=size)
+    """The lake-mode ramp the toon style samples (``refnpr.styles.lit.shading.lake_ramp``)."""
+    from refnpr.styles.lit.shading import lake_ramp
+
+    return lake_ramp(n, t, size)
 
 
 def export(
@@ -65,12 +64,8 @@ def export(
     -------
     StyleExport
     """
-    params: dict[str, Any] = {
-        "n": int(style.n),
-        "t": float(style.t),
-        "mode": str(style.mode),
-        "specular": bool(style.specular),
-    }
+    # every parameter as the style holds it (specular false in lake mode, as the style forces)
+    params = {**style.PARAMS.resolved(style.p), "specular": bool(style.specular)}
     textures = {}
     if style.mode == "lake":
         ramp = ramp_texture(style.n, style.t).astype(np.float32).reshape(1, RAMP_SIZE)

@@ -69,7 +69,7 @@ def composite_ink(
     One numba pass (``styles._kernels.ink_composite``) for float64 coverage over a float32 base;
     other dtypes take :func:`composite_ink_numpy`, the same expression in numpy (and the tests'
     oracle): the two agree bit for bit."""
-    from .._kernels import UNDER_NONE, UNDER_PAPER, UNDER_RGBA, ink_composite
+    from .._kernels import UNDER_NONE, UNDER_PAPER, UNDER_RGBA, Under, ink_composite
 
     ink = np.asarray(ink)
     shape = ink.shape
@@ -84,26 +84,22 @@ def composite_ink(
     ):
         return composite_ink_numpy(ctx, ink, ink_color, base=base, paper=paper, under=under)
     if under is not None:
-        mode, mask, paper_rgb = UNDER_RGBA, np.zeros((1, 1), dtype=np.bool_), np.zeros(3)
+        base_of = Under(
+            UNDER_RGBA, np.ascontiguousarray(under), np.zeros((1, 1), bool), np.zeros(3)
+        )
     elif paper is not None:
-        mode, mask = UNDER_PAPER, np.ascontiguousarray(ctx.mask, dtype=np.bool_)
         # as rgba_from stores it: clipped, rounded to float32
         paper_rgb = np.clip(np.asarray(paper, dtype=np.float64), 0.0, 1.0)
         paper_rgb = paper_rgb.astype(np.float32).astype(np.float64)
-        under = np.zeros((1, 1, 4), dtype=np.float32)
+        mask = np.ascontiguousarray(ctx.mask, dtype=np.bool_)
+        base_of = Under(UNDER_PAPER, np.zeros((1, 1, 4), np.float32), mask, paper_rgb)
     else:
-        mode, mask, paper_rgb = UNDER_NONE, np.zeros((1, 1), dtype=np.bool_), np.zeros(3)
-        under = np.zeros((1, 1, 4), dtype=np.float32)
+        base_of = Under(
+            UNDER_NONE, np.zeros((1, 1, 4), np.float32), np.zeros((1, 1), bool), np.zeros(3)
+        )
     out = rgba_out(ctx, shape)  # written in full by the kernel
-    ink_composite(
-        mode,
-        np.ascontiguousarray(under),
-        mask,
-        paper_rgb,
-        np.ascontiguousarray(ink),
-        np.ascontiguousarray(colors.reshape(-1, 3)),
-        out,
-    )
+    ink_rgb = np.ascontiguousarray(colors.reshape(-1, 3))
+    ink_composite(base_of, (np.ascontiguousarray(ink), ink_rgb), out)
     return out
 
 

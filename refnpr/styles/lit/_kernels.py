@@ -1,0 +1,396 @@
+"""numba kernels of toon and smooth shading (private; inputs validated by ``shading.lit_rgba``).
+
+Banded over the sample rows (a row per task, no reductions, so the result does not depend on
+the thread count): per covered sample, Veryovka eq. 1's ambient + diffuse + specular sums
+(``shade_smooth``), or their multi-tone steps of eqs. 2-4 and Lake et al.'s ramp
+(``shade_toon``), from the formulas of :mod:`refnpr.formulas.lighting` and
+:mod:`refnpr.formulas.threshold`, stored as float32 straight-alpha RGBA clipped to [0, 1].
+
+Each row first goes through branch-free passes over contiguous float64 scratch rows (V, each
+light's L, f_d and the specular base, T_n of f_d: ``_row_terms``, ``_row_step_tones``) that LLVM
+compiles to SIMD divisions, square roots and roundings; the per-sample loop then only selects
+and sums. IEEE division and square root are correctly rounded in SIMD as in scalar code, so the
+values are the same bits (tests/styles/test_shade_kernels.py checks the float64 arithmetic).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from refnpr._jit import banded, njit
+from refnpr.device.lights import LIGHT_POINT
+from refnpr.device.vectors import towards
+from refnpr.formulas.lighting import diffuse, illumination_term, specular_base, toon_ramp
+from refnpr.formulas.threshold import step_n
+
+from .params import SMOOTH, TOON
+
+_diffuse = diffuse.scalar
+_specular_base = specular_base.scalar
+_term = illumination_term.scalar
+_toon_ramp = toon_ramp.scalar
+_step_n = step_n.scalar
+
+
+class Tables(NamedTuple):
+    """What the lit kernels read beside the frame and style records.
+
+    ramp : (K,) float64, Lake's ramp (toon ``mode="lake"``), else any
+    edge_lo, edge_hi : (O, B) float64, tones : (B + 1,) float64: T_n of the specular term
+        without ``pow`` where the tone is certain (toon step with specular; see
+        ``shading._step_edges``), else any
+    spec_on : (O, L) bool, m_s and the light's colour both nonzero in some channel (else the
+        specular term, a signed zero, is skipped: ``_spec_term``)
+    pow_int : (O,) int64, the integer shininess k >= 1 whose f_s ``shade_smooth`` forms by
+        multiplications (0: pow)
+    spec_mag : (O, L) float64, 1.01 sum_c |m_s l_c|: the weight of an error in f_s
+    """
+
+    ramp: np.ndarray
+    edge_lo: np.ndarray
+    edge_hi: np.ndarray
+    tones: np.ndarray
+    spec_on: np.ndarray
+    pow_int: np.ndarray
+    spec_mag: np.ndarray
+
+
+class Row(NamedTuple):
+    """Per-row float64 scratch of the lit kernels: V, one light's L, and per light f_d, the
+    specular base and the tone of f_d, over the sample columns."""
+
+    v: np.ndarray  # (3, nW)
+    l: np.ndarray  # (3, nW)
+    f_d: np.ndarray  # (L, nW)
+    base: np.ndarray  # (L, nW)
+    tone: np.ndarray  # (L, nW)
+
+
+@njit
+def _scratch(n_lights, nw):
+    return Row(
+        np.zeros((3, nw)),
+        np.empty((3, nw)),
+        np.empty((n_lights, nw)),
+        np.zeros((n_lights, nw)),
+        np.empty((n_lights, nw)),
+    )
+
+
+@njit
+def _covered_span(cover_row):
+    """``(x0, x1)``: the row's covered samples (``cover >= 0``) lie in ``[x0, x1)``; x0 == x1
+    where the row has none. The row passes run over that span only."""
+    nw = cover_row.shape[0]
+    x0 = 0
+    while x0 < nw and cover_row[x0] < 0:
+        x0 += 1
+    x1 = nw
+    while x1 > x0 and cover_row[x1 - 1] < 0:
+        x1 -= 1
+    return x0, x1
+
+
+@njit
+def _towards_row(target, prow, o):
+    """``o[:, x] = towards(target, position[x])`` over one row span (``prow (n * 3,)``; ``o``
+    a tuple of three (n,) float64 views)."""
+    ox, oy, oz = o
+    for x in range(ox.shape[0]):
+        p = (np.float64(prow[3 * x]), np.float64(prow[3 * x + 1]), np.float64(prow[3 * x + 2]))
+        ox[x], oy[x], oz[x] = towards(target, p)
+
+
+@njit
+def _light_row(nrow, light, flags, v, l, out):
+    """One light's f_d and specular base over one row span, on 1D views (they vectorize):
+    ``light = (point, vec)``, ``flags = (specular, phong)``; ``v``, ``l`` tuples of three (n,)
+    views (V, and L where the light is a point light); ``out = (f_d, base)`` (n,) views."""
+    point, vec = light
+    specular, phong = flags
+    f_d, base = out
+    for x in range(f_d.shape[0]):
+        n = (np.float64(nrow[3 * x]), np.float64(nrow[3 * x + 1]), np.float64(nrow[3 * x + 2]))
+        lx = (l[0][x], l[1][x], l[2][x]) if point else vec
+        f_d[x] = _diffuse(n, lx, False)  # eq. 1: f_d = max(N.L, 0)
+    if not specular:
+        return
+    for x in range(f_d.shape[0]):
+        n = (np.float64(nrow[3 * x]), np.float64(nrow[3 * x + 1]), np.float64(nrow[3 * x + 2]))
+        lx = (l[0][x], l[1][x], l[2][x]) if point else vec
+        vx = (v[0][x], v[1][x], v[2][x])
+        base[x] = _specular_base(n, lx, vx, phong, False)  # max(N.H, 0) or max(R.V, 0)
+
+
+@njit(inline="always")
+def _row_terms(frame, arrays, y, flags, row):
+    """f_d and the specular base of every light at row y's covered span (returned as ``(x0,
+    x1)``, ``x0 == x1`` where the row is empty), into ``row``; ``arrays = (cover, nrm, pos)``,
+    the frame's coverage and its normals and positions as (nH, nW * 3) views. Uncovered samples
+    inside the span get values nobody reads. The passes get views of the span and loop from 0
+    (a loop from x0, a signed start, compiled without SIMD)."""
+    cover, nrm, pos = arrays
+    specular = flags[0]
+    lights = frame.lights
+    kind = lights.kind
+    vec = lights.vec
+    eye = (frame.eye[0], frame.eye[1], frame.eye[2])
+    x0, x1 = _covered_span(cover[y])
+    if x0 == x1:
+        return x0, x1
+    nrow = nrm[y, 3 * x0 : 3 * x1]
+    prow = pos[y, 3 * x0 : 3 * x1] if pos.shape[0] > y else pos[0]
+    v = (row.v[0, x0:x1], row.v[1, x0:x1], row.v[2, x0:x1])
+    l = (row.l[0, x0:x1], row.l[1, x0:x1], row.l[2, x0:x1])
+    if specular:  # V: the unit vector towards the eye
+        _towards_row(eye, prow, v)
+    for i in range(kind.shape[0]):
+        point = kind[i] == LIGHT_POINT
+        target = (vec[i, 0], vec[i, 1], vec[i, 2])
+        if point:  # L = towards(light, p)
+            _towards_row(target, prow, l)
+        out = (row.f_d[i, x0:x1], row.base[i, x0:x1])
+        _light_row(nrow, (point, target), flags, v, l, out)
+    return x0, x1
+
+
+@njit
+def _row_step_tones(f_d, t, n, tone):
+    """``tone[x] = T_n(f_d[x], t)`` (eq. 4 in eq. 2) over a row span, in a pass that vectorizes
+    (floor, ceil and the division by n as SIMD)."""
+    for x in range(f_d.shape[0]):
+        tone[x] = _step_n(f_d[x], t, n)
+
+
+@njit
+def _spec_term(nonzero, rgb):
+    """Whether the specular term must be added to the colour sums ``rgb``.
+
+    ``nonzero`` is False where, in every channel, the object's m_s or the light's colour is
+    zero (no specular colour, as the teapot's floor): then the term m_s f_s l_i is a signed zero
+    for any finite f_s (f_s <= base ** shininess with base <= 1 + 1e-6: finite below a
+    shininess of ~1e9), and adding it changes no sum unless the sum is itself zero (-0 + +0 =
+    +0), where it is added as the formula does. Skipping it gives the same bits.
+    """
+    return nonzero or rgb[0] == 0.0 or rgb[1] == 0.0 or rgb[2] == 0.0
+
+
+@njit
+def _add(rgb, m, mi, f, color, i):
+    """``rgb`` plus one light's term m f l (eq. 1), channel by channel: ``m[mi]`` the
+    object's material colour, ``color[i]`` the light's."""
+    return (
+        _term(rgb[0], m[mi, 0], f, color[i, 0]),
+        _term(rgb[1], m[mi, 1], f, color[i, 1]),
+        _term(rgb[2], m[mi, 2], f, color[i, 2]),
+    )
+
+
+@njit
+def _store(out, y, x, rgb):
+    out[y, x, 0] = min(max(rgb[0], 0.0), 1.0)
+    out[y, x, 1] = min(max(rgb[1], 0.0), 1.0)
+    out[y, x, 2] = min(max(rgb[2], 0.0), 1.0)
+    out[y, x, 3] = 1.0
+
+
+@njit
+def _clear(out, y, x):
+    for c in range(4):
+        out[y, x, c] = 0.0
+
+
+@njit
+def _grids(frame):
+    """``(cover, nrm, pos)``: the frame's coverage, and its normals and positions as
+    (nH, nW * 3) views (positions of any shape when unread)."""
+    nh, nw = frame.cover.shape
+    pos = frame.position
+    return (
+        frame.cover,
+        frame.normal.reshape(nh, nw * 3),
+        pos.reshape(pos.shape[0], pos.shape[1] * 3),
+    )
+
+
+#: Codes of the toon and smooth records (their declarations' choices).
+LAKE = TOON.code("mode", "lake")
+PHONG = SMOOTH.code("model", "phong")
+
+
+@banded("out")
+def shade_toon(lo, hi, frame, style, tables, out):
+    """Toon shading of rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` (written in full; zero where
+    empty): eq. 2 with both terms through T_n(., t, n) of eq. 4 (``style.mode`` STEP), or
+    ``m_a l_a + sum m_d ramp(N.L) l_i`` (LAKE, Lake et al. 2000, nearest texel), from the frame
+    record (cover, mesh_id, normal, position where read, eye, lights, materials), the toon
+    style record (n, t, mode, specular) and :class:`Tables`.
+
+    Specular T_n without pow: ``tables.edge_lo``, ``edge_hi (O, B)`` and ``tones (B + 1,)``: B
+    breakpoints c_j of T_n in f_s (ascending), mapped to base = f_s ** (1 / shininess) and
+    widened per object; a base in [edge_hi[j - 1], edge_lo[j]] has f_s strictly inside
+    (c_{j - 1}, c_j), far (relative 1e-11 or more) from both, so T_n(f_s) = tones[j]; elsewhere,
+    or where tones[j] < 0, pow is evaluated as the formula does.
+    """
+    mesh_id = frame.mesh_id
+    m = frame.materials
+    ambient, m_d, m_s, shininess = m.ambient, m.diffuse, m.specular, m.shininess
+    color = frame.lights.color
+    ramp, edge_lo, edge_hi, tones, spec_on = (
+        tables.ramp,
+        tables.edge_lo,
+        tables.edge_hi,
+        tables.tones,
+        tables.spec_on,
+    )
+    arrays = _grids(frame)
+    cover = arrays[0]
+    n_lights = color.shape[0]
+    nw = cover.shape[1]
+    steps = style.n
+    t = style.t
+    specular = style.specular
+    lake = style.mode == LAKE
+    k_ramp = ramp.shape[0]
+    n_edges = edge_lo.shape[1]
+    row = _scratch(n_lights, nw)
+    for y in range(lo, hi):
+        x0, x1 = _row_terms(frame, arrays, y, (specular, False), row)
+        if not lake:
+            for i in range(n_lights):
+                _row_step_tones(row.f_d[i, x0:x1], t, steps, row.tone[i, x0:x1])
+        for x in range(nw):
+            if cover[y, x] < 0:
+                _clear(out, y, x)
+                continue
+            mi = max(mesh_id[y, x], 0)
+            rgb = (ambient[mi, 0], ambient[mi, 1], ambient[mi, 2])  # eq. 1: m_a l_a
+            p = shininess[mi]
+            for i in range(n_lights):
+                f_d = row.f_d[i, x]
+                if lake:  # Lake et al.: nearest texel of clip(N.L, 0, 1)
+                    tone = ramp[_toon_ramp(f_d, k_ramp)]
+                else:
+                    tone = row.tone[i, x]  # eq. 4 in eq. 2, from _row_step_tones
+                rgb = _add(rgb, m_d, mi, tone, color, i)
+                if specular and p > 0.0 and _spec_term(spec_on[mi, i], rgb):
+                    base = row.base[i, x]  # max(N.H, 0)
+                    if f_d > 0.0:
+                        j = 0
+                        while j < n_edges and base >= edge_hi[mi, j]:
+                            j += 1
+                        if (j < n_edges and base > edge_lo[mi, j]) or tones[j] < 0.0:
+                            f_s = _step_n(base**p, t, steps)  # eq. 4 of eq. 1's f_s
+                        else:
+                            f_s = tones[j]  # the same: T_n is constant around base**p
+                    else:
+                        f_s = _step_n(0.0, t, steps)  # eq. 1: f_s = 0 where N.L <= 0
+                    rgb = _add(rgb, m_s, mi, f_s, color, i)
+            _store(out, y, x, rgb)
+
+
+#: Relative error of f_s by repeated multiplication, per unit of the exponent (u = 2^-53 with
+#: a margin; x^k by any multiplication chain is within (k - 1) u of the true power, and libm's
+#: pow within an ulp of it).
+_POW_REL = 1.2e-16
+#: Absolute error allowed on top (intermediate powers below 1e-280 may be subnormal).
+_POW_ABS = 1e-280
+#: Bound of the rounding of one float64 operation relative to the magnitudes summed (2^-52).
+_ULP = 2.3e-16
+
+
+@njit
+def _int_pow(base, k):
+    """base ** k for an integer k >= 1 by binary exponentiation (no libm pow)."""
+    result = 1.0
+    b = base
+    e = k
+    while e > 0:
+        if e & 1:
+            result = result * b
+        e = e >> 1
+        if e > 0:
+            b = b * b
+    return result
+
+
+@njit
+def _same_float32(v, e):
+    """Whether every value within ``e`` of ``v`` stores as the same clipped float32."""
+    lo = np.float32(min(max(v - e, 0.0), 1.0))
+    hi = np.float32(min(max(v + e, 0.0), 1.0))
+    return lo == hi
+
+
+@banded("out")
+def shade_smooth(lo, hi, frame, style, tables, out):
+    """Smooth shading (Veryovka eq. 1) of rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` from the
+    frame record, the smooth style record (specular, model) and :class:`Tables`, with f_s =
+    base ** shininess by multiplications where ``tables.pow_int`` holds the object's integer
+    shininess k >= 1 (0: pow). A sample whose N.L <= 0 has f_s = 0 (eq. 1) whatever the base,
+    and an object without a specular colour (``tables.spec_on``) a zero term: there the term is
+    a signed zero, added only to a zero sum (where it can turn -0 into +0, as the formula does;
+    ``_spec_term``).
+
+    Such a sample's colour carries a bound on its distance from the colour with libm's pow
+    (relative (k + 3) u on f_s, then the rounding of the operations that follow); where the
+    bound leaves the clipped float32 value in doubt the sample is shaded again with pow, so the
+    stored result is the pow one, bit for bit. ``out`` must be float32, and every material
+    and light colour non-negative (the terms summed then bound the rounding), where any k > 0.
+    """
+    mesh_id = frame.mesh_id
+    m = frame.materials
+    ambient, m_d, m_s, shininess = m.ambient, m.diffuse, m.specular, m.shininess
+    color = frame.lights.color
+    pow_int, spec_mag, spec_on = tables.pow_int, tables.spec_mag, tables.spec_on
+    arrays = _grids(frame)
+    cover = arrays[0]
+    n_lights = color.shape[0]
+    nw = cover.shape[1]
+    specular = style.specular
+    row = _scratch(n_lights, nw)
+    for y in range(lo, hi):
+        _row_terms(frame, arrays, y, (specular, style.model == PHONG), row)
+        for x in range(nw):
+            if cover[y, x] < 0:
+                _clear(out, y, x)
+                continue
+            mi = max(mesh_id[y, x], 0)
+            p = shininess[mi]
+            k = pow_int[mi]
+            while True:  # with f_s by multiplications (k > 0), then with pow if in doubt
+                rgb = (ambient[mi, 0], ambient[mi, 1], ambient[mi, 2])  # eq. 1: m_a l_a
+                err = 0.0  # bound of the pow replacement, summed over the terms
+                for i in range(n_lights):
+                    f_d = row.f_d[i, x]
+                    rgb = _add(rgb, m_d, mi, f_d, color, i)  # eq. 1: diffuse sum
+                    if not (specular and p > 0.0):
+                        continue
+                    if f_d > 0.0 and spec_on[mi, i]:
+                        base = row.base[i, x]  # max(R.V, 0) or max(N.H, 0)
+                        if k > 0:  # base ** p within e_s (checked below)
+                            f_s = _int_pow(base, k)
+                            err = err + spec_mag[mi, i] * (abs(f_s) * (k + 3) * _POW_REL + _POW_ABS)
+                        else:
+                            f_s = base**p  # eq. 1: f_s
+                        rgb = _add(rgb, m_s, mi, f_s, color, i)  # eq. 1: specular sum
+                    elif rgb[0] == 0.0 or rgb[1] == 0.0 or rgb[2] == 0.0:
+                        # f_s = 0 (eq. 1: N.L <= 0), or m_s l_i zero channel by channel: the
+                        # term is the signed zero m_s 0 l_i, which changes only a zero sum
+                        # (-0 + +0 = +0; see _spec_term); elsewhere it is skipped
+                        rgb = _add(rgb, m_s, mi, 0.0, color, i)
+                if k == 0 or err == 0.0:
+                    break
+                # and the rounding differences of the operations after a replaced pow, at most
+                # an ulp of the (non-negative) terms summed, r + g + b
+                err = err + (4 * n_lights + 4) * _ULP * (abs(rgb[0]) + abs(rgb[1]) + abs(rgb[2]))
+                if (
+                    _same_float32(rgb[0], err)
+                    and _same_float32(rgb[1], err)
+                    and _same_float32(rgb[2], err)
+                ):
+                    break
+                k = 0
+            _store(out, y, x, rgb)

@@ -1,0 +1,149 @@
+"""Toon and smooth shading of a whole frame in one numba pass (``_kernels.shade_toon``,
+``_kernels.shade_smooth``): the kernels' records and tables, built once per frame."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from refnpr.formulas import lighting
+from refnpr.formulas.threshold import step_n
+
+from .._common import rgba_out
+from .._frame import frame_record
+from . import _kernels as K
+
+__all__ = ["lit_rgba", "lake_ramp"]
+
+#: Largest integer shininess whose f_s the kernel computes by multiplications (then checked).
+_POW_INT_MAX = 1024
+#: Relative widening of the breakpoints of T_n in base space (see ``_step_edges``).
+_EDGE_MARGIN = 1e-7
+#: Below this shininess the widening is too small against pow's rounding: always pow.
+_EDGE_MIN_SHININESS = 1e-4
+
+
+def lake_ramp(n: int, t: float, size: int = 1024) -> np.ndarray:
+    """Lake et al.'s ramp of the toon style: n + 1 tones 0, 1/n, ..., 1 split at (k + t) / n,
+    ``size`` texels (``lighting.toon_ramp_texture``), float64."""
+    bounds = (np.arange(n) + t) / n
+    ramp = lighting.toon_ramp_texture(bounds, np.arange(n + 1) / n, size=size)
+    return np.ascontiguousarray(ramp, dtype=np.float64)
+
+
+def _step_edges(
+    shininess: np.ndarray, n: int, t: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where T_n(base ** p, t, n) (eq. 4 of a specular term) is known without pow.
+
+    T_n (``threshold.step_n``) is a monotone step function of f_s whose steps lie at the
+    breakpoints c = k / n and (k + t) / n; in float64 it is constant on each open interval
+    between them up to a few ulps from its ends. With b_j = c_j ** (1 / p), a base in
+    [b_{j-1} (1 + m), b_j (1 - m)] (m = 1e-7) has pow(base, p) inside (c_{j-1}, c_j) at a
+    relative distance of about p m >= 1e-11 from both ends (pow is accurate to an ulp), so its
+    tone is T_n of the interval's midpoint, ``tones[j]``. ``tones[j] = -1`` marks the intervals
+    where pow must be evaluated: the first one when t = 0 (T_n jumps at f_s = 0 and pow may
+    underflow to 0 there) and the last one (f_s above every breakpoint); objects with
+    shininess < 1e-4, or whose widened edges overlap or underflow, evaluate pow everywhere.
+
+    Returns ``edge_lo (O, B)``, ``edge_hi (O, B)``, ``tones (B + 1,)``, float64.
+    """
+    k = np.arange(n + 2, dtype=np.float64)
+    c = np.unique(np.concatenate([k / n, (k[: n + 1] + t) / n]))
+    mid = np.concatenate([[-1.0], (c[:-1] + c[1:]) / 2, [2.0]])
+    tones = step_n(mid, t, n).astype(np.float64)
+    tones[0] = tones[-1] = -1.0  # below 0 (unreachable), above every breakpoint
+    if t == 0.0:
+        tones[1] = -1.0
+    p = np.asarray(shininess, dtype=np.float64)[:, None]
+    with np.errstate(divide="ignore", over="ignore"):
+        b = c[None, :] ** (1.0 / p)
+    edge_lo = b * (1.0 - _EDGE_MARGIN)
+    edge_hi = b * (1.0 + _EDGE_MARGIN)
+    # pow everywhere for a tiny shininess, or where the widened edges overlap or underflow
+    # (b_j = 0 for j >= 1 when c_j ** (1 / p) is below the smallest float)
+    always = (p[:, 0] < _EDGE_MIN_SHININESS) | ~np.all(edge_hi[:, :-1] < edge_lo[:, 1:], axis=1)
+    edge_lo[always] = -np.inf
+    edge_hi[always] = np.inf
+    return np.ascontiguousarray(edge_lo), np.ascontiguousarray(edge_hi), tones
+
+
+def _out(ctx: Any, out: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray:
+    if out is None:
+        return rgba_out(ctx, shape)  # written in full by the kernel
+    if (
+        not isinstance(out, np.ndarray)
+        or out.shape != shape + (4,)
+        or out.dtype not in (np.float32, np.float64)
+        or not out.flags.c_contiguous
+        or not out.flags.writeable
+    ):
+        raise ValueError(
+            f"out: expected a writable C-contiguous {shape + (4,)} float32 array, got "
+            f"{type(out).__name__} {getattr(out, 'shape', '')} {getattr(out, 'dtype', '')}; "
+            "pass None for a new one"
+        )
+    return out
+
+
+def lit_rgba(
+    ctx: Any, record: Any, *, smooth: bool, pow_int: bool = True, out: np.ndarray | None = None
+) -> np.ndarray:
+    """Toon or smooth shading of every sample in one numba pass: (nH, nW, 4) float32 RGBA.
+
+    ``smooth``: Veryovka eq. 1, ``m_a l_a + sum m_d f_d l_i + sum m_s f_s l_i`` with the smooth
+    style's ``record`` (specular, model); else the toon style's ``record`` (n, t, mode,
+    specular): eq. 2 with both terms through T_n(., t, n) of eq. 4 (step), or ``m_a l_a + sum
+    m_d ramp(N.L) l_i`` (lake, Lake et al. 2000, nearest texel). f_s has each object's
+    shininess (``specular``; needs ``position``); point lights need ``position`` too. Colours
+    are clipped to [0, 1], alpha is 1 where covered (``ctx.mask``) and everything is 0
+    elsewhere.
+
+    ``pow_int``: smooth shading forms f_s of an integer shininess by multiplications, checked
+    against pow's float32 result (False: pow everywhere; a float64 ``out`` is pow too).
+    ``out``, optional: a C-contiguous (nH, nW, 4) float32 (or float64, for tests of the
+    arithmetic) array to write into and return, every element overwritten (repeated frames).
+    """
+    scene = ctx.scene
+    specular = bool(record.specular)
+    need_pos = specular or any(light.kind == "point" for light in scene.lights)
+    frame = frame_record(ctx, ("normal", "position") if need_pos else ("normal",))
+    shape = frame.cover.shape
+    out = _out(ctx, out, shape)
+    m = frame.materials
+    color = frame.lights.color
+    # the objects and lights with a specular colour (m_s and l_i both nonzero in a channel):
+    # elsewhere the kernels skip the specular term, whose value is a signed zero there
+    spec_on = np.ascontiguousarray(
+        np.any((m.specular[:, None, :] != 0.0) & (color[None, :, :] != 0.0), axis=2)
+    )
+    none = np.zeros((1, 0))
+    if smooth:
+        # f_s = base ** shininess by multiplications where the shininess is a small integer,
+        # checked against pow's float32 result in the kernel (a float64 ``out``: pow itself)
+        p = m.shininess
+        whole = (p == np.floor(p)) & (p >= 1) & (p <= _POW_INT_MAX)
+        powers = np.where(whole, p, 0).astype(np.int64)
+        terms = (m.ambient, m.diffuse, m.specular, color)
+        if (
+            not (pow_int and specular)
+            or out.dtype != np.float32
+            or any(np.any(a < 0) for a in terms)
+        ):
+            powers[:] = 0
+        spec_mag = 1.01 * np.abs(m.specular[:, None, :] * color[None, :, :]).sum(axis=2)
+        tables = K.Tables(
+            np.zeros(1), none, none, np.zeros(1), spec_on, powers, np.ascontiguousarray(spec_mag)
+        )
+        K.shade_smooth(frame, record, tables, out)
+        return out
+    ramp = lake_ramp(record.n, record.t) if record.mode == K.LAKE else np.zeros(1)
+    edge_lo, edge_hi, tones = none, none, np.zeros(1)
+    if specular and record.mode != K.LAKE:
+        edge_lo, edge_hi, tones = _step_edges(m.shininess, record.n, record.t)
+    tables = K.Tables(
+        ramp, edge_lo, edge_hi, tones, spec_on, np.zeros(1, dtype=np.int64), np.zeros((1, 1))
+    )
+    K.shade_toon(frame, record, tables, out)
+    return out
