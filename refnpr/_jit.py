@@ -35,6 +35,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import os
+import pickle
 import stat
 import tempfile
 import threading
@@ -82,6 +83,32 @@ def _locked_save(save):
 
 if fcntl is not None and not getattr(_numba_caching.IndexDataCacheFile.save, "refnpr_locked", 0):
     _numba_caching.IndexDataCacheFile.save = _locked_save(_numba_caching.IndexDataCacheFile.save)
+
+
+def _tolerant_load_index(load_index):
+    """numba's ``IndexDataCacheFile._load_index``, reading an index it cannot unpickle as
+    empty (stale): an index written by an older refnpr can name a record type that no longer
+    exists, and numba would raise instead of recompiling."""
+
+    def tolerant_load_index(self):
+        try:
+            return load_index(self)
+        except (AttributeError, ImportError, EOFError, ValueError, TypeError, IndexError) as exc:
+            if isinstance(exc, TypeError) and "pickle" not in str(exc).lower():
+                raise
+            return {}
+        except pickle.UnpicklingError:
+            return {}
+
+    tolerant_load_index.refnpr_tolerant = True
+    tolerant_load_index.__wrapped__ = load_index
+    return tolerant_load_index
+
+
+if not getattr(_numba_caching.IndexDataCacheFile._load_index, "refnpr_tolerant", 0):
+    _numba_caching.IndexDataCacheFile._load_index = _tolerant_load_index(
+        _numba_caching.IndexDataCacheFile._load_index
+    )
 
 
 def fallback_cache_dir() -> str | None:

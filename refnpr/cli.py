@@ -305,13 +305,18 @@ def _cmd_styles(args: argparse.Namespace) -> int:
         for name, desc in list_styles().items():
             print(f"{name:16s} {desc}")
         return 0
-    cls = get_style_class(args.name)
-    if cls.PARAMS is None:
-        print(f"{cls.name}: parameters {', '.join(cls.parameters())} (see its docstring)")
-        return 0
     from .styles._declare import markdown_table, text_table
+    from .styles.contours import CONTOURS
 
-    print(markdown_table(cls.PARAMS) if args.markdown else text_table(cls.PARAMS), end="")
+    if args.name == "contours":  # the contour layer any style takes (``contours = {...}``)
+        params = CONTOURS
+    else:
+        cls = get_style_class(args.name)
+        if cls.PARAMS is None:
+            print(f"{cls.name}: parameters {', '.join(cls.parameters())} (see its docstring)")
+            return 0
+        params = cls.PARAMS
+    print(markdown_table(params) if args.markdown else text_table(params), end="")
     return 0
 
 
@@ -572,7 +577,9 @@ def build_parser() -> argparse.ArgumentParser:
     st = sub.add_parser(
         "styles", help="list styles, or one style's parameters (what --param takes)"
     )
-    st.add_argument("name", nargs="?", help="a style: list its parameters")
+    st.add_argument(
+        "name", nargs="?", help="a style (or contours, the contour layer): list its parameters"
+    )
     st.add_argument("--markdown", action="store_true", help="as the table of the docs")
     st.set_defaults(func=_cmd_styles)
     sub.add_parser("info", help="versions, numba threads, cache dir").set_defaults(func=_cmd_info)

@@ -205,7 +205,7 @@ def _parallel_functions(text: str) -> set[str]:
 
 
 def test_no_kernel_uses_numba_parallel_lowering():
-    """``prange`` / ``parallel=True`` compile about twice as long (issue 11, cold start): every
+    """``prange`` / ``parallel=True`` compile about twice as long (cold start): every
     parallel kernel of the package is banded (the last, TAMISS's ``raster_strips``, since its
     banded build measured as fast: benchmarks/README.md, "Specialised kernels")."""
     seen = {}

@@ -10,9 +10,12 @@ import pytest
 
 from refnpr.styles import get_style_class, list_styles
 from refnpr.styles._declare import DOCS_MARK, markdown_table
+from refnpr.styles.contours import CONTOURS
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 DECLARED = [n for n in list_styles() if get_style_class(n).PARAMS is not None]
+#: Declarations that are not a style's (their tables are in the docs too).
+LAYERS = {"contours": CONTOURS}
 
 
 def _block(name: str) -> str | None:
@@ -38,3 +41,10 @@ def test_docs_table_is_the_declarations(name):
     assert block == markdown_table(get_style_class(name).PARAMS), (
         f"docs table of {name!r} is out of date: paste `refnpr styles {name} --markdown`"
     )
+
+
+@pytest.mark.parametrize("name", sorted(LAYERS))
+def test_docs_table_of_a_layer_is_its_declarations(name):
+    block = _block(name)
+    assert block is not None, f"no '<!-- parameters: {name} -->' table in docs/*.md"
+    assert block == markdown_table(LAYERS[name])

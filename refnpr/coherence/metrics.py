@@ -9,7 +9,7 @@ With M the valid mask of :func:`refnpr.coherence.motion_field` and ``Y_hat = war
 
 * ``warp_error`` E = sum(M |Y_t - Y_hat|) / sum(M): the temporal warping error E_warp of Lai
   et al. 2018 ("Learning Blind Video Temporal Consistency", ECCV), a masked mean over pixels of
-  the difference between a frame and its warped predecessor, here in the L1 form of issue 12 on
+  the difference between a frame and its warped predecessor, here in the L1 form on
   luminance, with the exact motion field in place of estimated optical flow and the exact
   visibility mask in place of their flow-based occlusion mask (so the values are not comparable
   with their tables, which use estimated flow on RGB);

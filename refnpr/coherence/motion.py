@@ -49,6 +49,8 @@ from typing import Any
 
 import numpy as np
 
+from refnpr.raster.projection import project_points
+
 __all__ = [
     "MOTION_CHANNELS",
     "DEPTH_RTOL",
@@ -291,12 +293,8 @@ def motion_field(
     view = cam.view_matrix()
     proj = cam.projection_matrix(width, height)
     q = p_prev @ view[:3, :3].T + view[:3, 3]  # eye space of the previous camera
-    clip = q @ proj[:3, :3].T + proj[:3, 3]
-    w = -q[:, 2]  # clip w = -z_eye (OpenGL perspective: last row (0, 0, -1, 0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x = (clip[:, 0] / w + 1.0) * 0.5 * width
-        y = (1.0 - clip[:, 1] / w) * 0.5 * height
-    xy_k = np.stack([x, y], axis=-1)
+    # pixel and clip w as the rasterizer projects a vertex (w = -z_eye: OpenGL perspective)
+    xy_k, w = project_points(p_prev, cam.view_projection(width, height), width, height)
     nearest = np.floor(xy_k) + 0.5
     snap = np.abs(xy_k - nearest) < SNAP_PX
     xy_k = np.where(snap, nearest, xy_k)

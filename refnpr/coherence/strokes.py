@@ -35,6 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from refnpr.raster.projection import project_points
+
 from ..raster import rasterize
 from ..styles import ShadeContext, style_from_spec
 from ..styles.tamiss.strokes import centreline
@@ -203,13 +205,9 @@ def carried_points(
     p_now = np.einsum("kij,kj->ki", m[:, :3, :3], p) + m[:, :3, 3]
     cam = scene.camera
     width, height = prev_gb.width, prev_gb.height
-    vp = cam.view_projection(width, height)
-    clip = p_now @ vp[:, :3].T + vp[:, 3]  # (K, 4)
-    w = clip[:, 3]
+    now, w = project_points(p_now, cam.view_projection(width, height), width, height)
     ok &= (w >= cam.near) & (w <= cam.far)
-    ws = np.where(ok, w, 1.0)
-    now = np.stack([(clip[:, 0] / ws + 1) * 0.5 * width, (1 - clip[:, 1] / ws) * 0.5 * height], -1)
-    return now, ok
+    return np.where(ok[:, None], now, 0.0), ok
 
 
 def stroke_pair_metrics(

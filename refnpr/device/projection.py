@@ -8,9 +8,11 @@ gets the rasterizer's bits. Pixel (x, y) has its centre at (x + 0.5, y + 0.5), r
 
 from __future__ import annotations
 
+import math
+
 from refnpr._jit import njit
 
-__all__ = ["clip_of", "pixel_of"]
+__all__ = ["clip_of", "pixel_of", "project"]
 
 
 @njit
@@ -31,3 +33,14 @@ def pixel_of(cx, cy, w, width, height):
     """Continuous pixel coordinates of clip ``(cx, cy, ., w)`` in a ``width x height`` image:
     ``((cx / w + 1) W / 2, (1 - cy / w) H / 2)`` (w > 0; the caller handles points behind)."""
     return (cx / w + 1.0) * (0.5 * width), (1.0 - cy / w) * (0.5 * height)
+
+
+@njit
+def project(vp, p, size):
+    """``(x, y, w_clip)`` of the world point ``p``: its continuous pixel coordinates in an
+    image of ``size = (width, height)``, NaN where it is at or behind the eye (w_clip <= 0)."""
+    c = clip_of(vp, p)
+    if c[3] > 0.0:
+        x, y = pixel_of(c[0], c[1], c[3], size[0], size[1])
+        return x, y, c[3]
+    return math.nan, math.nan, c[3]

@@ -76,19 +76,13 @@ _GRIDS = {
 }
 
 
-def _ints(name: str, arr: Any, shape: tuple[int, ...]) -> np.ndarray:
+def _grid(name: str, arr: Any, shape: tuple[int, ...], kind: str) -> np.ndarray:
+    """Channel ``name`` on the sample grid, C-contiguous: int32/int64 (``kind`` "i") or
+    float32/float64 ("f") kept, other dtypes converted to the 64-bit one."""
     arr = np.asarray(arr)
     _check_shape(name, arr, shape)
-    if arr.dtype not in (np.int32, np.int64):
-        arr = arr.astype(np.int64)
-    return np.ascontiguousarray(arr)
-
-
-def _floats(name: str, arr: Any, shape: tuple[int, ...]) -> np.ndarray:
-    arr = np.asarray(arr)
-    _check_shape(name, arr, shape)
-    if arr.dtype not in (np.float32, np.float64):
-        arr = arr.astype(np.float64)
+    if arr.dtype.kind != kind or arr.dtype.itemsize not in (4, 8):
+        arr = arr.astype(np.int64 if kind == "i" else np.float64)
     return np.ascontiguousarray(arr)
 
 
@@ -130,8 +124,8 @@ def frame_record(ctx: Any, channels: tuple[str, ...] = ()) -> Frame:
     gb, scene = ctx.gb, ctx.scene
     mesh_id = np.asarray(gb["mesh_id"])
     shape = mesh_id.shape
-    mesh_id = _ints("mesh_id", mesh_id, shape)
-    cover = _ints("tri_id", gb["tri_id"], shape) if "tri_id" in gb else mesh_id
+    mesh_id = _grid("mesh_id", mesh_id, shape, "i")
+    cover = _grid("tri_id", gb["tri_id"], shape, "i") if "tri_id" in gb else mesh_id
     objs = scene.objects
     if mesh_id.size and int(mesh_id.max()) >= len(objs):
         raise ValueError(
@@ -141,7 +135,7 @@ def frame_record(ctx: Any, channels: tuple[str, ...] = ()) -> Frame:
     grids = {}
     for name, tail in _GRIDS.items():
         if name in channels:
-            grids[name] = _floats(name, gb[name], shape + tail)
+            grids[name] = _grid(name, gb[name], shape + tail, "f")
         else:
             grids[name] = _STAND_IN[len(tail) and tail[0]]
     return Frame(

@@ -4,18 +4,15 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
-from ._common import needs_position
-from .base import ShadeContext, Style, register
+from .base import register
 from .lit.params import TOON
-from .lit.shading import lit_rgba
+from .lit.shading import LitStyle
 
 __all__ = ["ToonStyle"]
 
 
 @register
-class ToonStyle(Style):
+class ToonStyle(LitStyle):
     """Discrete-tone shading.
 
     ``mode="step"`` (Veryovka eq. 2): ``I = m_a l_a + sum m_d T_n(f_d, t) l_i + sum m_s
@@ -30,19 +27,8 @@ class ToonStyle(Style):
     PARAMS = TOON
 
     def __init__(self, **params: Any) -> None:
-        p = TOON.validate(params)
-        if p.mode != "step":
-            p = p.replace(specular=False)  # Lake's ramp has no specular term
-        self.p = p
-        self.n, self.t, self.mode, self.specular = p.n, p.t, p.mode, p.specular
-        self._params = p.as_dict()
-
-    def requires(self, scene: Any) -> frozenset[str]:
-        req = {"normal", "mesh_id"}
-        if needs_position(scene, self.specular):
-            req.add("position")
-        return frozenset(req)
-
-    def shade(self, ctx: ShadeContext, out: np.ndarray | None = None) -> np.ndarray:
-        # eq. 2 with eq. 4's T_n, or Lake's ramp: one numba pass
-        return lit_rgba(ctx, TOON.record(self.p), smooth=False, out=out)
+        super().__init__(**params)
+        if self.p.mode != "step":
+            self.p = self.p.replace(specular=False)  # Lake's ramp has no specular term
+            self._params = self.p.as_dict()
+        self.n, self.t, self.mode, self.specular = self.p.n, self.p.t, self.p.mode, self.p.specular

@@ -1,4 +1,4 @@
-"""The four built-in animated sequences stay under stated coherence bounds, per style (issue 12).
+"""The four built-in animated sequences stay under stated coherence bounds, per style.
 
 Each test renders a short range of one built-in sequence (a few frames, small size, spp 1) with
 every style of its paper's claim through :func:`refnpr.coherence.measure` and checks

@@ -1,7 +1,7 @@
 """What CI runs for the GLSL backend: the whole exported suite rendered on llvmpipe by
 ``python -m refnpr_glsl`` and judged by ``refnpr kit check`` with each case's own tolerance.
 
-Target (issue 10): at least 95% of cases pass with analytic derivatives; docs/kit.md explains every
+Target: at least 95% of cases pass with analytic derivatives; docs/kit.md explains every
 case that does not. Today every case passes, so any failure here is a regression: either fix it or
 add it to KNOWN_FAILURES with its reason and to docs/kit.md's table.
 """

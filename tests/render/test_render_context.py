@@ -14,7 +14,7 @@ from refnpr.warmup import WARM_ROWS
 
 
 def numpy_composite_resolve(rgba, n, background):
-    """The compositing and resolve render() ran before issue 11, verbatim."""
+    """The compositing and resolve of render() in numpy: the oracle of the fused kernel."""
     bg = np.asarray(background, dtype=np.float64)
     a = rgba[..., 3:4].astype(np.float64)
     premult = np.concatenate([rgba[..., :3] * a, a], axis=-1)

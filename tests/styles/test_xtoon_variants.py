@@ -1,4 +1,4 @@
-"""X-Toon golden variant pairs tell their variants apart (issue 13, defect 6).
+"""X-Toon golden variant pairs tell their variants apart.
 
 Each pair renders one configuration with two variants of a step: D per pixel or per vertex
 (depth map, Fig. 7d; optical flow, Fig. 6) and the paper's |v.r|^s or max(v.r, 0)^s (Fig. 11b).

@@ -10,11 +10,12 @@ import numpy as np
 from refnpr.formulas import lighting
 from refnpr.formulas.threshold import step_n
 
-from .._common import rgba_out
+from .._common import needs_position, rgba_out
 from .._frame import frame_record
+from ..base import ShadeContext, Style
 from . import _kernels as K
 
-__all__ = ["lit_rgba", "lake_ramp"]
+__all__ = ["lit_rgba", "lake_ramp", "LitStyle"]
 
 #: Largest integer shininess whose f_s the kernel computes by multiplications (then checked).
 _POW_INT_MAX = 1024
@@ -147,3 +148,25 @@ def lit_rgba(
     )
     K.shade_toon(frame, record, tables, out)
     return out
+
+
+class LitStyle(Style):
+    """What the toon and smooth styles share: their parameters ``self.p`` (validated by the
+    subclass's ``PARAMS``), the channels they read and one numba pass (:func:`lit_rgba`)."""
+
+    #: Smooth shading (eq. 1) rather than toon (eqs. 2-4, Lake's ramp).
+    smooth: bool = False
+
+    def __init__(self, **params: Any) -> None:
+        self.p = self.PARAMS.validate(params)
+        self._params = self.p.as_dict()
+
+    def requires(self, scene: Any) -> frozenset[str]:
+        req = {"normal", "mesh_id"}
+        if needs_position(scene, self.p.specular):
+            req.add("position")
+        return frozenset(req)
+
+    def shade(self, ctx: ShadeContext, out: np.ndarray | None = None) -> np.ndarray:
+        record = self.PARAMS.record(self.p)
+        return lit_rgba(ctx, record, smooth=self.smooth, out=out)  # one numba pass

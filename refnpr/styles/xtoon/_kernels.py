@@ -23,7 +23,6 @@ import numpy as np
 from refnpr._jit import banded, njit
 from refnpr.device.color import srgb_to_linear
 from refnpr.device.lights import LIGHT_POINT, light_dir
-from refnpr.device.projection import clip_of, pixel_of
 from refnpr.device.scalars import clip01
 from refnpr.device.vectors import dot, reflect, unit
 from refnpr.formulas.xtoon import (
@@ -73,17 +72,6 @@ class Tables(NamedTuple):
     offsets: np.ndarray
     tone: np.ndarray
     detail: np.ndarray
-
-
-@njit
-def pixel(vp, p, size):
-    """``(x, y, w_clip)`` of world point ``p``: its pixel coordinates in an image of ``size =
-    (width, height)`` (NaN behind the eye), as the rasterizer projects vertices."""
-    c = clip_of(vp, p)
-    if c[3] > 0.0:
-        x, y = pixel_of(c[0], c[1], c[3], size[0], size[1])
-        return x, y, c[3]
-    return math.nan, math.nan, c[3]
 
 
 @njit(inline="always")

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.formulas._face import Whole, elementwise
 from refnpr.raster import Camera
+from refnpr.raster.projection import project_points
 
 __all__ = ["VertexGeometry", "project_pixels", "view_axis_depth"]
 
@@ -31,18 +31,12 @@ def project_pixels(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Pixel coordinates ``(N, 2)`` (x right, y down, pixel centres at +0.5) and w_clip ``(N,)``
     of world ``points (N, 3)`` through ``camera`` for a ``width`` x ``height`` image, as the
-    rasterizer projects vertices (``refnpr.device.projection``).
+    rasterizer projects vertices (``refnpr.raster.projection``).
 
     Points with w_clip <= 0 (behind the eye) get NaN coordinates.
     """
-    vp = np.ascontiguousarray(camera.view_projection(width, height), dtype=np.float64)
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    from ._kernels import pixel
-
-    out = elementwise(
-        pixel, np.float64, Whole(vp), (p[:, 0], p[:, 1], p[:, 2]), (float(width), float(height))
-    )
-    return out[:, :2], out[:, 2]
+    vp = camera.view_projection(width, height)
+    return project_points(np.asarray(points, dtype=np.float64).reshape(-1, 3), vp, width, height)
 
 
 @dataclass(frozen=True, eq=False)
