@@ -86,6 +86,7 @@ PUBLIC_API = {
         "dyadic_remap",
         "dyadic_scale",
         "dyadic_scale_from_gradient",
+        "facing_strength",
         "hatch_coordinate",
         "hatch_threshold",
         "line_coverage",
@@ -96,7 +97,9 @@ PUBLIC_API = {
         "pcf_threshold",
         "step",
         "step_n",
+        "strength_blend",
         "threshold_illumination",
+        "tone_strength",
     ),
     "refnpr.formulas.xtoon": (
         "blend_normals",

@@ -8,9 +8,6 @@ import numpy as np
 
 from ._validate import as_float
 
-#: |floor(s)| beyond this changes nothing: v * 2**k is an integer (k >= 1075) or rounds to 0.
-K_MAX = 1100
-
 
 def real(name: str, value, dtype: np.dtype) -> np.ndarray:
     """``value`` as a finite float array of ``dtype`` (TypeError/ValueError naming ``name``)."""
@@ -73,23 +70,6 @@ def frac(x: np.ndarray) -> np.ndarray:
     """
     r = x - np.floor(x)
     return np.minimum(r, one_below(r.dtype))
-
-
-def floor_int(s: np.ndarray) -> np.ndarray:
-    """floor(s) as int64, clipped to [-K_MAX, K_MAX] (s finite)."""
-    return np.clip(np.floor(s), -K_MAX, K_MAX).astype(np.int64)
-
-
-def scaled_frac(v: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Frac(v * 2**k) for finite v and integer k, in the dtype of ``v``.
-
-    The product is formed with ``ldexp`` (exact unless it under- or overflows). An overflowing
-    product is an integer, so its fractional part is 0; an underflowing one is (close to) 0.
-    """
-    with np.errstate(over="ignore", under="ignore"):
-        p = np.ldexp(v, k)
-    p = np.where(np.isfinite(p), p, 0)
-    return frac(p)
 
 
 def unit_vectors(vec: np.ndarray) -> np.ndarray:

@@ -866,3 +866,60 @@ def test_public_api_and_import_boundary():
 def test_pcf_threshold_needs_at_least_one_sample():
     with pytest.raises(ValueError, match=r"t_samples: expected K >= 1 threshold samples"):
         threshold.pcf_threshold(np.ones(2), np.zeros((2, 0)))
+
+
+@pytest.mark.parametrize("k", [1, 2, 7, 8, 9, 16, 31, 64, 127, 128, 129, 256, 257, 512])
+def test_pcf_threshold_sums_in_numpys_order(k):
+    """The PCF average is numpy's mean of the thresholding results, bit for bit (pairwise
+    summation, 8 accumulators, halves past 128), K up to 2 x 256 (image PCF at two levels)."""
+    rng = np.random.default_rng(k)
+    x = rng.uniform(0, 1, 20)
+    ts = rng.uniform(0, 1, (20, k))
+    w = rng.uniform(0.1, 2.0, (20, k))
+    for n in (1, 3):
+        hits = np.array(
+            [
+                [step_n_py(a, b, n) if n > 1 else step_py(a, b) for b in r]
+                for a, r in zip(x, ts, strict=True)
+            ]
+        )
+        assert np.array_equal(pcf_threshold(x, ts, n=n), np.mean(hits, axis=-1))
+        want = np.sum(hits * w, axis=-1) / np.sum(w, axis=-1)
+        assert np.array_equal(pcf_threshold(x, ts, weights=w, n=n), want)
+
+
+def test_strength_faces_match_naive_loops():
+    rng = np.random.default_rng(17)
+    c, x, tx, st = (
+        rng.uniform(-1, 1, 50),
+        rng.uniform(0, 1, 50),
+        rng.uniform(0, 1, 50),
+        rng.uniform(0, 1, 50),
+    )
+
+    def smooth(a):
+        a = min(max(a, 0.0), 1.0)
+        return a * a * (3 - 2 * a)
+
+    for power in (0.5, 1.0, 2.0, 3.7):
+        want = [1 - 0.8 * abs(a) ** power for a in c]
+        np.testing.assert_allclose(threshold.facing_strength(c, 0.8, power), want, rtol=1e-14)
+    for dark, bright in ((0.0, 0.0), (0.2, 0.0), (0.0, 0.3), (0.25, 0.5)):
+        want = [
+            (smooth(a / dark) if dark else 1.0) * (smooth((1 - a) / bright) if bright else 1.0)
+            for a in x
+        ]
+        np.testing.assert_allclose(threshold.tone_strength(x, dark, bright), want, rtol=1e-14)
+    np.testing.assert_allclose(threshold.strength_blend(x, tx, st), x + st * (tx - x), rtol=1e-15)
+    assert threshold.tone_strength(np.array([0.0, 1.0]), 0.1, 0.1).tolist() == [0.0, 0.0]
+    with pytest.raises(ValueError, match="dark: expected a value in \\[0.0, 0.5\\]"):
+        threshold.tone_strength(x, 0.6, 0.0)
+    with pytest.raises(ValueError, match="power: expected a value in \\(0.0, inf\\]"):
+        threshold.facing_strength(c, 0.5, 0.0)
+
+
+def test_float32_faces_of_unit_interval_formulas_stay_below_one():
+    """Computed in float64, a value just below 1 would round to 1 in float32: clamped."""
+    v = np.array([np.nextafter(1.0, 0.0), 0.9999999, -1e-9], dtype=np.float32)
+    for f in (multiscale_line(v, np.float32(0.0)), dyadic_remap(v, np.float32(0.0))):
+        assert f.dtype == np.float32 and np.all(f < 1.0)

@@ -21,6 +21,9 @@ A style holding per-pixel ``v``, ``s`` (dyadic scale) and ``intensity`` arrays `
     ink = step(intensity, t)                        # 1 = white, 0 = black line
     ink_aa = line_coverage(v, s, intensity, dv_dx, dv_dy, uniform=True)   # box-filtered
 
+Each per-sample formula is a scalar device function (``f.scalar``: the ``threshold`` style's
+kernel calls it per sample) whose public numpy face validates and runs it elementwise.
+
 Contents: eqs. 2-4 (:func:`threshold_illumination`, :func:`step`, :func:`step_n`); eqs. 5-8
 (:func:`dyadic_scale`, :func:`dyadic_scale_from_gradient`, :func:`dyadic_remap`,
 :func:`multiscale_line`, :func:`multiscale_line_cdf`, :func:`line_threshold`); compositions
@@ -28,14 +31,18 @@ Contents: eqs. 2-4 (:func:`threshold_illumination`, :func:`step`, :func:`step_n`
 :func:`layer_whites`, :func:`layer_schedule`,
 :func:`dot_function`, :func:`dot_dyadic_scale`, :func:`dot_tone_table`, :func:`dot_threshold`; the screen-round
 jittered stipple :func:`stipple_scales`, :func:`stipple_tone_table`, :func:`stipple_threshold`);
-filtering (:func:`pcf_threshold`, :func:`mip_threshold`, :func:`line_coverage`).
+filtering (:func:`pcf_threshold`, :func:`mip_threshold`, :func:`line_coverage`); the strength of
+sec. 5 (:func:`facing_strength`, :func:`tone_strength`, :func:`strength_blend`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from refnpr._jit import njit
+
 from .. import lighting
+from .._face import elementwise
 from .._shading_checks import broadcast, check_range, real
 from .._validate import check_int, result_dtype
 from .compose import combine_thresholds, layer_schedule, layer_whites
@@ -48,7 +55,7 @@ from .lines import (
     multiscale_line,
     multiscale_line_cdf,
     step,
-    step_kernel,
+    step_any,
     step_n,
 )
 from .stipple import (
@@ -57,6 +64,7 @@ from .stipple import (
     stipple_threshold,
     stipple_tone_table,
 )
+from .strength import facing_strength, strength_blend, tone_strength
 from .textures import (
     DotToneTable,
     dot_dyadic_scale,
@@ -94,7 +102,18 @@ __all__ = [
     "pcf_threshold",
     "mip_threshold",
     "line_coverage",
+    "facing_strength",
+    "tone_strength",
+    "strength_blend",
 ]
+
+
+_strength_blend = strength_blend.scalar
+
+
+@njit
+def _thresholded_term(f, t, n, strength):
+    return _strength_blend(f, step_any(f, t, n), strength)  # eq. 2: T(f), sec. 5 blend
 
 
 def _thresholded(name: str, terms, t: np.ndarray, n: int, strength: np.ndarray, dt) -> list:
@@ -103,8 +122,7 @@ def _thresholded(name: str, terms, t: np.ndarray, n: int, strength: np.ndarray, 
     for i, f in enumerate([terms] if single else terms):
         f = real(name if single else f"{name}[{i}]", f, dt)
         broadcast(**{name: f, "t": t, "strength": strength})
-        tf = step_kernel(f, t, n)  # eq. 2: T(f)
-        out.append(f + strength * (tf - f))
+        out.append(elementwise(_thresholded_term, dt, f, t, n, strength))
     return out[0] if single else out
 
 

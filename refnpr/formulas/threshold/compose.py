@@ -18,17 +18,26 @@ In darkness ``lambda = -ln x`` the allocation is water-filling: ``lambda = sum_i
 (tone), ``lambda_i = 0`` while ``lambda < Lambda_i = -ln onsets[i]``, and each increment goes to
 the active layers of least darkness. Every ``lambda_i(lambda)`` is piecewise linear.
 
+The layers' white fractions and the composition are scalar device functions (``f.scalar``) that
+the ``threshold`` style's kernel calls per sample, given the schedule of :func:`layer_schedule`
+(``lam_bp``, ``lev_bp``, computed once per frame); the public functions are their numpy faces.
 Public names are re-exported by :mod:`refnpr.formulas.threshold`.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
+from refnpr._jit import njit
+from refnpr.device.scalars import ONE_BELOW, clip
+
+from .._face import Whole, elementwise, face
 from .._shading_checks import broadcast, check_range, real
 from .._validate import describe, result_dtype
+from .lines import _below_one
 
 __all__ = ["layer_schedule", "layer_whites", "combine_thresholds", "check_onsets"]
 
@@ -93,12 +102,48 @@ def layer_schedule(onsets) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(lams), np.asarray(levs)
 
 
+@njit(inline="always")
+def _interp(x, xp, fp, i):
+    """``np.interp(x, xp, fp[:, i])`` (numpy's branches: ends, exact knots, slope form)."""
+    nb = xp.shape[0]
+    if x < xp[0]:
+        return fp[0, i]
+    if x > xp[nb - 1]:
+        return fp[nb - 1, i]
+    j = 0
+    while j < nb - 1 and xp[j + 1] <= x:
+        j += 1
+    if j == nb - 1 or xp[j] == x:
+        return fp[j, i]
+    slope = (fp[j + 1, i] - fp[j, i]) / (xp[j + 1] - xp[j])
+    out = slope * (x - xp[j]) + fp[j, i]
+    if out != out:
+        out = slope * (x - xp[j + 1]) + fp[j + 1, i]
+        if out != out and fp[j, i] == fp[j + 1, i]:
+            out = fp[j, i]
+    return out
+
+
+@njit(inline="always")
+def _layer_white(x, lam_bp, lev_bp, i):
+    c = clip(x, 0.0, 1.0)
+    lam = -math.log(c) if c > 0.0 else math.inf  # total darkness -ln x
+    li = _interp(lam, lam_bp, lev_bp, i)  # layer i's darkness: the water-filling schedule
+    last = lam_bp.shape[0] - 1
+    if lam > lam_bp[last]:  # beyond the last breakpoint every layer gains 1 / L
+        li = lev_bp[last, i] + (lam - lam_bp[last]) / lev_bp.shape[1]
+    return math.exp(-li)
+
+
+@face(_layer_white)
 def layer_whites(x, onsets) -> np.ndarray:
     """White fraction w_i(x) of each hatching layer at intensity x (tone-preserving allocation).
 
     ``prod_i w_i(x) = x``; ``w_i = 1`` for ``x >= onsets[i]``; a newly appearing layer darkens
     alone until its lines are as wide as the others' (see the module docstring). With the
     sawtooth layers of :func:`line_threshold` the black line fraction of layer i is 1 - w_i.
+    ``layer_whites.scalar(x, lam_bp, lev_bp, i)`` is the device function: layer i's w_i(x)
+    under the schedule ``lam_bp, lev_bp = layer_schedule(onsets)``.
 
     Parameters
     ----------
@@ -112,37 +157,55 @@ def layer_whites(x, onsets) -> np.ndarray:
     """
     dt = result_dtype(x)
     x = real("x", x, dt)
-    lam_bp, lev_bp = layer_schedule(onsets)
-    n = lev_bp.shape[1]
-    with np.errstate(divide="ignore"):
-        lam = -np.log(np.clip(x.astype(np.float64), 0.0, 1.0))
+    lam_bp, lev_bp = (Whole(a) for a in layer_schedule(onsets))
+    n = lev_bp.value.shape[1]
     out = np.empty((n, *x.shape), dtype=dt)
     for i in range(n):
-        li = np.interp(lam, lam_bp, lev_bp[:, i])
-        li = np.where(lam > lam_bp[-1], lev_bp[-1, i] + (lam - lam_bp[-1]) / n, li)
-        out[i] = np.exp(-li)
+        out[i] = elementwise(layer_whites.scalar, dt, x, lam_bp, lev_bp, i)
     return out
 
 
-def _darkness_of_layer(f: np.ndarray, lam_bp: np.ndarray, lev_i: np.ndarray, n: int) -> np.ndarray:
+@njit(inline="always")
+def _darkness(f, lam_bp, lev_bp, i):
     """lambda*_i(F): the largest total darkness at which a sample with layer value F is white.
 
     White iff ``F <= w_i(x)`` iff ``q = -ln F >= lambda_i(lambda)`` (lambda_i non-decreasing);
     the layer's threshold is ``h_i(F) = exp(-lambda*)``.
     """
-    with np.errstate(divide="ignore", invalid="ignore"):
-        q = -np.log(np.clip(f, 0.0, 1.0))
-        k = np.searchsorted(lev_i, q, side="right")  # first breakpoint whose level exceeds q
-        last = len(lev_i) - 1
-        hi = np.clip(k, 1, max(last, 1)) if last >= 1 else np.zeros_like(k)
-        lo = np.maximum(hi - 1, 0)
-        dlev = lev_i[hi] - lev_i[lo]
-        safe = np.where(dlev > 0, dlev, 1.0)
-        inner = lam_bp[lo] + (q - lev_i[lo]) * (lam_bp[hi] - lam_bp[lo]) / safe
-        tail = lam_bp[-1] + (q - lev_i[-1]) * n  # beyond the last breakpoint (slope 1 / L)
-    return np.where(k > last, tail, inner)
+    c = clip(f, 0.0, 1.0)
+    q = -math.log(c) if c > 0.0 else math.inf
+    nb = lam_bp.shape[0]
+    k = 0  # first breakpoint whose level exceeds q (searchsorted, side="right")
+    while k < nb and lev_bp[k, i] <= q:
+        k += 1
+    last = nb - 1
+    if k > last:  # beyond the last breakpoint (slope 1 / L)
+        return lam_bp[last] + (q - lev_bp[last, i]) * lev_bp.shape[1]
+    if last >= 1:
+        hi = k if k >= 1 else 1
+        if hi > last:
+            hi = last
+    else:
+        hi = 0
+    lo = hi - 1 if hi >= 1 else 0
+    dlev = lev_bp[hi, i] - lev_bp[lo, i]
+    safe = dlev if dlev > 0 else 1.0
+    return lam_bp[lo] + (q - lev_bp[lo, i]) * (lam_bp[hi] - lam_bp[lo]) / safe
 
 
+@njit(inline="always")
+def _combine_thresholds(fs, lam_bp, lev_bp):
+    lam_star = math.inf
+    for i in range(len(fs)):
+        li = _darkness(fs[i], lam_bp, lev_bp, i)
+        lam_star = li if li < lam_star else lam_star  # white in every layer
+    t = math.exp(-lam_star)  # union of the dark lines: t = max_i h_i(F_i)
+    if t < 0.0:
+        t = 0.0
+    return t if t < ONE_BELOW else ONE_BELOW
+
+
+@face(_combine_thresholds)
 def combine_thresholds(layers: Sequence, *, onsets=None) -> np.ndarray:
     """Compose threshold textures into one (cross-hatching): the union of their dark lines.
 
@@ -151,6 +214,8 @@ def combine_thresholds(layers: Sequence, *, onsets=None) -> np.ndarray:
     preserving) when the layers are independent uniform textures (lines at different angles
     over an area); layer i takes part only below the intensity ``onsets[i]``, and a new layer's
     lines grow until they are as wide as those already drawn before all darken together.
+    ``combine_thresholds.scalar(fs, lam_bp, lev_bp)`` is the device function: ``fs`` the L
+    layer values (an array or a tuple), the schedule ``layer_schedule(onsets)``.
 
     Parameters
     ----------
@@ -174,11 +239,6 @@ def combine_thresholds(layers: Sequence, *, onsets=None) -> np.ndarray:
     for i, f in enumerate(fs):
         check_range(f"layers[{i}]", f, 0.0, 1.0, "threshold textures take values in [0, 1]")
     broadcast(**{f"layers[{i}]": f for i, f in enumerate(fs)})
-    o = check_onsets(onsets, len(fs))
-    lam_bp, lev_bp = layer_schedule(o)
-    lam_star = None
-    for i, f in enumerate(fs):
-        li = _darkness_of_layer(f.astype(np.float64), lam_bp, lev_bp[:, i], len(fs))
-        lam_star = li if lam_star is None else np.minimum(lam_star, li)  # white in every layer
-    t = np.exp(-lam_star)  # union of the dark lines: t = max_i h_i(F_i)
-    return np.asarray(np.clip(t, 0.0, np.nextafter(dt.type(1), dt.type(0))), dtype=dt)
+    lam_bp, lev_bp = layer_schedule(check_onsets(onsets, len(fs)))
+    t = elementwise(combine_thresholds.scalar, dt, tuple(fs), Whole(lam_bp), Whole(lev_bp))
+    return _below_one(t)

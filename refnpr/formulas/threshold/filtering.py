@@ -1,25 +1,115 @@
 """Filtered thresholding of Veryovka sec. 4: percentage-closer filtering of thresholding results
 and the analytic box filter of a thresholded multi-scale line texture.
 
-Public names are re-exported by :mod:`refnpr.formulas.threshold`.
+Each formula is a scalar device function (``f.scalar``) that the ``threshold`` style's kernel
+calls per sample; the public function is its numpy face. Public names are re-exported by
+:mod:`refnpr.formulas.threshold`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .._shading_checks import broadcast, check_range, frac, real, scaled_frac
+from refnpr._jit import njit
+from refnpr.device.scalars import clip, frac
+
+from .._face import Whole, elementwise, face
+from .._shading_checks import broadcast, check_range, real
 from .._validate import check_int, result_dtype
-from .lines import multiscale_kernel, scale_split, step_kernel
+from .lines import _dyadic_remap, _multiscale_line, _step, ldexp, level, step_any
 
 __all__ = ["pcf_threshold", "mip_threshold", "line_coverage"]
 
+#: Terms of :func:`_psum`: a thresholding result, a weighted one, a weight.
+_HIT, _WEIGHTED_HIT, _WEIGHT = 0, 1, 2
 
+
+@njit(inline="always")
+def _term(x, t, w, n, j, kind):
+    if kind == _WEIGHT:
+        return w[j]
+    h = step_any(x, t[j], n)  # eq. 3 (n = 1) or eq. 4
+    return h * w[j] if kind == _WEIGHTED_HIT else h
+
+
+@njit(inline="always")
+def _block(x, t, w, n, lo, count, kind):
+    """numpy's pairwise sum of up to 128 terms ``lo .. lo + count - 1`` (:func:`_term`, formed
+    as they are read): a plain sum below 8, else 8 accumulators."""
+    if count < 8:
+        res = 0.0
+        for i in range(count):
+            res += _term(x, t, w, n, lo + i, kind)
+        return res
+    r0 = _term(x, t, w, n, lo, kind)
+    r1 = _term(x, t, w, n, lo + 1, kind)
+    r2 = _term(x, t, w, n, lo + 2, kind)
+    r3 = _term(x, t, w, n, lo + 3, kind)
+    r4 = _term(x, t, w, n, lo + 4, kind)
+    r5 = _term(x, t, w, n, lo + 5, kind)
+    r6 = _term(x, t, w, n, lo + 6, kind)
+    r7 = _term(x, t, w, n, lo + 7, kind)
+    i = 8
+    while i < count - (count % 8):
+        r0 += _term(x, t, w, n, lo + i, kind)
+        r1 += _term(x, t, w, n, lo + i + 1, kind)
+        r2 += _term(x, t, w, n, lo + i + 2, kind)
+        r3 += _term(x, t, w, n, lo + i + 3, kind)
+        r4 += _term(x, t, w, n, lo + i + 4, kind)
+        r5 += _term(x, t, w, n, lo + i + 5, kind)
+        r6 += _term(x, t, w, n, lo + i + 6, kind)
+        r7 += _term(x, t, w, n, lo + i + 7, kind)
+        i += 8
+    res = (r0 + r1) + (r2 + r3) + ((r4 + r5) + (r6 + r7))
+    while i < count:
+        res += _term(x, t, w, n, lo + i, kind)
+        i += 1
+    return res
+
+
+@njit
+def _psum(x, t, w, n, lo, count, kind):
+    """numpy's pairwise sum (``np.add.reduce`` over a contiguous axis) of the terms ``lo ..
+    lo + count - 1``: blocks of up to 128, halves (multiples of 8) above."""
+    if count <= 128:
+        return _block(x, t, w, n, lo, count, kind)
+    half = count // 2
+    half -= half % 8
+    return _psum(x, t, w, n, lo, half, kind) + _psum(x, t, w, n, lo + half, count - half, kind)
+
+
+@njit(inline="always")
+def _pairwise(x, t, w, n, kind):
+    """The pairwise sum of the K terms of ``kind`` of thresholds ``t`` and weights ``w``."""
+    k = t.shape[0]
+    if k <= 128:
+        return _block(x, t, w, n, 0, k, kind)
+    zero = k - k  # run-time values: a recursive function typed for literals fails to link
+    return _psum(x, t, w, n, zero, k, zero + kind)
+
+
+@njit(inline="always")
+def _pcf_threshold(x, t, w, n):
+    if w.shape[0] == 0:  # sec. 4: the mean of the thresholding results
+        return _pairwise(x, t, w, n, _HIT) / t.shape[0]
+    total = _pairwise(x, t, w, n, _WEIGHT)
+    return _pairwise(x, t, w, n, _WEIGHTED_HIT) / total  # sec. 4: weighted
+
+
+@njit
+def _pcf_row(i, x, t, w, n):
+    """:func:`_pcf_threshold` of row ``i`` of the face's ``(M, K)`` tables."""
+    return _pcf_threshold(x, t[i], w[min(i, w.shape[0] - 1)], n)
+
+
+@face(_pcf_threshold)
 def pcf_threshold(x, t_samples, *, weights=None, n: int = 1) -> np.ndarray:
     """Percentage-closer filtered thresholding (Veryovka sec. 4): ``sum_k w_k T(x, t_k) / sum w``.
 
     The thresholding results are filtered, not the thresholds (filtering thresholds does not
-    remove aliasing, sec. 4). T is eq. 3 for n = 1 and T_n of eq. 4 otherwise.
+    remove aliasing, sec. 4). T is eq. 3 for n = 1 and T_n of eq. 4 otherwise. Sums are formed
+    in numpy's pairwise order. ``pcf_threshold.scalar(x, t, w, n)`` is the device function:
+    ``t`` the (K,) samples, ``w`` their (K,) weights or an empty array (equal weights).
 
     Parameters
     ----------
@@ -49,28 +139,45 @@ def pcf_threshold(x, t_samples, *, weights=None, n: int = 1) -> np.ndarray:
         raise ValueError(
             f"t_samples: expected K >= 1 threshold samples on the last axis, got shape {ts.shape}"
         )
-    broadcast(x=x[..., None], t_samples=ts)
-    hits = step_kernel(x[..., None], ts, n)
-    if weights is None:
-        return np.asarray(np.mean(hits, axis=-1), dtype=dt)
-    wts = real("weights", weights, dt)
-    if np.any(wts < 0):
-        raise ValueError("weights: expected values >= 0, got a negative weight; use |w|")
-    broadcast(t_samples=ts, weights=wts)
-    total = np.sum(np.broadcast_to(wts, np.broadcast_shapes(wts.shape, hits.shape)), axis=-1)
-    if np.any(total <= 0):
-        raise ValueError(
-            "weights: the weights of some pixel sum to 0; give every pixel a positive weight"
-        )
-    return np.asarray(np.sum(hits * wts, axis=-1) / total, dtype=dt)
+    shape = broadcast(x=x[..., None], t_samples=ts)
+    wts = np.zeros((1, 0))
+    if weights is not None:
+        w = real("weights", weights, dt)
+        if np.any(w < 0):
+            raise ValueError("weights: expected values >= 0, got a negative weight; use |w|")
+        broadcast(t_samples=ts, weights=w)
+        wts = _rows(w, shape)
+        if np.any(np.sum(wts, axis=-1) <= 0):
+            raise ValueError(
+                "weights: the weights of some pixel sum to 0; give every pixel a positive weight"
+            )
+    rows = _rows(ts, shape)
+    xs = np.broadcast_to(x, shape[:-1]).reshape(-1)
+    index = np.arange(rows.shape[0])
+    out = elementwise(_pcf_row, dt, index, xs, Whole(rows), Whole(wts), n)
+    return out.reshape(shape[:-1])
 
 
+def _rows(a: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """``a`` broadcast to ``shape`` as contiguous float64 rows ``(M, K)``."""
+    full = np.broadcast_to(a.astype(np.float64, copy=False), shape)
+    return np.ascontiguousarray(full).reshape(-1, shape[-1])
+
+
+@njit
+def _mip_threshold(x, t_fine, t_coarse, lod_frac, n):
+    # sec. 4: the results at the two levels, blended with the trilinear weight
+    return (1 - lod_frac) * step_any(x, t_fine, n) + lod_frac * step_any(x, t_coarse, n)
+
+
+@face(_mip_threshold)
 def mip_threshold(x, t_fine, t_coarse, lod_frac, *, n: int = 1) -> np.ndarray:
     """Two-mip-level weighted thresholding (Veryovka sec. 4, image textures).
 
     ``(1 - lod_frac) T(x, t_fine) + lod_frac T(x, t_coarse)``: the thresholding results at the
     two nearest mip levels of a (CLAHE) threshold pyramid are blended with the trilinear weight,
-    instead of thresholding the blended threshold.
+    instead of thresholding the blended threshold. ``mip_threshold.scalar(x, t_fine, t_coarse,
+    lod_frac, n)`` is the device function.
 
     Parameters
     ----------
@@ -95,62 +202,49 @@ def mip_threshold(x, t_fine, t_coarse, lod_frac, *, n: int = 1) -> np.ndarray:
     f = real("lod_frac", lod_frac, dt)
     check_range("lod_frac", f, 0.0, 1.0, "lod_frac is the fractional part of the mip LOD")
     broadcast(x=x, t_fine=t0, t_coarse=t1, lod_frac=f)
-    out = (1 - f) * step_kernel(x, t0, n) + f * step_kernel(x, t1, n)
-    return np.asarray(out, dtype=dt)
+    return elementwise(mip_threshold.scalar, dt, x, t0, t1, f, n)
 
 
 # ------------------------------------------------------------------ analytic box filter (lines)
 
 
-def _pieces(intensity: np.ndarray, t: np.ndarray, uniform: bool) -> list[tuple]:
-    """{v in [0, 1): F(v, t) <= intensity} as disjoint intervals [c_j, c_j + len_j]."""
-    i = intensity
-    if not uniform:  # F = (1 + t) v on [0, 1/2), (1 + t) v - t on [1/2, 1)
-        return [
-            (0.0, np.clip(i / (1 + t), 0, 0.5)),
-            (0.5, np.clip((i + t) / (1 + t) - 0.5, 0, 0.5)),
-        ]
-    a = (1 - t) / (2 * (1 + t))  # slopes 1, 2, 2, 1 on [0, a), [a, 1/2), [1/2, b), [b, 1)
-    b = 1 - a
-    return [
-        (0.0, np.clip(i, 0, a)),
-        (a, np.clip((i - a) / 2, 0, 0.5 - a)),
-        (0.5, np.clip((i + b) / 2 - 0.5, 0, b - 0.5)),
-        (b, np.clip(i - b, 0, 1 - b)),
-    ]
-
-
-def _h(x: np.ndarray, ln: np.ndarray) -> np.ndarray:
+@njit
+def _h(x, ln):
     """H(x) - ln x, H the running integral of the pulse train 1[Frac(x) < ln] (periodic)."""
     f = frac(x)
-    return np.minimum(f, ln) - ln * f
+    return (f if f <= ln else ln) - ln * f
 
 
-def _d2(x: np.ndarray, ln: np.ndarray) -> np.ndarray:
+@njit
+def _d2(x, ln):
     """H2(x) - ln x^2 / 2 - mu x, H2 = integral of H, mu = ln (1 - ln) / 2 (periodic)."""
     f = frac(x)
-    m = np.where(f <= ln, f * f / 2, ln * f - ln * ln / 2)
+    m = f * f / 2 if f <= ln else ln * f - ln * ln / 2
     return m - ln * f * f / 2 - ln * (1 - ln) / 2 * f
 
 
-def _ramp(start: np.ndarray, width: np.ndarray, ln: np.ndarray, sign: int) -> np.ndarray:
+@njit
+def _ramp(start, width, ln, sign):
     """Integral over z in [0, width] of z * 1[Frac(start + sign z) < ln], for width < 1."""
-    total = np.zeros(np.broadcast_shapes(start.shape, width.shape, ln.shape))
+    total = 0.0
     base = np.floor(start)
     for dn in (-1.0, 0.0, 1.0):
         n = base + dn * sign
         # z-interval where start + sign z lies in the pulse [n, n + ln]
         if sign > 0:
-            lo, hi = n - start, n + ln - start
+            lo = n - start
+            hi = n + ln - start
         else:
-            lo, hi = start - n - ln, start - n
-        lo = np.clip(lo, 0, width)
-        hi = np.clip(hi, 0, width)
+            lo = start - n - ln
+            hi = start - n
+        lo = clip(lo, 0.0, width)
+        hi = clip(hi, 0.0, width)
         total = total + (hi - lo) * (hi + lo) / 2
     return total
 
 
-def _pulse_box(u: np.ndarray, a: np.ndarray, b: np.ndarray, ln: np.ndarray) -> np.ndarray:
+@njit
+def _pulse_box(u, a, b, ln):
     """E[1[Frac(u + a X + b Y) < ln]] for X, Y ~ U(-1/2, 1/2) and a >= b >= 0, a > 0.
 
     The density of u + a X + b Y is a trapezoid: ramps of width b at both ends of a plateau
@@ -159,23 +253,77 @@ def _pulse_box(u: np.ndarray, a: np.ndarray, b: np.ndarray, ln: np.ndarray) -> n
     ramp, which then meets at most three pulses, term by term (stable for small footprints).
     """
     u = frac(u)
-    wide = b >= 1
-    safe_a = np.where(a > 0, a, 1.0)
-    safe_b = np.where(b > 0, b, 1.0)
-    # b >= 1: closed form
-    ha, hb = a / 2, b / 2
-    dd = _d2(u + ha + hb, ln) - _d2(u + ha - hb, ln) - _d2(u - ha + hb, ln) + _d2(u - ha - hb, ln)
-    closed = ln + dd / (safe_a * safe_b)
-    # b < 1: plateau + two ramps
+    safe_a = a if a > 0 else 1.0
+    safe_b = b if b > 0 else 1.0
+    if b >= 1:  # closed form
+        ha = a / 2
+        hb = b / 2
+        dd = (
+            _d2(u + ha + hb, ln)
+            - _d2(u + ha - hb, ln)
+            - _d2(u - ha + hb, ln)
+            + _d2(u - ha - hb, ln)
+        )
+        return ln + dd / (safe_a * safe_b)
     half = (a - b) / 2
     plateau = (ln * (a - b) + _h(u + half, ln) - _h(u - half, ln)) / safe_a
-    width = np.where(wide, 0.0, b)
-    left = _ramp(u - (a + b) / 2, width, ln, +1)
-    right = _ramp(u + (a + b) / 2, width, ln, -1)
-    ramps = np.where(b > 0, (left + right) / (safe_a * safe_b), 0.0)
-    return np.where(wide, closed, plateau + ramps)
+    left = _ramp(u - (a + b) / 2, b, ln, 1)
+    right = _ramp(u + (a + b) / 2, b, ln, -1)
+    ramps = (left + right) / (safe_a * safe_b) if b > 0 else 0.0
+    return plateau + ramps
 
 
+@njit
+def _line_coverage(v, s, x, gx, gy, uniform):
+    k = level(s)
+    t = s - np.floor(s)
+    vr = _dyadic_remap(v, s)  # eq. 6: position within the line period
+    ax = abs(gx)
+    ay = abs(gy)
+    a = ldexp(ax if ax >= ay else ay, k)  # footprint in line periods
+    b = ldexp(ax if ax <= ay else ay, k)
+    # footprints below 1e-100 periods: no float input locates v that well, point sample
+    point = a < 1e-100
+    huge = not (a < 1e15)  # the box average equals the tone to < 1e-15 (also catches inf)
+    a_ok = 1.0 if (point or huge) else a
+    b_ok = 0.0 if (point or huge or b < 1e-200) else b  # b / a < 1e-100: box of width a
+    # {v in [0, 1): F(v, t) <= x} as disjoint intervals [c_j, c_j + ln_j], each box-filtered
+    cover = 0.0
+    tone = 0.0
+    if not uniform:  # F = (1 + t) v on [0, 1/2), (1 + t) v - t on [1/2, 1)
+        ln = clip(x / (1 + t), 0.0, 0.5)
+        cover = cover + _pulse_box(vr - 0.0, a_ok, b_ok, ln)
+        tone = tone + ln
+        ln = clip((x + t) / (1 + t) - 0.5, 0.0, 0.5)
+        cover = cover + _pulse_box(vr - 0.5, a_ok, b_ok, ln)
+        tone = tone + ln
+    else:  # slopes 1, 2, 2, 1 on [0, ca), [ca, 1/2), [1/2, cb), [cb, 1)
+        ca = (1 - t) / (2 * (1 + t))
+        cb = 1 - ca
+        ln = clip(x, 0.0, ca)
+        cover = cover + _pulse_box(vr - 0.0, a_ok, b_ok, ln)
+        tone = tone + ln
+        ln = clip((x - ca) / 2, 0.0, 0.5 - ca)
+        cover = cover + _pulse_box(vr - ca, a_ok, b_ok, ln)
+        tone = tone + ln
+        ln = clip((x + cb) / 2 - 0.5, 0.0, cb - 0.5)
+        cover = cover + _pulse_box(vr - 0.5, a_ok, b_ok, ln)
+        tone = tone + ln
+        ln = clip(x - cb, 0.0, 1 - cb)
+        cover = cover + _pulse_box(vr - cb, a_ok, b_ok, ln)
+        tone = tone + ln
+    if point:
+        cover = _step(x, _multiscale_line(vr, t, uniform))  # the point sample
+    elif huge:
+        cover = tone
+    if x >= 1:  # F takes values in [0, 1)
+        cover = 1.0
+    elif x < 0:
+        cover = 0.0
+    return clip(cover, 0.0, 1.0)
+
+
+@face(_line_coverage)
 def line_coverage(v, s, intensity, dv_dx, dv_dy, *, uniform: bool = False) -> np.ndarray:
     """Analytic box filter of a thresholded line texture over the pixel footprint (Veryovka sec. 4).
 
@@ -186,7 +334,8 @@ def line_coverage(v, s, intensity, dv_dx, dv_dy, *, uniform: bool = False) -> np
     trapezoid (two box filters), so the fraction is a sum of integrals of piecewise polynomials.
     Zero derivatives give the point sample ``step(intensity, line_threshold(v, s))``; an infinite
     footprint gives the tone, ``multiscale_line_cdf(intensity, t)`` (or ``intensity`` with
-    ``uniform=True``).
+    ``uniform=True``). ``line_coverage.scalar(v, s, intensity, dv_dx, dv_dy, uniform)`` is the
+    device function.
 
     Parameters
     ----------
@@ -214,24 +363,5 @@ def line_coverage(v, s, intensity, dv_dx, dv_dy, *, uniform: bool = False) -> np
     x = real("intensity", intensity, f64)
     gx = real("dv_dx", dv_dx, f64)
     gy = real("dv_dy", dv_dy, f64)
-    shape = broadcast(v=v, s=s, intensity=x, dv_dx=gx, dv_dy=gy)
-    v, s, x, gx, gy = np.broadcast_arrays(v, s, x, gx, gy)
-    k, t = scale_split(s)
-    vr = scaled_frac(v, k)  # eq. 6: position within the line period
-    with np.errstate(over="ignore"):
-        a = np.ldexp(np.maximum(np.abs(gx), np.abs(gy)), k)  # footprint in line periods
-        b = np.ldexp(np.minimum(np.abs(gx), np.abs(gy)), k)
-    # footprints below 1e-100 periods: no float input locates v that well, point sample
-    point = a < 1e-100
-    huge = ~(a < 1e15)  # the box average equals the tone to < 1e-15 (also catches inf)
-    a_ok = np.where(point | huge, 1.0, a)
-    b_ok = np.where(point | huge | (b < 1e-200), 0.0, b)  # b / a < 1e-100: box of width a
-    cover = np.zeros(shape)
-    tone = np.zeros(shape)
-    for c, ln in _pieces(x, t, uniform):
-        cover = cover + _pulse_box(vr - c, a_ok, b_ok, ln)
-        tone = tone + ln
-    sample = step_kernel(x, multiscale_kernel(vr, t, uniform), 1)
-    cover = np.where(point, sample, np.where(huge, tone, cover))
-    cover = np.where(x >= 1, 1.0, np.where(x < 0, 0.0, cover))  # F takes values in [0, 1)
-    return np.asarray(np.clip(cover, 0, 1), dtype=dt)
+    broadcast(v=v, s=s, intensity=x, dv_dx=gx, dv_dy=gy)
+    return elementwise(line_coverage.scalar, dt, v, s, x, gx, gy, bool(uniform))

@@ -1,26 +1,22 @@
 """Veryovka 2002 eqs. 3-8: step functions, dyadic scale and re-mapping, multi-scale line function.
 
+Each formula is a scalar device function (``f.scalar``) that the ``threshold`` style's kernel
+calls per sample; the public function is its numpy face (validation, then ``elementwise``).
 Public names are re-exported by :mod:`refnpr.formulas.threshold`; see its docstring for the
 conventions.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from refnpr._jit import njit
+from refnpr.device.scalars import ONE_BELOW, clip, frac
 
 from .._face import elementwise, face
-from .._shading_checks import (
-    broadcast,
-    check_positive,
-    check_range,
-    floor_int,
-    frac,
-    one_below,
-    real,
-    scaled_frac,
-)
+from .._shading_checks import broadcast, check_positive, check_range, real
 from .._validate import check_int, result_dtype
 
 __all__ = [
@@ -34,8 +30,42 @@ __all__ = [
     "line_threshold",
 ]
 
+#: |floor(s)| beyond this changes nothing: v * 2**k is an integer (k >= 1075) or rounds to 0.
+K_MAX = 1100
+#: Smallest normal float64: a zero gradient is clamped to it (eq. 5 stays finite).
+TINY = float(np.finfo(np.float64).tiny)
+#: 2.0 ** k for k in [-POW2_K, POW2_K] (normal floats: v * 2^k is ldexp(v, k), one rounding).
+POW2_K = 1000
+POW2 = np.array([2.0**k for k in range(-POW2_K, POW2_K + 1)], dtype=np.float64)
 
-# ---------------------------------------------------------------- unvalidated kernels (private)
+
+# ------------------------------------------------------------------ device helpers (private)
+
+
+@njit(inline="always")
+def ldexp(v, k):
+    """``v 2^k`` for an integer-valued float k: a product by an exact power of two (the
+    correctly rounded ``np.ldexp``) where 2^k is a normal float, else ``math.ldexp``."""
+    if -POW2_K <= k <= POW2_K:
+        return v * POW2[int(k) + POW2_K]
+    return math.ldexp(v, int(k))
+
+
+@njit(inline="always")
+def level(s):
+    """``floor(s)`` clipped to [-K_MAX, K_MAX] (a float), the dyadic level of scale s."""
+    return clip(np.floor(s), -K_MAX, K_MAX)
+
+
+@njit(inline="always")
+def below_one(f):
+    """``f`` clamped to [0, 1): the range of a threshold texture."""
+    if f < 0.0:
+        f = 0.0
+    return f if f <= ONE_BELOW else ONE_BELOW
+
+
+# ---------------------------------------------------------------------------- eqs. 3 and 4
 
 
 @njit
@@ -56,33 +86,6 @@ def _step_n(x, t, n):
 def step_any(x, t, n):
     """T(x, t) (eq. 3) for n == 1, T_n(x, t) (eq. 4) otherwise (device function)."""
     return _step(x, t) if n == 1 else _step_n(x, t, n)
-
-
-def step_kernel(x: np.ndarray, t: np.ndarray, n: int) -> np.ndarray:
-    """:func:`step_any` over broadcast arrays, float64 (no validation)."""
-    x = np.asarray(x, dtype=np.float64)
-    t = np.asarray(t, dtype=np.float64)
-    return elementwise(step_any, np.float64, x, t, int(n))
-
-
-def multiscale_kernel(v: np.ndarray, t: np.ndarray, uniform: bool) -> np.ndarray:
-    """F(v, t) of eqs. 7-8 (base f(v) = v) for v in [0, 1), t in [0, 1]; result in [0, 1)."""
-    v1 = np.where(v < 0.5, 2 * v, 2 * v - 1)  # eq. 7: F(v, 1)
-    if uniform:
-        a = (1 - t) / (2 * (1 + t))  # F(., t)'s CDF applied to F(., t): slopes 1, 2, 2, 1
-        b = 1 - a
-        f = np.where(v < a, v, np.where(v < 0.5, 2 * v - a, np.where(v < b, 2 * v - b, v)))
-    else:
-        f = (1 - t) * v + t * v1  # eq. 8
-    return np.clip(f, 0, one_below(f.dtype))
-
-
-def scale_split(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(floor(s) as clipped int64, t = Frac(s) in [0, 1]) for finite s."""
-    return floor_int(s), s - np.floor(s)
-
-
-# ---------------------------------------------------------------------------- public functions
 
 
 @face(_step)
@@ -139,8 +142,19 @@ def step_n(x, t, n: int) -> np.ndarray:
     return elementwise(step_n.scalar, dt, x, t, n)  # eq. 4
 
 
+# ---------------------------------------------------------------------------- eqs. 5 and 6
+
+
+@njit
+def _dyadic_scale(d, w):
+    return math.log2(d) - math.log2(w)  # eq. 5: log2(d / w), no overflow in d / w
+
+
+@face(_dyadic_scale)
 def dyadic_scale(d, w) -> np.ndarray:
     """Dyadic texture scale of Veryovka eq. 5: ``s = log2(d / w)``.
+
+    ``dyadic_scale.scalar(d, w)`` is the device function.
 
     Parameters
     ----------
@@ -160,14 +174,24 @@ def dyadic_scale(d, w) -> np.ndarray:
     check_positive("d", d, "d is a distance between iso-lines in pixels; mask empty pixels")
     check_positive("w", w, "w is the desired line period in pixels, e.g. 8")
     broadcast(d=d, w=w)
-    return np.asarray(np.log2(d) - np.log2(w), dtype=dt)  # eq. 5 (no overflow in d / w)
+    return elementwise(dyadic_scale.scalar, dt, d, w)
 
 
+@njit
+def _dyadic_scale_from_gradient(gx, gy, log2_w):
+    g = math.hypot(gx, gy)
+    if not g >= TINY:  # a zero gradient: the smallest normal float (NaN stays NaN)
+        g = TINY if g == g else g
+    return -(math.log2(g) + log2_w)  # eq. 5, d = 1 / |grad v|
+
+
+@face(_dyadic_scale_from_gradient)
 def dyadic_scale_from_gradient(dv_dx, dv_dy, w) -> np.ndarray:
     """Eq. 5 with d = 1 / |grad v|: ``s = -log2(w * |(dv/dx, dv/dy)|)``.
 
-    A zero gradient (v constant on screen) is clamped to the smallest normal float of the dtype,
-    so s stays finite (about 1022 in float64, 126 in float32) instead of +inf.
+    A zero gradient (v constant on screen) is clamped to the smallest normal float64, so s
+    stays finite (about 1022 - log2(w)) instead of +inf. ``dyadic_scale_from_gradient.scalar(
+    dv_dx, dv_dy, log2_w)`` is the device function (``log2_w = log2(w)``, a frame constant).
 
     Parameters
     ----------
@@ -186,15 +210,30 @@ def dyadic_scale_from_gradient(dv_dx, dv_dy, w) -> np.ndarray:
     w = real("w", w, dt)
     check_positive("w", w, "w is the desired line period in pixels, e.g. 8")
     broadcast(dv_dx=gx, dv_dy=gy, w=w)
-    g = np.maximum(np.hypot(gx, gy), np.finfo(dt).tiny)
-    return np.asarray(-(np.log2(g) + np.log2(w)), dtype=dt)  # eq. 5, d = 1 / |grad v|
+    log2_w = np.log2(w.astype(np.float64))
+    return elementwise(dyadic_scale_from_gradient.scalar, dt, gx, gy, log2_w)
 
 
+@njit(inline="always")
+def scaled(v, s):
+    """``v 2^floor(s)``, exact unless it under- or overflows; 0 where it overflows (an integer,
+    whose Frac is 0)."""
+    p = ldexp(v, level(s))
+    return p if math.isfinite(p) else 0.0
+
+
+@njit
+def _dyadic_remap(v, s):
+    return frac(scaled(v, s))  # eq. 6: Frac(v 2^floor(s))
+
+
+@face(_dyadic_remap)
 def dyadic_remap(v, s) -> np.ndarray:
     """Dyadic re-mapping of Veryovka eq. 6, read as ``Frac(v * 2**floor(s))``.
 
     The paper prints ``Frac(v|s|)``; the scale meant is 2**floor(s) (docs/paper-notes.md).
     Products that overflow are integers and map to 0, so huge s or v never give NaN.
+    ``dyadic_remap.scalar(v, s)`` is the device function.
 
     Parameters
     ----------
@@ -205,15 +244,47 @@ def dyadic_remap(v, s) -> np.ndarray:
 
     Returns
     -------
-    ndarray in [0, 1) with the broadcast shape; float64, or float32 if the inputs are float32.
+    ndarray in [0, 1) with the broadcast shape; computed in float64, returned as float32 if
+    the inputs are float32.
     """
     dt = result_dtype(v, s)
     v = real("v", v, dt)
     s = real("s", s, dt)
     broadcast(v=v, s=s)
-    return np.asarray(scaled_frac(v, floor_int(s)), dtype=dt)  # eq. 6
+    return _below_one(elementwise(dyadic_remap.scalar, dt, v, s))  # eq. 6
 
 
+def _below_one(a: np.ndarray) -> np.ndarray:
+    """A float32 result of a [0, 1) formula kept below 1 (float64 rounding up to 1)."""
+    if a.dtype == np.float32:
+        np.minimum(a, np.nextafter(np.float32(1), np.float32(0)), out=a)
+    return a
+
+
+# ---------------------------------------------------------------------------- eqs. 7 and 8
+
+
+@njit(inline="always")
+def _multiscale_line(v, t, uniform):
+    vr = frac(v)
+    if uniform:  # F(., t)'s CDF applied to F(., t): slopes 1, 2, 2, 1
+        a = (1 - t) / (2 * (1 + t))
+        b = 1 - a
+        if vr < a:
+            f = vr
+        elif vr < 0.5:
+            f = 2 * vr - a
+        elif vr < b:
+            f = 2 * vr - b
+        else:
+            f = vr
+    else:
+        v1 = 2 * vr if vr < 0.5 else 2 * vr - 1  # eq. 7: F(v, 1)
+        f = (1 - t) * vr + t * v1  # eq. 8
+    return below_one(f)
+
+
+@face(_multiscale_line)
 def multiscale_line(v, t, *, uniform: bool = False) -> np.ndarray:
     """Multi-scale line function F(v, t) of Veryovka eqs. 7-8 with base f(v) = v.
 
@@ -223,6 +294,7 @@ def multiscale_line(v, t, *, uniform: bool = False) -> np.ndarray:
     :func:`multiscale_line_cdf`). ``uniform=True`` returns G(F(v, t), t) with G that CDF: uniform
     for every t, strictly increasing in F (same line order, minima and maxima where F has them)
     and equal to F at t = 0 and t = 1. It is piecewise linear in v with slopes 1, 2, 2, 1.
+    ``multiscale_line.scalar(v, t, uniform)`` is the device function.
 
     Parameters
     ----------
@@ -235,24 +307,39 @@ def multiscale_line(v, t, *, uniform: bool = False) -> np.ndarray:
 
     Returns
     -------
-    ndarray in [0, 1) with the broadcast shape; float64, or float32 if the inputs are float32.
-    Float32 agrees with float64 on the same inputs to 1e-6 except within 1e-6 of the jumps at
-    Frac(v) = 0 and 0.5.
+    ndarray in [0, 1) with the broadcast shape; computed in float64, returned as float32 if the
+    inputs are float32 (within an ulp of float32 of the float64 values).
     """
     dt = result_dtype(v, t)
     v = real("v", v, dt)
     t = real("t", t, dt)
     check_range("t", t, 0.0, 1.0, "t is the fractional part of the dyadic scale")
     broadcast(v=v, t=t)
-    return np.asarray(multiscale_kernel(frac(v), t, uniform), dtype=dt)
+    return _below_one(elementwise(multiscale_line.scalar, dt, v, t, bool(uniform)))
 
 
+@njit
+def _multiscale_line_cdf(y, t):
+    y = clip(y, 0.0, 1.0)
+    lo = (1 - t) / 2
+    hi = (1 + t) / 2
+    if y < lo:
+        g = y / (1 + t)
+    elif y < hi:
+        g = (2 * y - lo) / (1 + t)
+    else:
+        g = (y + t) / (1 + t)
+    return clip(g, 0.0, 1.0)
+
+
+@face(_multiscale_line_cdf)
 def multiscale_line_cdf(y, t) -> np.ndarray:
     """CDF G(y, t) of the paper's F(., t) (eq. 8) over one period of v.
 
     ``G = y / (1 + t)`` below (1 - t) / 2, ``(2 y - (1 - t) / 2) / (1 + t)`` up to (1 + t) / 2
     and ``(y + t) / (1 + t)`` above; G(y, 0) = G(y, 1) = y. The paper's claim of a uniform
-    distribution holds only at t = 0 and t = 1.
+    distribution holds only at t = 0 and t = 1. ``multiscale_line_cdf.scalar(y, t)`` is the
+    device function.
 
     Parameters
     ----------
@@ -270,13 +357,17 @@ def multiscale_line_cdf(y, t) -> np.ndarray:
     t = real("t", t, dt)
     check_range("t", t, 0.0, 1.0, "t is the fractional part of the dyadic scale")
     broadcast(y=y, t=t)
-    y = np.clip(y, 0, 1)
-    lo = (1 - t) / 2
-    hi = (1 + t) / 2
-    g = np.where(y < lo, y / (1 + t), np.where(y < hi, (2 * y - lo) / (1 + t), (y + t) / (1 + t)))
-    return np.asarray(np.clip(g, 0, 1), dtype=dt)
+    return elementwise(multiscale_line_cdf.scalar, dt, y, t)
 
 
+@njit(inline="always")
+def _line_threshold(v, s, uniform, noise):
+    t = s - np.floor(s)  # eq. 8's blend: Frac(s)
+    f = _multiscale_line(scaled(v, s), t, uniform)  # eqs. 6-8 (F takes Frac of eq. 6 itself)
+    return frac(f + noise) if noise != 0.0 else f  # the phase modulation
+
+
+@face(_line_threshold)
 def line_threshold(v, s, *, uniform: bool = False, noise=None) -> np.ndarray:
     """Multi-scale line threshold texture of Veryovka sec. 3.2 at continuous dyadic scale s.
 
@@ -285,6 +376,7 @@ def line_threshold(v, s, *, uniform: bool = False, noise=None) -> np.ndarray:
     next scale with t = 0). Threshold an intensity against it with :func:`step`: white where
     ``intensity >= line_threshold``; the black line fraction of a period is 1 - intensity (with
     ``uniform=True``; the paper's blend drifts at intermediate scales).
+    ``line_threshold.scalar(v, s, uniform, noise)`` is the device function (noise 0: none).
 
     Parameters
     ----------
@@ -303,8 +395,8 @@ def line_threshold(v, s, *, uniform: bool = False, noise=None) -> np.ndarray:
 
     Returns
     -------
-    (...) ndarray in [0, 1); float64, or float32 if the inputs are float32. Float32 agrees with
-    float64 on the same inputs to 1e-6 except within 1e-6 of the jumps of the sawtooth.
+    (...) ndarray in [0, 1); computed in float64, returned as float32 if the inputs are float32
+    (within an ulp of float32 of the float64 values).
     """
     extra = () if noise is None else (noise,)
     dt = result_dtype(v, s, *extra)
@@ -315,8 +407,5 @@ def line_threshold(v, s, *, uniform: bool = False, noise=None) -> np.ndarray:
         noise = real("noise", noise, dt)
         named["noise"] = noise
     broadcast(**named)
-    k, t = scale_split(s)
-    f = multiscale_kernel(scaled_frac(v, k), t, uniform)  # eqs. 6-8
-    if noise is not None:
-        f = frac(f + noise)
-    return np.asarray(f, dtype=dt)
+    z = 0.0 if noise is None else noise
+    return _below_one(elementwise(line_threshold.scalar, dt, v, s, bool(uniform), z))

@@ -26,18 +26,28 @@ The residual anisotropy: the metric uses each axis's screen length, so it is exa
 screen images of the u and v directions are perpendicular (a UV sphere, a plane seen along an
 axis) and follows the shear of the mapping otherwise.
 
-Public names are re-exported by :mod:`refnpr.formulas.threshold`.
+:func:`stipple_threshold` is a scalar device function (``f.scalar``) that the ``threshold``
+style's kernel calls per sample; the public function is its numpy face. Public names are
+re-exported by :mod:`refnpr.formulas.threshold`.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from llvmlite import ir
+from numba import types as nbtypes
+from numba.extending import intrinsic
 
+from refnpr._jit import njit
+from refnpr.device.scalars import clip
+
+from .._face import Whole, elementwise, face
 from .._shading_checks import broadcast, check_positive, real, trailing
 from .._validate import check_int, describe, result_dtype
-from .lines import dyadic_scale_from_gradient, scale_split
+from .lines import dyadic_scale_from_gradient, ldexp, level
 
 __all__ = [
     "stipple_scales",
@@ -52,6 +62,8 @@ _TABLE_TILES = 64.0
 _M1 = np.uint64(0x9E3779B97F4A7C15)
 _M2 = np.uint64(0xBF58476D1CE4E5B9)
 _M3 = np.uint64(0x94D049BB133111EB)
+#: No tone table (:func:`stipple_threshold`'s ``cdf`` argument): the plain blend.
+NO_TABLE = np.zeros((0, 0, 0))
 
 
 #: Default and largest dot offset, in tiles of the dot's level.
@@ -70,87 +82,144 @@ def _check_jitter(jitter) -> float:
     return j
 
 
-def _mix(h: np.ndarray) -> np.ndarray:
-    """splitmix64 finalizer on uint64 arrays."""
-    with np.errstate(over="ignore"):
-        h = h ^ (h >> np.uint64(30))
-        h = h * _M2
-        h = h ^ (h >> np.uint64(27))
-        h = h * _M3
-        h = h ^ (h >> np.uint64(31))
-    return h
+def seed_bits(seed: int) -> np.uint64:
+    """The 32 seed bits the hashes mix in, as :func:`stipple_threshold`'s ``seed`` argument."""
+    return np.uint64(int(seed) & 0xFFFFFFFF)
 
 
-def _bits(x) -> np.ndarray:
-    """float64 bits as uint64 (-0.0 folded onto 0.0)."""
-    return np.ascontiguousarray(np.asarray(x, dtype=np.float64) + 0.0).view(np.uint64)
+@intrinsic
+def _f64_bits(typingctx, x):
+    """The bits of a float64 as a uint64."""
+    if x != nbtypes.float64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(64))
+
+    return nbtypes.uint64(nbtypes.float64), codegen
 
 
-def _unit(h: np.ndarray) -> np.ndarray:
-    return (h >> np.uint64(11)).astype(np.float64) / float(2**53)
+@njit
+def _bits(x):
+    """float64 bits as uint64, -0.0 folded onto 0.0."""
+    return _f64_bits(x + 0.0)
 
 
-def _row_phase(v_row: np.ndarray, seed: int) -> np.ndarray:
-    """Hash of a row's exact v and the seed to a phase in [0, 1) texture units."""
-    with np.errstate(over="ignore"):
-        h = _bits(v_row) * _M1 + np.uint64(seed & 0xFFFFFFFF) * _M3
-    return _unit(_mix(h))
+@njit
+def _mix(h):
+    """splitmix64 finalizer (uint64, wrapping)."""
+    h = h ^ (h >> np.uint64(30))
+    h = h * _M2
+    h = h ^ (h >> np.uint64(27))
+    h = h * _M3
+    return h ^ (h >> np.uint64(31))
 
 
-def _dot_offsets(v_row: np.ndarray, u_dot: np.ndarray, seed: int) -> tuple:
-    """Two hashes in [0, 1) of a dot's identity (its row's v, its exact lattice u)."""
-    with np.errstate(over="ignore"):
-        h = _mix(_bits(v_row) * _M1 + np.uint64(seed & 0xFFFFFFFF) * _M3 + np.uint64(1))
-        h = _mix(h ^ (_bits(u_dot) * _M2))
-        g = _mix(h + _M1)
-    return _unit(h), _unit(g)
+@njit
+def _unit(h):
+    return np.float64(h >> np.uint64(11)) / 9007199254740992.0  # / 2^53: [0, 1)
 
 
-def _quadrant_area(r: np.ndarray, x_half: np.ndarray, y_half: np.ndarray) -> np.ndarray:
+@njit
+def _quadrant_area(r, x_half, y_half):
     """Area of {0 <= x <= X, 0 <= y <= Y, x^2 + y^2 <= r^2}: ``int_0^min(X, r) min(Y,
     sqrt(r^2 - x^2)) dx`` in closed form."""
-    m = np.minimum(x_half, r)
-    xc = np.minimum(np.sqrt(np.maximum(r * r - y_half * y_half, 0.0)), m)  # where the arc meets Y
+    m = x_half if x_half <= r else r
+    q = r * r - y_half * y_half
+    xc = math.sqrt(q if q >= 0.0 else 0.0)  # where the arc meets Y
+    xc = xc if xc <= m else m
+    q = r * r - m * m  # antiderivative of sqrt(r^2 - x^2) at m, then at xc
+    root = math.sqrt(q if q >= 0.0 else 0.0)
+    pm = 0.5 * (m * root + r * r * math.atan2(m, root))
+    q = r * r - xc * xc
+    root = math.sqrt(q if q >= 0.0 else 0.0)
+    pc = 0.5 * (xc * root + r * r * math.atan2(xc, root))
+    return y_half * xc + pm - pc
 
-    def prim(x):  # antiderivative of sqrt(r^2 - x^2)
-        root = np.sqrt(np.maximum(r * r - x * x, 0.0))
-        return 0.5 * (x * root + r * r * np.arctan2(x, root))
 
-    return y_half * xc + prim(m) - prim(xc)
+@njit
+def _round_dot(u, v, k, a, seed, jitter):
+    """Exactly uniform dot function of one level ``k = (k_u, k_v)``: 1 at the dot centre, round
+    in pixels.
 
-
-def _round_dot(u, v, ku, kv, a_u, a_v, seed, jitter):
-    """Exactly uniform dot function of one level: 1 at the dot centre, round in pixels.
-
-    The tile (W_u x W_v = a_u x a_v) is centred on its lattice point; the dot sits ``jitter``
+    The tile (W_u x W_v = ``a``) is centred on its lattice point; the dot sits ``jitter``
     tiles at most from it along each axis (offsets hashed from the dot's identity, the same at
     every level), and ``D = 1 - A(r) / (a_u a_v)`` with A(r) the tile's area within distance r
     of the dot: four quadrant areas of half-extents ``(1/2 -+ offset) a``.
     """
-    big_v = np.ldexp(v, kv)  # eq. 6 along v: v 2^kv
+    ku, kv = k
+    a_u, a_v = a
+    big_v = ldexp(v, kv)  # eq. 6 along v: v 2^kv
     j = np.floor(big_v + 0.5)  # nearest row of dot centres
     dv = big_v - j
-    v_row = np.ldexp(j, -kv)  # the row's exact v: the same row at every level
-    phase = _row_phase(v_row, seed) if jitter > 0 else 0.0
-    big_u = np.ldexp(u - phase, ku)  # eq. 6 along u, in the row's shifted lattice
+    v_row = ldexp(j, -kv)  # the row's exact v: the same row at every level
+    phase = 0.0
+    if jitter > 0:  # the row's phase: a hash of its exact v and the seed
+        phase = _unit(_mix(_bits(v_row) * _M1 + seed * _M3))
+    big_u = ldexp(u - phase, ku)  # eq. 6 along u, in the row's shifted lattice
     i = np.floor(big_u + 0.5)
     du = big_u - i
-    if jitter > 0:
-        hu, hv = _dot_offsets(v_row, np.ldexp(i, -ku), seed)
-        ou = jitter * (2.0 * hu - 1.0)  # dot offset in tiles
-        ov = jitter * (2.0 * hv - 1.0)
-    else:
-        ou = ov = 0.0
-    r = np.hypot((du - ou) * a_u, (dv - ov) * a_v)  # distance to the dot in tile pixels
-    xl, xr = (0.5 + ou) * a_u, (0.5 - ou) * a_u
-    yl, yr = (0.5 + ov) * a_v, (0.5 - ov) * a_v
+    ou = 0.0
+    ov = 0.0
+    if jitter > 0:  # the dot's offset in tiles: two hashes of its row's v and its exact u
+        h = _mix(_bits(v_row) * _M1 + seed * _M3 + np.uint64(1))
+        h = _mix(h ^ (_bits(ldexp(i, -ku)) * _M2))
+        g = _mix(h + _M1)
+        ou = jitter * (2.0 * _unit(h) - 1.0)
+        ov = jitter * (2.0 * _unit(g) - 1.0)
+    r = math.hypot((du - ou) * a_u, (dv - ov) * a_v)  # distance to the dot in tile pixels
+    xl = (0.5 + ou) * a_u
+    xr = (0.5 - ou) * a_u
+    yl = (0.5 + ov) * a_v
+    yr = (0.5 - ov) * a_v
     area = (
         _quadrant_area(r, xl, yl)
         + _quadrant_area(r, xr, yl)
         + _quadrant_area(r, xl, yr)
         + _quadrant_area(r, xr, yr)
     )
-    return np.clip(1.0 - area / (a_u * a_v), 0.0, 1.0)
+    return clip(1.0 - area / (a_u * a_v), 0.0, 1.0)
+
+
+@njit
+def _split(x, n):
+    """Cell and weight of ``x`` in [0, 1] on a table axis of ``n`` cells."""
+    c = clip(x, 0.0, 1.0) * n
+    i = clip(np.floor(c), 0.0, n - 1.0)
+    return int(i), c - i
+
+
+@njit
+def _stipple_threshold(u, v, s_u, s_v, seed, jitter, cdf):
+    ku = level(s_u)
+    tu = s_u - np.floor(s_u)
+    kv = level(s_v)
+    tv = s_v - np.floor(s_v)
+    a_u = np.exp2(tu)  # tile width at level ku, in units of w
+    a_v = np.exp2(tv)
+    f = 0.0
+    for bu in range(2):
+        wu = tu if bu else 1.0 - tu  # eq. 8 along u
+        for bv in range(2):
+            wv = tv if bv else 1.0 - tv  # eq. 8 along v
+            k = (ku + bu, kv + bv)
+            d = _round_dot(u, v, k, (a_u / (1 + bu), a_v / (1 + bv)), seed, jitter)
+            f = f + wu * wv * d
+    if cdf.shape[0] > 0:  # the tone table: trilinear G(f | t_u, t_v)
+        nt = cdf.shape[0] - 1
+        ny = cdf.shape[2] - 1
+        a, fa = _split(tu, float(nt))
+        b, fb = _split(tv, float(nt))
+        i, fi = _split(f, float(ny))
+        out = 0.0
+        for da in range(2):
+            wa = fa if da else 1 - fa
+            for db in range(2):
+                wb = fb if db else 1 - fb
+                g = cdf[a + da, b + db, i] * (1 - fi) + cdf[a + da, b + db, i + 1] * fi
+                out = out + wa * wb * g
+        f = out
+    return clip(f, 0.0, 1.0)
 
 
 def stipple_scales(duv_dx, duv_dy, w) -> tuple[np.ndarray, np.ndarray]:
@@ -182,22 +251,6 @@ def stipple_scales(duv_dx, duv_dy, w) -> tuple[np.ndarray, np.ndarray]:
     s_u = dyadic_scale_from_gradient(gx[..., 0], gy[..., 0], w)  # eq. 5 along u
     s_v = dyadic_scale_from_gradient(gx[..., 1], gy[..., 1], w)  # eq. 5 along v
     return s_u, s_v
-
-
-def _blend(u, v, s_u, s_v, seed, jitter):
-    """Tensor-product eq. 8 over the two axes' consecutive scales (float64)."""
-    ku, tu = scale_split(s_u)
-    kv, tv = scale_split(s_v)
-    a_u = np.exp2(tu)  # tile width at level ku, in units of w
-    a_v = np.exp2(tv)
-    f = np.zeros(np.broadcast(u, v, s_u, s_v).shape)
-    for bu in (0, 1):
-        wu = tu if bu else 1.0 - tu  # eq. 8 along u
-        for bv in (0, 1):
-            wv = tv if bv else 1.0 - tv  # eq. 8 along v
-            d = _round_dot(u, v, ku + bu, kv + bv, a_u / (1 + bu), a_v / (1 + bv), seed, jitter)
-            f = f + wu * wv * d
-    return f, tu, tv
 
 
 @dataclass(frozen=True, eq=False)
@@ -257,11 +310,14 @@ def stipple_tone_table(
     y = np.linspace(0.0, 1.0, n_y)
     ts = np.linspace(0.0, 1.0, n_t)
     cdf = np.empty((n_t, n_t, n_y))
+    bits = seed_bits(seed)
     for a, t_u in enumerate(ts):
         for b, t_v in enumerate(ts):
-            s_u = np.full(u.shape, min(t_u, 1.0 - 1e-12))
-            s_v = np.full(u.shape, min(t_v, 1.0 - 1e-12))
-            f, _, _ = _blend(u, v, s_u, s_v, seed, jitter)
+            s_u = min(t_u, 1.0 - 1e-12)
+            s_v = min(t_v, 1.0 - 1e-12)
+            f = elementwise(
+                _stipple_threshold, np.float64, u, v, s_u, s_v, bits, jitter, Whole(NO_TABLE)
+            )
             cdf[a, b] = np.searchsorted(np.sort(f), y, side="right") / f.size
     for a in (0, n_t - 1):
         for b in (0, n_t - 1):
@@ -272,27 +328,7 @@ def stipple_tone_table(
     return StippleToneTable(cdf=cdf, jitter=jitter)
 
 
-def _apply(table: StippleToneTable, f: np.ndarray, tu: np.ndarray, tv: np.ndarray) -> np.ndarray:
-    """Trilinear lookup of G(f | t_u, t_v)."""
-    c = table.cdf
-    nt, ny = c.shape[0] - 1, c.shape[2] - 1
-
-    def split(x, n):
-        x = np.clip(x, 0.0, 1.0) * n
-        i = np.clip(np.floor(x), 0, n - 1).astype(np.intp)
-        return i, x - i
-
-    a, fa = split(tu, nt)
-    b, fb = split(tv, nt)
-    i, fi = split(f, ny)
-    out = 0.0
-    for da, wa in ((0, 1 - fa), (1, fa)):
-        for db, wb in ((0, 1 - fb), (1, fb)):
-            g = c[a + da, b + db, i] * (1 - fi) + c[a + da, b + db, i + 1] * fi
-            out = out + wa * wb * g
-    return out
-
-
+@face(_stipple_threshold)
 def stipple_threshold(
     uv,
     s_u,
@@ -349,9 +385,8 @@ def stipple_threshold(
     s_u = real("s_u", s_u, dt)
     s_v = real("s_v", s_v, dt)
     broadcast(uv_u=uv[..., 0], s_u=s_u, s_v=s_v)
-    u = uv[..., 0].astype(np.float64)
-    v = uv[..., 1].astype(np.float64)
-    f, tu, tv = _blend(u, v, s_u.astype(np.float64), s_v.astype(np.float64), seed, jitter)
-    if tone_table is not None:
-        f = _apply(tone_table, f, tu, tv)
-    return np.asarray(np.clip(f, 0.0, 1.0), dtype=dt)
+    cdf = NO_TABLE if tone_table is None else tone_table.cdf
+    return elementwise(
+        stipple_threshold.scalar, dt, uv[..., 0], uv[..., 1], s_u, s_v, seed_bits(seed), jitter,
+        Whole(np.ascontiguousarray(cdf, dtype=np.float64)),
+    )  # fmt: skip

@@ -1,6 +1,8 @@
 """Line-texture compositions of Veryovka sec. 3.2 (Fig. 4): hatching at one or more angles and
 stippling from a 2D multi-scale dot function.
 
+The per-sample formulas (the hatch coordinate, the dot function, the dot texture and its
+scale) are scalar device functions (``f.scalar``); the public functions are their numpy faces.
 Public names are re-exported by :mod:`refnpr.formulas.threshold`.
 """
 
@@ -12,17 +14,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._shading_checks import (
-    broadcast,
-    check_positive,
-    frac,
-    real,
-    scaled_frac,
-    trailing,
-)
+from refnpr._jit import njit
+from refnpr.device.scalars import clip, frac
+
+from .._face import Whole, elementwise, face
+from .._shading_checks import broadcast, check_positive, real, trailing
 from .._validate import check_int, check_scalar, describe, result_dtype
 from .compose import combine_thresholds
-from .lines import dyadic_scale_from_gradient, line_threshold, scale_split
+from .lines import TINY, _dyadic_remap, dyadic_scale_from_gradient, line_threshold
 
 __all__ = [
     "hatch_coordinate",
@@ -45,12 +44,19 @@ def _angle(name: str, value) -> float:
     return check_scalar(name, value, hint="angles are in radians")
 
 
+@njit
+def _hatch_coordinate(u, v, sin_a, cos_a):
+    return -u * sin_a + v * cos_a  # v rotated: iso-lines along (cos a, sin a)
+
+
+@face(_hatch_coordinate)
 def hatch_coordinate(uv, angle: float) -> np.ndarray:
     """Line coordinate of hatching at ``angle``: ``v_theta = -u sin(angle) + v cos(angle)``.
 
     Its iso-lines run along the direction (cos(angle), sin(angle)) of texture space; angle 0
     gives v itself (lines parallel to u, as in the paper). Linear, so the same call maps
     ``duv_dx`` / ``duv_dy`` to the screen derivatives of v_theta.
+    ``hatch_coordinate.scalar(u, v, sin_a, cos_a)`` is the device function.
 
     Parameters
     ----------
@@ -66,7 +72,8 @@ def hatch_coordinate(uv, angle: float) -> np.ndarray:
     a = _angle("angle", angle)
     dt = result_dtype(uv)
     uv = _uv("uv", uv, dt)
-    return np.asarray(-uv[..., 0] * math.sin(a) + uv[..., 1] * math.cos(a), dtype=dt)
+    sin_a, cos_a = math.sin(a), math.cos(a)
+    return elementwise(hatch_coordinate.scalar, dt, uv[..., 0], uv[..., 1], sin_a, cos_a)
 
 
 def hatch_threshold(
@@ -125,6 +132,25 @@ def hatch_threshold(
     return combine_thresholds(layers, onsets=onsets)
 
 
+@njit
+def _dot(pu, pv):
+    """D at a position (pu, pv) in [0, 1)^2 of the cell."""
+    du = pu if pu <= 1 - pu else 1 - pu
+    dv = pv if pv <= 1 - pv else 1 - pv
+    r2 = du * du + dv * dv
+    r2 = r2 if r2 <= 0.5 else 0.5
+    r = max(math.sqrt(r2), 0.5)
+    segment = r * r * math.acos(0.5 / r) - 0.5 * math.sqrt(max(r * r - 0.25, 0.0))
+    area = math.pi * r2 - 4 * (segment if r2 > 0.25 else 0.0)  # within r of the corners
+    return clip(1 - area, 0.0, 1.0)
+
+
+@njit
+def _dot_function(pu, pv):
+    return _dot(frac(pu), frac(pv))  # period 1 in both axes
+
+
+@face(_dot_function)
 def dot_function(p) -> np.ndarray:
     """Base dot function D(p) of the stipple texture: uniform on [0, 1], 1 at lattice points.
 
@@ -132,7 +158,8 @@ def dot_function(p) -> np.ndarray:
     the area of the unit cell within distance r of its corners (pi r^2 up to r = 1/2, minus four
     circular segments beyond). A is the fraction of the cell with a smaller distance, so D is
     exactly uniform over a cell; thresholded, it gives round dots centred on the lattice that
-    grow with darkness and merge at the darkest tones.
+    grow with darkness and merge at the darkest tones. ``dot_function.scalar(pu, pv)`` is the
+    device function.
 
     Parameters
     ----------
@@ -145,23 +172,24 @@ def dot_function(p) -> np.ndarray:
     """
     dt = result_dtype(p)
     p = _uv("p", p, dt)
-    return np.asarray(_dot_kernel(frac(p)), dtype=dt)
+    return elementwise(dot_function.scalar, dt, p[..., 0], p[..., 1])
 
 
-def _dot_kernel(p: np.ndarray) -> np.ndarray:
-    d = np.minimum(p, 1 - p)
-    r2 = np.minimum(d[..., 0] ** 2 + d[..., 1] ** 2, 0.5)
-    r = np.maximum(np.sqrt(r2), 0.5)
-    segment = r * r * np.arccos(0.5 / r) - 0.5 * np.sqrt(np.maximum(r * r - 0.25, 0))
-    area = np.pi * r2 - 4 * np.where(r2 > 0.25, segment, 0)
-    return np.clip(1 - area, 0, 1)
+@njit
+def _dot_dyadic_scale(du, dv, log2_w):
+    rho = max(math.hypot(du[0], du[1]), math.hypot(dv[0], dv[1]))  # the GL LOD footprint
+    rho = rho if rho >= TINY else TINY  # (NaN stays NaN)
+    return -(math.log2(rho) + log2_w)  # eq. 5
 
 
+@face(_dot_dyadic_scale)
 def dot_dyadic_scale(duv_dx, duv_dy, w) -> np.ndarray:
     """Isotropic dyadic scale for 2D textures: eq. 5 with d = 1 / rho, rho the GL LOD footprint.
 
     ``rho = max(|duv_dx|, |duv_dy|)`` (texture units per pixel), ``s = -log2(w * rho)``; a zero
-    footprint is clamped to the smallest normal float so s stays finite.
+    footprint is clamped to the smallest normal float64 so s stays finite.
+    ``dot_dyadic_scale.scalar(du, dv, log2_w)`` is the device function (``du = duv_dx``,
+    ``dv = duv_dy`` as 2-tuples, ``log2_w = log2(w)``).
 
     Parameters
     ----------
@@ -179,10 +207,10 @@ def dot_dyadic_scale(duv_dx, duv_dy, w) -> np.ndarray:
     gy = _uv("duv_dy", duv_dy, dt)
     w = real("w", w, dt)
     check_positive("w", w, "w is the dot spacing in pixels, e.g. 6")
-    rho = np.maximum(np.hypot(gx[..., 0], gx[..., 1]), np.hypot(gy[..., 0], gy[..., 1]))
-    broadcast(rho=rho, w=w)
-    rho = np.maximum(rho, np.finfo(dt).tiny)
-    return np.asarray(-(np.log2(rho) + np.log2(w)), dtype=dt)  # eq. 5
+    broadcast(duv_dx=gx[..., 0], duv_dy=gy[..., 0], w=w)
+    du = (gx[..., 0], gx[..., 1])
+    dv = (gy[..., 0], gy[..., 1])
+    return elementwise(dot_dyadic_scale.scalar, dt, du, dv, np.log2(w.astype(np.float64)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,9 +251,9 @@ def dot_tone_table(*, n_t: int = 33, n_y: int = 257, samples: int = 256) -> DotT
     n_y = check_int("n_y", n_y, lo=2)
     samples = check_int("samples", samples, lo=8)
     g = (np.arange(samples) + 0.5) / samples
-    p = np.stack(np.meshgrid(g, g, indexing="ij"), axis=-1)
-    d0 = _dot_kernel(p).ravel()
-    d1 = _dot_kernel(np.where(p < 0.5, 2 * p, 2 * p - 1)).ravel()
+    pu, pv = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
+    d0 = elementwise(_dot, np.float64, pu, pv)
+    d1 = elementwise(_dot, np.float64, *(np.where(p < 0.5, 2 * p, 2 * p - 1) for p in (pu, pv)))
     y = np.linspace(0.0, 1.0, n_y)
     cdf = np.empty((n_t, n_y))
     for j, t in enumerate(np.linspace(0.0, 1.0, n_t)):
@@ -239,21 +267,33 @@ def dot_tone_table(*, n_t: int = 33, n_y: int = 257, samples: int = 256) -> DotT
     return DotToneTable(cdf=cdf)
 
 
-def _apply_table(table: DotToneTable, f: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Bilinear lookup of G(f, t) in the table."""
-    c = table.cdf
-    nt, ny = c.shape[0] - 1, c.shape[1] - 1
-    x = np.asarray(t, dtype=np.float64) * nt
-    j = np.clip(np.floor(x), 0, nt - 1).astype(np.intp)
-    ft = x - j
-    yy = np.clip(np.asarray(f, dtype=np.float64), 0, 1) * ny
-    i = np.clip(np.floor(yy), 0, ny - 1).astype(np.intp)
-    fy = yy - i
-    g0 = c[j, i] * (1 - fy) + c[j, i + 1] * fy
-    g1 = c[j + 1, i] * (1 - fy) + c[j + 1, i + 1] * fy
-    return (1 - ft) * g0 + ft * g1
+@njit
+def _half_scale(p):
+    return 2 * p if p < 0.5 else 2 * p - 1  # eq. 7 per axis: Frac(2 p)
 
 
+@njit
+def _dot_threshold(u, v, s, cdf):
+    t = s - np.floor(s)
+    pu = _dyadic_remap(u, s)  # eq. 6 per axis
+    pv = _dyadic_remap(v, s)
+    f = (1 - t) * _dot(pu, pv) + t * _dot(_half_scale(pu), _half_scale(pv))  # eq. 8
+    if cdf.shape[0] > 0:  # bilinear lookup of G(f, t) in the tone table
+        nt = cdf.shape[0] - 1
+        ny = cdf.shape[1] - 1
+        x = t * nt
+        j = int(clip(np.floor(x), 0.0, nt - 1.0))
+        ft = x - j
+        yy = clip(f, 0.0, 1.0) * ny
+        i = int(clip(np.floor(yy), 0.0, ny - 1.0))
+        fy = yy - i
+        g0 = cdf[j, i] * (1 - fy) + cdf[j, i + 1] * fy
+        g1 = cdf[j + 1, i] * (1 - fy) + cdf[j + 1, i + 1] * fy
+        f = (1 - ft) * g0 + ft * g1
+    return clip(f, 0.0, 1.0)
+
+
+@face(_dot_threshold)
 def dot_threshold(uv, s, *, tone_table: DotToneTable | None = None) -> np.ndarray:
     """Multi-scale stipple threshold texture (Veryovka sec. 3.2, Fig. 4): eqs. 6-8 in 2D.
 
@@ -262,7 +302,8 @@ def dot_threshold(uv, s, *, tone_table: DotToneTable | None = None) -> np.ndarra
     stay lattice points) and new dots grow in the cell centres as t goes from 0 to 1; no jump
     where s crosses an integer. With ``tone_table`` the blend is made uniform at every t (the
     paper's blend drifts in tone, as for lines), through a monotone map that keeps the order of
-    values.
+    values. ``dot_threshold.scalar(u, v, s, cdf)`` is the device function (``cdf`` the table's,
+    or an empty (0, 0) array).
 
     Parameters
     ----------
@@ -285,10 +326,6 @@ def dot_threshold(uv, s, *, tone_table: DotToneTable | None = None) -> np.ndarra
     uv = _uv("uv", uv, dt)
     s = real("s", s, dt)
     broadcast(uv_u=uv[..., 0], s=s)
-    k, t = scale_split(s)
-    p = scaled_frac(uv, k[..., None])  # eq. 6 per axis
-    p1 = np.where(p < 0.5, 2 * p, 2 * p - 1)  # eq. 7 per axis
-    f = (1 - t) * _dot_kernel(p) + t * _dot_kernel(p1)  # eq. 8
-    if tone_table is not None:
-        f = _apply_table(tone_table, f, t)
-    return np.asarray(np.clip(f, 0, 1), dtype=dt)
+    cdf = np.zeros((0, 0)) if tone_table is None else tone_table.cdf
+    cdf = Whole(np.ascontiguousarray(cdf, dtype=np.float64))
+    return elementwise(dot_threshold.scalar, dt, uv[..., 0], uv[..., 1], s, cdf)

@@ -1,7 +1,9 @@
 """Kit export of the ``threshold`` style (Veryovka 2002): every parameter resolved, every table
 and texture the style samples written as files (interface A of the conformance kit).
 
-What a backend receives, beyond ``ThresholdParams`` with every field present (None as null):
+What a backend receives, beyond every parameter of the style's declaration
+(:data:`refnpr.styles.threshold.params.PARAMS`, in its order, None as null; ``pyramid``, a
+Python object, left out; the deprecated ``scale`` after ``tone_fade``):
 
 - ``uv_scales``: per object index ``[su, sv]`` multiplying uv (the style's ``uv_scale`` or the
   material's, times the deprecated ``scale``), as :meth:`ThresholdStyle.uv_scales` resolves it.
@@ -22,7 +24,6 @@ What a backend receives, beyond ``ThresholdParams`` with every field present (No
 from __future__ import annotations
 
 import math
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +31,7 @@ import numpy as np
 
 from refnpr.formulas import threshold as thr
 from refnpr.kit.textures import ORIENTATION_ROW0_V0, write_texture_levels
+from refnpr.styles.threshold.shading import uv_scale_table
 
 __all__ = ["export", "unresolved", "DERIVED"]
 
@@ -41,8 +43,8 @@ DERIVED = {
         "Blinn-Phong max(n.h, 0)^shininess where n.L > 0 and shininess > 0 (n not renormalized, "
         "h = normalize(L + V), V = normalize(eye - position)), B(x) = x + strength * s_o * s_i * "
         "(T_n(x) - x) with s_o = 1 - facing_fade |n.v|^facing_power and s_i the smoothstep "
-        "tone fades (refnpr/styles/threshold/strength.py); T_n filtered as params.filter says "
-        "(refnpr/styles/threshold/sources.py, images.py); the colour is clipped to [0, 1], "
+        "tone fades (refnpr/formulas/threshold/strength.py); T_n filtered as params.filter says "
+        "(refnpr/styles/threshold/_kernels.py, images.py); the colour is clipped to [0, 1], "
         "alpha 1. uv is multiplied by params.uv_scales[mesh_id] before any lookup, and so are "
         "duv_dx / duv_dy (per-pixel derivatives; a sample's footprint is 1/n of them, n = "
         "sqrt(spp))."
@@ -68,31 +70,22 @@ DERIVED = {
 }
 
 
-def _plain(value: Any) -> Any:
-    """JSON-able: tuples as lists, numpy scalars as Python numbers."""
-    if isinstance(value, (tuple, list)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-def _uv_scales(p: Any, scene: Any) -> list[list[float]]:
-    """Per object ``[su, sv]`` exactly as ThresholdStyle.uv_scales resolves it."""
-    out = []
-    for obj in scene.objects:
-        base = np.asarray(
-            p.uv_scale if p.uv_scale is not None else obj.material.uv_scale, dtype=np.float64
-        )
-        if p.scale is not None:
-            base = base * p.scale
-        out.append([float(base[0]), float(base[1])])
+def _params(style: Any) -> dict[str, Any]:
+    """Every declared parameter (None as null) but the Python-only ``pyramid``, the deprecated
+    ``scale`` where ``uv_scale`` is declared (both shown, as params() shows them)."""
+    out = {}
+    for name, value in style.p.as_dict(keep_none=True).items():
+        if name == "pyramid":
+            continue
+        out[name] = value
+        if name == "uv_scale":
+            out["scale"] = style.scale
     return out
 
 
 def _image_textures(style: Any, scene: Any, case_dir: Path, params: dict, textures: dict) -> None:
-    """Threshold pyramids (and tone maps) per distinct texture, as the style's thresholder
-    groups objects (refnpr/styles/threshold/style.py ``thresholder``)."""
+    """Threshold pyramids (and tone maps) per distinct texture, as the style groups objects
+    (refnpr/styles/threshold/style.py ``image_thresholds``)."""
     p = style.p
     roles: dict[Any, str | None] = {}
     per_object = []
@@ -176,8 +169,8 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
     if getattr(base, "name", "") != "threshold":
         raise TypeError(f"style: expected a 'threshold' style, got {getattr(base, 'name', base)!r}")
     p = base.p
-    params: dict[str, Any] = {k: _plain(v) for k, v in asdict(p).items()}
-    params["uv_scales"] = _uv_scales(p, scene)
+    params = _params(base)
+    params["uv_scales"] = uv_scale_table(base, scene).tolist()  # as the kernel reads them
     params["channel_scale"] = bool(base._channel_scale())
     params["spp_n"] = int(round(math.sqrt(spp)))
     textures: dict[str, Any] = {}
@@ -189,8 +182,7 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
         lam, levels = thr.layer_schedule(onsets)
         params["layer_schedule"] = {"lam": lam.tolist(), "levels": levels.tolist()}
     if p.source == "stipple" and p.uniform:
-        table = thr.stipple_tone_table(jitter=p.jitter)  # the style's own call
-        c = table.cdf
+        c = base.stipple_tone_table().cdf  # the style's own table
         textures["stipple_tone"] = write_texture_levels(
             case_dir,
             "stipple_tone",

@@ -24,7 +24,6 @@ Scene files and the CLI reach every parameter::
 
 from __future__ import annotations
 
-from .params import ThresholdParams
 from .style import ThresholdStyle
 
-__all__ = ["ThresholdStyle", "ThresholdParams"]
+__all__ = ["ThresholdStyle"]

@@ -1,4 +1,10 @@
-"""Image threshold textures of the ``threshold`` style (Veryovka sec. 3.1 and sec. 4).
+"""Image threshold textures of the ``threshold`` style (Veryovka sec. 3.1 and sec. 4), and the
+footprint of the covered samples in texture space.
+
+The footprint of a sample is its share of the pixel: with ``spp = k * k`` the pixel derivatives
+divided by k. Scales (the dyadic scale of eq. 5, the mip LOD) are per *pixel* whatever the
+supersampling, so that supersampling converges to the box filter of the one-sample-per-pixel
+image of the same view.
 
 Pyramids are built once per (texture, tiling, window, clip limit, nbins, rank equalization,
 CLAHE levels) and cached in a :class:`PyramidCache` owned by the style instance (never rebuilt
@@ -7,6 +13,9 @@ pyramid serves objects with different ``uv_scale``.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -21,16 +30,51 @@ from refnpr.texture import (
     sample_trilinear,
 )
 
-from .params import ThresholdParams
-from .sources import Footprint, SampledThresholds
-
 __all__ = [
+    "Footprint",
+    "grid_offsets",
     "PyramidCache",
     "ToneMaps",
     "interpolation_quantiles",
     "texture_lod",
     "image_thresholds",
 ]
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """Texture coordinates of the M covered samples of a frame.
+
+    Attributes
+    ----------
+    uv : (M, 2) float64
+        Texture coordinates (already multiplied by the style's or material's ``uv_scale``).
+    gx, gy : (M, 2) float64
+        Screen derivatives of ``uv`` per pixel (x to the right, y downward).
+    n : int
+        Samples per pixel along each axis: a sample covers ``1 / n`` of the pixel per axis.
+    """
+
+    uv: np.ndarray
+    gx: np.ndarray
+    gy: np.ndarray
+    n: int
+
+    def offsets_uv(self, k: int) -> np.ndarray:
+        """(M, k*k, 2) texture coordinates of a k x k grid over each sample's footprint."""
+        o = grid_offsets(k) / self.n  # (K, 2) in pixels
+        return (
+            self.uv[:, None, :]
+            + o[None, :, 0:1] * self.gx[:, None, :]
+            + o[None, :, 1:2] * self.gy[:, None, :]
+        )
+
+
+def grid_offsets(k: int) -> np.ndarray:
+    """(k*k, 2) float64 offsets ((i + 0.5) / k - 0.5, (j + 0.5) / k - 0.5) in [-1/2, 1/2]^2."""
+    g = (np.arange(k) + 0.5) / k - 0.5
+    oy, ox = np.meshgrid(g, g, indexing="ij")
+    return np.stack([ox.ravel(), oy.ravel()], axis=-1)
 
 
 #: Quantiles kept per level for the interpolation tone correction.
@@ -100,7 +144,7 @@ class PyramidCache:
     def __len__(self) -> int:
         return len(self._pyramids)
 
-    def get(self, texture: str, p: ThresholdParams, *, tiling: str | None = None) -> MipPyramid:
+    def get(self, texture: str, p: Any, *, tiling: str | None = None) -> MipPyramid:
         """The threshold pyramid of ``texture`` (built-in name or path) for ``p``'s CLAHE settings.
 
         ``clahe_levels``: "all" applies CLAHE to every mip level (sec. 3.1); "base" equalizes
@@ -145,10 +189,12 @@ def image_thresholds(
     fp: Footprint,
     pyramids: list[MipPyramid | None],
     group: np.ndarray,
-    p: ThresholdParams,
+    p: Any,
     tone_maps: list[ToneMaps | None] | None = None,
-) -> SampledThresholds:
-    """Thresholder of image threshold textures (sec. 3.1) with the style's filter (sec. 4).
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Threshold samples of image threshold textures (sec. 3.1) with the style's filter (sec. 4):
+    ``(t, w)``, the (M, K) thresholds per covered sample and their weights (None: one threshold,
+    unfiltered), thresholded in the kernel as ``pcf_threshold`` (or ``step_n`` for one).
 
     Parameters
     ----------
@@ -157,7 +203,7 @@ def image_thresholds(
         One per group; None stands for the constant threshold ``p.t`` (untextured objects).
     group : (M,) int
         Index into ``pyramids`` of each sample.
-    p : ThresholdParams
+    p : the style's parameter values
         ``filter="none"``: one trilinear threshold per sample. ``filter="pcf"``: K samples on a
         k x k grid over the footprint, each thresholded at the two mip levels that trilinear
         filtering would blend, weighted (1 - Frac(lambda)) / K and Frac(lambda) / K; K = 1 is the
@@ -199,4 +245,4 @@ def image_thresholds(
         t[sel, :kk], t[sel, kk:] = t0, t1
         w[sel, :kk] = ((1.0 - f) / kk)[:, None]  # sec. 4: weighted sum over two mip levels
         w[sel, kk:] = (f / kk)[:, None]
-    return SampledThresholds(t, w)
+    return t, w

@@ -1,45 +1,32 @@
-"""Validated parameters of the ``threshold`` style (Veryovka 2002); all TOML-representable."""
+"""The ``threshold`` style's parameters (Veryovka 2002), each declared once: :data:`PARAMS`.
+
+Checks between parameters (analytic filtering needs lines, one onset per direction) are the
+style's (:func:`checked`); the deprecated forms ``scale`` and ``pcf_levels`` are converted by
+:func:`deprecated_forms` before the declaration validates the rest.
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from refnpr.texture import TILINGS
 
-from .._common import check_choice, check_count, check_number, check_uv_scale, warn_unused
-from .._names import check_known, renamed_params, warn_deprecated
+from .._common import check_count, check_number, check_uv_scale
+from .._declare import NOT_NONE, Param, Params
+from .._names import renamed_params, warn_deprecated
 
-__all__ = [
-    "SOURCES",
-    "FILTERS",
-    "CLAHE_LEVELS",
-    "MIPS",
-    "RENAMED",
-    "ThresholdParams",
-    "parse_params",
-]
+__all__ = ["PARAMS", "SOURCES", "FILTERS", "MIPS", "deprecated_forms", "checked", "parse_params"]
 
 SOURCES = ("constant", "image", "lines", "stipple")
 FILTERS = ("none", "pcf", "analytic")
 CLAHE_LEVELS = ("all", "base", "none")
 MIPS = ("per_level", "trilinear")
-#: Deprecated names -> the names the other styles use for the same thing (accepted with a
-#: DeprecationWarning). ``scale`` and ``pcf_levels`` changed form too; see :func:`parse_params`.
-RENAMED = {"angles": "directions"}
+#: Names whose value changed form, converted by :func:`deprecated_forms` (with a warning).
 DEPRECATED = ("scale", "pcf_levels")
 _WHERE = "style 'threshold'"
-
-
-def _bool(name: str, value: Any) -> bool:
-    if not isinstance(value, bool):
-        raise TypeError(f"{name}: expected a bool (true/false), got {value!r}")
-    return bool(value)
-
-
 #: Most hatching layers (``directions``): each is a full threshold pass per sample.
 MAX_LAYERS = 64
 #: Largest ``noise_scale`` (noise cells per texture unit) and deprecated ``scale``: the noise
@@ -62,64 +49,7 @@ def _numbers(
     return out
 
 
-@dataclass(frozen=True)
-class ThresholdParams:
-    """Parameters of :class:`refnpr.styles.threshold.ThresholdStyle` (see its docstring)."""
-
-    source: str = "lines"
-    n: int = 1
-    t: float = 0.5
-    specular: bool = True
-    specular_threshold: str | float = "texture"
-    filter: str = "none"
-    samples: int = 4
-    strength: float = 1.0
-    facing_fade: float = 0.0
-    facing_power: float = 1.0
-    tone_fade: tuple[float, float] = (0.0, 0.0)
-    uv_scale: tuple[float, float] | None = None
-    #: Deprecated (use ``uv_scale``): multiplies the material's uv_scale.
-    scale: float | None = None
-    # image threshold textures (sec. 3.1)
-    texture: str | None = None
-    window: int = 16
-    clip_limit: float = 0.01
-    nbins: int = 256
-    rank_equalize: bool = True
-    clahe_levels: str = "all"
-    tiling: str = "none"
-    tone_correct: bool = False
-    mip: str = "per_level"
-    lod_bias: float = 0.0
-    # procedural lines and dots (sec. 3.2)
-    period: float = 8.0
-    directions: tuple[float, ...] = (0.0,)
-    onsets: tuple[float, ...] | None = None
-    uniform: bool = False
-    multiscale: bool = True
-    noise: float = 0.0
-    noise_scale: float = 4.0
-    noise_seed: int = 0
-    jitter: float = 0.2
-    # bump mapping (Fig. 2, top centre)
-    bump: str | None = None
-    bump_height: float = 0.02
-
-    def as_dict(self) -> dict[str, Any]:
-        """TOML-friendly dict (tuples as lists, None values dropped)."""
-        out = {}
-        for k, v in asdict(self).items():
-            if v is None:
-                continue
-            out[k] = list(v) if isinstance(v, tuple) else v
-        return out
-
-
-#: The names the style takes (``scale`` is the deprecated form of ``uv_scale``).
-PARAMETERS = tuple(sorted({f.name for f in fields(ThresholdParams)} - {"scale"}))
-
-
-def _directions(value: Any) -> tuple[float, ...]:
+def _directions(name: str, value: Any) -> tuple[float, ...]:
     """Hatching directions: 'u' (0 degrees), 'v' (90) or angles in degrees, as for ``tamiss``;
     a list (tuple, 1-D array) of them or a single one."""
     one = isinstance(value, (str, bytes, dict)) or np.ndim(value) == 0
@@ -128,29 +58,332 @@ def _directions(value: Any) -> tuple[float, ...]:
     bad = [d for d in named if isinstance(d, str)]
     if bad:
         raise ValueError(
-            f"directions: each layer is 'u', 'v' or an angle in degrees from u towards v, "
+            f"{name}: each layer is 'u', 'v' or an angle in degrees from u towards v, "
             f"got {bad[0]!r}"
         )
-    return _numbers("directions", named, lo=-360.0, hi=360.0, what="hatching angles, degrees")
+    return _numbers(name, named, lo=-360.0, hi=360.0, what="hatching angles, degrees")
 
 
-def _bump(value: Any) -> str | None:
-    if value is not None and (not isinstance(value, str) or not value):
-        raise TypeError(
-            f"bump: expected a built-in texture name or an image path (str) for the height map, "
-            f"got {value!r}"
+def _onsets(name: str, value: Any) -> tuple[float, ...]:
+    onsets = _numbers(name, value, lo=0.0, hi=1.0, what="onset intensity per direction")
+    if min(onsets) <= 0.0 or max(onsets) != 1.0:
+        raise ValueError(
+            f"{name}: expected values in (0, 1] whose largest is 1 (the first layer shows at "
+            f"every tone below white), got {list(onsets)}"
+        )
+    return onsets
+
+
+def _tone_fade(name: str, value: Any) -> tuple[float, float]:
+    widths = _numbers(name, value, lo=0.0, hi=0.5, what="[dark, bright] widths")
+    if len(widths) != 2:
+        raise ValueError(f"{name}: expected two widths [dark, bright], got {list(widths)}")
+    return widths[0], widths[1]
+
+
+def _specular_threshold(name: str, value: Any) -> str | float:
+    if isinstance(value, str):
+        if value != "texture":
+            raise ValueError(f"{name}: expected 'texture' or a number in [0, 1], got {value!r}")
+        return value
+    return check_number(name, value, lo=0.0, hi=1.0)
+
+
+def _samples(name: str, value: int) -> int:
+    if math.isqrt(value) ** 2 != value:
+        raise ValueError(
+            f"{name}: expected a square number of threshold samples (1, 4, 9, 16, ...) laid out "
+            f"on a k x k grid over the footprint, got {value}"
         )
     return value
 
 
-def _deprecated_forms(kw: dict[str, Any]) -> dict[str, Any]:
+def _texture(name: str, value: Any) -> str:
+    if not isinstance(value, str) or not value:
+        raise TypeError(
+            f"{name}: expected a built-in texture name or an image path (str), got {value!r}"
+        )
+    return value
+
+
+def _bump(name: str, value: Any) -> str:
+    if not isinstance(value, str) or not value:
+        raise TypeError(
+            f"{name}: expected a built-in texture name or an image path (str) for the height "
+            f"map, got {value!r}"
+        )
+    return value
+
+
+def _pyramid(name: str, value: Any) -> Any:
+    from refnpr.texture import MipPyramid
+
+    if not isinstance(value, MipPyramid):
+        raise TypeError(
+            f"{name}: expected a refnpr.texture.MipPyramid (clahe_pyramid(...)), got "
+            f"{type(value).__name__}"
+        )
+    if value.channels != 1:
+        raise ValueError(f"{name}: threshold pyramids are gray, got {value.channels} channels")
+    return value
+
+
+_IMAGE = {"source": ("image",)}
+_LINES = {"source": ("lines",)}
+
+PARAMS = Params(
+    "threshold",
+    Param(
+        "source",
+        "lines",
+        "where thresholds come from: the constant t (the toon step), an image threshold "
+        "texture (texture, else each material's; sec. 3.1), multi-scale lines (sec. 3.2) or "
+        "stipple dots (Fig. 4)",
+        kind="choice",
+        choices=SOURCES,
+    ),
+    Param("n", 1, "steps of T_n (eq. 4): n + 1 tones", kind="int", lo=1, hi=256),
+    Param(
+        "t",
+        0.5,
+        "constant threshold (source constant, and untextured objects of source image)",
+        lo=0.0,
+        hi=1.0,
+    ),
+    Param("specular", True, "add the thresholded specular term (needs positions)", kind="bool"),
+    Param(
+        "specular_threshold",
+        "texture",
+        "threshold the specular term against the same texture, or against this constant",
+        kind="any",
+        parse=_specular_threshold,
+        accepts='"texture" or float in [0, 1]',
+    ),
+    Param(
+        "filter",
+        "none",
+        "none: one threshold per sample (binary); pcf: samples thresholds over the footprint, "
+        "results averaged (images: at two mip levels each, sec. 4); analytic: exact box filter "
+        "of the thresholded lines (source lines only)",
+        kind="choice",
+        choices=FILTERS,
+    ),
+    Param(
+        "samples",
+        4,
+        "threshold samples of pcf, on a k x k grid over the footprint (a square: 1, 4, 9, ...)",
+        kind="int",
+        lo=1,
+        hi=256,
+        parse=_samples,
+        used_when={"filter": ("pcf",)},
+    ),
+    Param("strength", 1.0, "blend from eq. 1 (0) to eq. 2 (1) (sec. 5)", lo=0.0, hi=1.0),
+    Param(
+        "facing_fade",
+        0.0,
+        "orientation fade: strength times 1 - facing_fade |n.v|^facing_power (Fig. 5 centre)",
+        lo=0.0,
+        hi=1.0,
+    ),
+    Param("facing_power", 1.0, "exponent of the orientation fade", lo=0.0, lo_open=True),
+    Param(
+        "tone_fade",
+        (0.0, 0.0),
+        "illumination fade: widths [dark, bright] in [0, 0.5] of the smoothsteps to no effect "
+        "at x = 0 and x = 1 (Fig. 5 right)",
+        kind="any",
+        parse=_tone_fade,
+        accepts="2 floats",
+    ),
+    Param(
+        "uv_scale",
+        None,
+        "multiplies texture coordinates in place of each material's uv_scale (none: the "
+        "materials'); deprecated: scale, which multiplied the material's",
+        kind="any",
+        parse=check_uv_scale,
+        accepts="float or 2 floats",
+    ),
+    Param(
+        "texture",
+        None,
+        "image threshold texture (built-in name or path) for every object (none: the materials')",
+        kind="any",
+        parse=_texture,
+        accepts="str",
+        used_when=_IMAGE,
+    ),
+    Param(
+        "window",
+        16,
+        "CLAHE window w in texels (sec. 3.1), on the torus: contextual regions wrap around, so "
+        "every level tiles",
+        kind="int",
+        lo=2,
+        hi=4096,
+    ),
+    Param("clip_limit", 0.01, "CLAHE clip limit", lo=0.0, lo_open=True, hi=1.0),
+    Param("nbins", 256, "CLAHE histogram bins", kind="int", lo=2, hi=65536),
+    Param(
+        "rank_equalize",
+        True,
+        "make each CLAHE level exactly uniform (clahe_pyramid(uniform=True))",
+        kind="bool",
+    ),
+    Param(
+        "clahe_levels",
+        "all",
+        "CLAHE on every mip level (sec. 3.1), on level 0 only (plain mip-map, Fig. 3 right "
+        "wall) or not at all (raw image, Fig. 2 top right)",
+        kind="choice",
+        choices=CLAHE_LEVELS,
+    ),
+    Param(
+        "tiling",
+        "none",
+        "how an image file is made to repeat before CLAHE: periodic uses its periodic "
+        "component (Moisan 2011), so a photograph whose borders differ tiles without a seam",
+        kind="choice",
+        choices=TILINGS,
+        used_when=_IMAGE,
+    ),
+    Param(
+        "tone_correct",
+        False,
+        "map each level's bilinear threshold samples through that level's interpolant CDF "
+        "(exact tone per level; refnpr's addition, see below)",
+        kind="bool",
+    ),
+    Param(
+        "mip",
+        "per_level",
+        "image pcf: threshold every footprint sample at the two mip levels and blend (sec. 4), "
+        "or against one trilinear threshold; deprecated: pcf_levels = 2 | 1",
+        kind="choice",
+        choices=MIPS,
+    ),
+    Param("lod_bias", 0.0, "added to the mip LOD", lo=-16.0, hi=16.0),
+    Param(
+        "period",
+        8.0,
+        "line period w of eq. 5 (lines and dots; the screen period lies in [w, 2 w))",
+        lo=0.0,
+        lo_open=True,
+        unit="px",
+    ),
+    Param(
+        "directions",
+        (0.0,),
+        "hatching directions in texture space: u (0, lines parallel to u), v (90) or angles; "
+        "several give cross-hatching; deprecated: angles",
+        kind="any",
+        parse=_directions,
+        unit="degrees",
+        accepts="u, v, float or a list",
+    ),
+    Param(
+        "onsets",
+        None,
+        "per direction, the intensity below which that layer appears (the largest 1; none: all 1)",
+        kind="any",
+        parse=_onsets,
+        accepts="list of floats in (0, 1]",
+        used_when=_LINES,
+    ),
+    Param(
+        "uniform",
+        False,
+        "tone-preserving multi-scale blend (lines: multiscale_line(uniform=True); dots: the "
+        "tone table) instead of eq. 8, which drifts in tone between integer scales",
+        kind="bool",
+    ),
+    Param(
+        "multiscale",
+        True,
+        "eqs. 7-8's transition between dyadic scales; false floors the scale (eq. 6 alone: "
+        "lines pop where the scale crosses an integer)",
+        kind="bool",
+    ),
+    Param(
+        "noise",
+        0.0,
+        "amplitude of the lines' phase modulation (sec. 3.2)",
+        lo=0.0,
+        hi=1.0,
+        unit="periods",
+    ),
+    Param(
+        "noise_scale",
+        4.0,
+        "value-noise cells per texture unit",
+        lo=0.0,
+        lo_open=True,
+        hi=MAX_NOISE_SCALE,
+    ),
+    Param(
+        "noise_seed",
+        0,
+        "seed of the line noise and of the stipple's dot placement",
+        kind="int",
+        record=False,
+    ),
+    Param(
+        "jitter",
+        0.2,
+        "stipple: dot offsets (rows of dots at random phases, each dot up to jitter off its "
+        "lattice point; 0: a rectangular lattice per level)",
+        lo=0.0,
+        hi=0.4,
+        unit="tiles",
+        used_when={"source": ("stipple",)},
+    ),
+    Param(
+        "bump",
+        None,
+        "a height texture (built-in name or path) bump-mapping the normals before shading: "
+        "the alternative to threshold textures of Fig. 2 (top centre), usually with source "
+        "constant",
+        kind="any",
+        parse=_bump,
+        accepts="str",
+    ),
+    Param(
+        "bump_height",
+        0.02,
+        "world units per unit of bump texture value (negative: dents)",
+        lo=-1e3,
+        hi=1e3,
+        unit="world units",
+        used_when={"bump": NOT_NONE},
+    ),
+    Param(
+        "pyramid",
+        None,
+        "a prebuilt threshold pyramid (clahe_pyramid(...)) for every object, overriding "
+        "texture (Python only)",
+        kind="any",
+        parse=_pyramid,
+        summary=lambda _: "prebuilt",
+        accepts="MipPyramid",
+    ),
+    renamed={"angles": "directions"},
+    frame=("dark", "bright", "spec_t", "log2_w", "seed", "n_sub", "has_grad"),
+    module=__name__,
+)
+
+
+def deprecated_forms(kw: dict[str, Any]) -> tuple[dict[str, Any], float | None]:
     """Old parameter names whose value changed form: ``pcf_levels`` (2 | 1) is ``mip``
     ("per_level" | "trilinear", the halftone style's name); ``scale`` (a multiplier of the
-    material's uv_scale) gives way to ``uv_scale`` (replaces it, as in every other style)."""
+    material's uv_scale, returned apart) gives way to ``uv_scale`` (replaces it, as in every
+    other style). Both with a DeprecationWarning."""
+    kw = dict(kw)
     if "pcf_levels" in kw:
         levels = check_count("pcf_levels", kw["pcf_levels"], lo=1, hi=2)
         kw = renamed_params(_WHERE, kw, {"pcf_levels": "mip"})
         kw["mip"] = MIPS[0] if levels == 2 else MIPS[1]
+    scale = None
     if "scale" in kw:
         warn_deprecated(
             f"{_WHERE}: parameter 'scale' is deprecated, use 'uv_scale' (one name across styles;"
@@ -160,126 +393,27 @@ def _deprecated_forms(kw: dict[str, Any]) -> dict[str, Any]:
             raise TypeError(
                 f"{_WHERE}: got both 'scale' (deprecated) and 'uv_scale'; pass only 'uv_scale'"
             )
-    return kw
+        scale = kw.pop("scale")
+        if scale is not None:
+            scale = check_number("scale", scale, lo=1e-6, hi=MAX_NOISE_SCALE)
+    return kw, scale
 
 
-def _warn_unused(kw: dict[str, Any], source: str, filt: str) -> None:
-    """A UserWarning for each parameter given that the chosen source or filter ignores."""
-    if kw.get("texture") is not None and source != "image":
-        warn_unused(
-            "texture", kw["texture"], f"source={source!r}", "remove it or use source='image'"
-        )
-    if kw.get("tiling", "none") != "none" and source != "image":
-        warn_unused(
-            "tiling", kw["tiling"], f"source={source!r}", "it applies to image textures only"
-        )
-    if kw.get("onsets") is not None and source != "lines":
-        warn_unused(
-            "onsets", kw["onsets"], f"source={source!r}", "onsets order hatching layers only"
-        )
-    if "jitter" in kw and source != "stipple" and kw["jitter"] != ThresholdParams.jitter:
-        warn_unused("jitter", kw["jitter"], f"source={source!r}", "jitter places stipple dots")
-    if kw.get("bump") is None and kw.get("bump_height", ThresholdParams.bump_height) != (
-        ThresholdParams.bump_height
-    ):
-        warn_unused("bump_height", kw["bump_height"], "bump=None", "name a height texture in bump")
-    if "samples" in kw and filt != "pcf" and kw["samples"] != ThresholdParams.samples:
-        warn_unused("samples", kw["samples"], f"filter={filt!r}", "use filter='pcf'")
-
-
-def parse_params(**kw: Any) -> ThresholdParams:
-    """Validate keyword parameters into :class:`ThresholdParams` (clear errors naming each).
-
-    Deprecated names (``angles``, ``pcf_levels``, ``scale``) are accepted with a
-    ``DeprecationWarning``.
-    """
-    kw = _deprecated_forms(renamed_params(_WHERE, kw, RENAMED))
-    defaults = ThresholdParams()
-    check_known(_WHERE, set(kw) - {"scale"}, PARAMETERS)
-    p = {**asdict(defaults), **kw}
-    source = check_choice("source", p["source"], SOURCES)
-    filt = check_choice("filter", p["filter"], FILTERS)
-    if filt == "analytic" and source != "lines":
+def checked(p: Any) -> Any:
+    """The checks between parameters of validated values ``p``."""
+    if p.filter == "analytic" and p.source != "lines":
         raise ValueError(
-            f"filter: 'analytic' filtering exists for source='lines' only (got source={source!r});"
-            " use filter='pcf' for image and stipple thresholds"
+            f"filter: 'analytic' filtering exists for source='lines' only (got source="
+            f"{p.source!r}); use filter='pcf' for image and stipple thresholds"
         )
-    samples = check_count("samples", p["samples"], lo=1, hi=256)
-    if math.isqrt(samples) ** 2 != samples:
+    if p.onsets is not None and len(p.onsets) != len(p.directions):
         raise ValueError(
-            f"samples: expected a square number of threshold samples (1, 4, 9, 16, ...) laid out "
-            f"on a k x k grid over the footprint, got {samples}"
+            f"onsets: expected one onset per direction ({len(p.directions)}), got {list(p.onsets)}"
         )
-    spec_t = p["specular_threshold"]
-    if isinstance(spec_t, str):
-        if spec_t != "texture":
-            raise ValueError(
-                f"specular_threshold: expected 'texture' or a number in [0, 1], got {spec_t!r}"
-            )
-    else:
-        spec_t = check_number("specular_threshold", spec_t, lo=0.0, hi=1.0)
-    tone_fade = _numbers("tone_fade", p["tone_fade"], lo=0.0, hi=0.5, what="[dark, bright] widths")
-    if len(tone_fade) != 2:
-        raise ValueError(f"tone_fade: expected two widths [dark, bright], got {list(tone_fade)}")
-    texture = p["texture"]
-    if texture is not None and (not isinstance(texture, str) or not texture):
-        raise TypeError(
-            f"texture: expected a built-in texture name or an image path (str), got {texture!r}"
-        )
-    window = check_count("window", p["window"], lo=2, hi=4096)
-    clip_limit = check_number("clip_limit", p["clip_limit"], lo=0.0, lo_open=True, hi=1.0)
-    directions = _directions(p["directions"])
-    onsets = p["onsets"]
-    if onsets is not None:
-        onsets = _numbers("onsets", onsets, lo=0.0, hi=1.0, what="onset intensity per direction")
-        if len(onsets) != len(directions):
-            raise ValueError(
-                f"onsets: expected one onset per direction ({len(directions)}), got {list(onsets)}"
-            )
-        if min(onsets) <= 0.0 or max(onsets) != 1.0:
-            raise ValueError(
-                f"onsets: expected values in (0, 1] whose largest is 1 (the first layer shows at "
-                f"every tone below white), got {list(onsets)}"
-            )
-    _warn_unused(kw, source, filt)
-    noise_seed = p["noise_seed"]
-    if isinstance(noise_seed, bool) or not isinstance(noise_seed, int):
-        raise TypeError(f"noise_seed: expected an integer, got {noise_seed!r}")
-    return ThresholdParams(
-        source=source,
-        n=check_count("n", p["n"], lo=1, hi=256),
-        t=check_number("t", p["t"], lo=0.0, hi=1.0),
-        specular=_bool("specular", p["specular"]),
-        specular_threshold=spec_t,
-        filter=filt,
-        samples=samples,
-        strength=check_number("strength", p["strength"], lo=0.0, hi=1.0),
-        facing_fade=check_number("facing_fade", p["facing_fade"], lo=0.0, hi=1.0),
-        facing_power=check_number("facing_power", p["facing_power"], lo=0.0, lo_open=True),
-        tone_fade=(tone_fade[0], tone_fade[1]),
-        uv_scale=check_uv_scale("uv_scale", p["uv_scale"]),
-        scale=None if p["scale"] is None else check_number("scale", p["scale"], lo=1e-6, hi=1e6),
-        texture=texture,
-        window=window,
-        clip_limit=clip_limit,
-        nbins=check_count("nbins", p["nbins"], lo=2, hi=65536),
-        rank_equalize=_bool("rank_equalize", p["rank_equalize"]),
-        clahe_levels=check_choice("clahe_levels", p["clahe_levels"], CLAHE_LEVELS),
-        tiling=check_choice("tiling", p["tiling"], TILINGS),
-        tone_correct=_bool("tone_correct", p["tone_correct"]),
-        mip=check_choice("mip", p["mip"], MIPS),
-        lod_bias=check_number("lod_bias", p["lod_bias"], lo=-16.0, hi=16.0),
-        period=check_number("period", p["period"], lo=0.0, lo_open=True),
-        directions=directions,
-        onsets=onsets,
-        uniform=_bool("uniform", p["uniform"]),
-        multiscale=_bool("multiscale", p["multiscale"]),
-        noise=check_number("noise", p["noise"], lo=0.0, hi=1.0),
-        noise_scale=check_number(
-            "noise_scale", p["noise_scale"], lo=0.0, lo_open=True, hi=MAX_NOISE_SCALE
-        ),
-        noise_seed=int(noise_seed),
-        jitter=check_number("jitter", p["jitter"], lo=0.0, hi=0.4),
-        bump=_bump(p["bump"]),
-        bump_height=check_number("bump_height", p["bump_height"], lo=-1e3, hi=1e3),
-    )
+    return p
+
+
+def parse_params(**kw: Any) -> Any:
+    """Validated parameter values of keyword parameters (deprecated ``scale`` not taken)."""
+    kw, _ = deprecated_forms(kw)
+    return checked(PARAMS.validate(kw))
