@@ -38,6 +38,17 @@ CASES = [
         "xtoon_teapot",
         {"name": "xtoon", "detail": "orientation", "texture": "silhouette_fade"},
     ),
+    ("refnpr.formulas.threshold", "multiscale_line", "veryovka_plane", {"name": "threshold"}),
+    ("refnpr.formulas.threshold", "step_n", "veryovka_plane", {"name": "threshold", "n": 3}),
+    ("refnpr.formulas.tamiss", "darkness", "tamiss_teapot", {"name": "tam"}),
+    ("refnpr.formulas.tamiss", "cubic", "tamiss_teapot", {"name": "tamiss"}),
+    ("refnpr.formulas.halftone", "smooth_threshold", "halftone_teapot", {"name": "halftone"}),
+    (
+        "refnpr.formulas.halftone",
+        "binary_threshold",
+        "halftone_teapot",
+        {"name": "halftone", "threshold": "binary"},
+    ),
 ]
 SIZE = (64, 48)
 

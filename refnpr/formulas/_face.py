@@ -42,7 +42,7 @@ from numba.extending import overload
 
 from refnpr._jit import njit
 
-__all__ = ["face", "elementwise", "Whole"]
+__all__ = ["face", "elementwise", "elementwise_in", "Whole"]
 
 
 class Whole(NamedTuple):
@@ -207,6 +207,33 @@ def elementwise(scalar: Any, dtype: Any, *args: Any) -> np.ndarray:
     out = _loop_of(scalar, len(packed))(packed, n)[:size]
     result = out.reshape(shape + out.shape[1:])
     dt = np.dtype(dtype)
+    return result.astype(dt, copy=False) if out.dtype.kind == "f" else result
+
+
+def elementwise_in(scalar: Any, dtype: Any, *args: Any) -> np.ndarray:
+    """:func:`elementwise` computing in ``dtype``: float arrays are read as ``dtype`` (float32
+    stays float32), so a scalar function written for any float type (its constants passed in
+    as arguments of that type) runs float32 arithmetic where a kernel does; the result is cast
+    to ``dtype``. Numbers are passed as they are (give float32 constants as ``np.float32``)."""
+    dt = np.dtype(dtype)
+    arrays = [a for a in args if isinstance(a, np.ndarray)]
+    arrays += [c for a in args if _is_vector(a) for c in a]
+    shape = np.broadcast_shapes(*(a.shape for a in arrays)) if arrays else ()
+    size = int(np.prod(shape, dtype=np.int64))
+
+    def flat(a: np.ndarray) -> np.ndarray:
+        if a.dtype.kind == "f":
+            a = a.astype(dt, copy=False)
+        if size == 0:
+            return np.zeros(1, dtype=a.dtype)
+        return np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(size)
+
+    packed = tuple(
+        flat(a) if isinstance(a, np.ndarray) else tuple(flat(c) for c in a) if _is_vector(a) else a
+        for a in args
+    )
+    out = _loop_of(scalar, len(packed))(packed, max(size, 1))[:size]
+    result = out.reshape(shape + out.shape[1:])
     return result.astype(dt, copy=False) if out.dtype.kind == "f" else result
 
 

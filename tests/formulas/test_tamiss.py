@@ -633,3 +633,92 @@ def test_stress_visible_segments_extreme_coefficients(c):
     for j in range(int(count)):
         inside |= (s >= seg[j, 0]) & (s <= seg[j, 1])
     assert np.all(inside[f > 1e-9]) and not np.any(inside[f < -1e-9])
+
+
+# ---------------------------------------------------------------------------------------------
+# the RPTAM stroke field (formulas.tamiss.field): each face against a plain Python loop
+
+
+def test_level_rule_and_fade_in_match_the_definition():
+    s = np.array([-2.5, -0.25, 0.0, 0.5, 1.0, 3.75, 9.99, 10.0, 12.5])
+    got = tamiss.level_rule(s, 10)
+    for (big_l, f, thin), v in zip(got, s, strict=True):
+        want_l, want_f, want_thin = math.floor(v), v - math.floor(v), 1.0
+        if want_l < 0:
+            want_l, want_f, want_thin = 0, 0.0, 2.0**v
+        if want_l >= 10:
+            want_l, want_f = 10, 0.0
+        assert (big_l, f) == (want_l, want_f) and thin == pytest.approx(want_thin, rel=1e-15)
+    np.testing.assert_allclose(tamiss.fade_in([0.0, 0.5, 1.0]), [0.0, 2**0.5 - 1, 1.0])
+    with pytest.raises(ValueError, match="s"):
+        tamiss.level_rule(np.array([np.nan]), 10)
+
+
+def test_layer_frame_and_dyadic_scale_match_python():
+    rng = np.random.default_rng(4)
+    uv, dx, dy = rng.normal(size=(3, 50, 2))
+    dx, dy = dx * 1e-3, dy * 1e-3
+    scale = np.tile([2.0, 3.0], (50, 1))
+    dx[0] = dy[0] = 0.0  # no gradient: no strokes
+    got = tamiss.layer_frame(uv, dx, dy, scale, 30.0)
+    ca, sa = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+    for i in range(50):
+        u, v = uv[i] * scale[i]
+        (ux, vx), (uy, vy) = dx[i] * scale[i], dy[i] * scale[i]
+        gp = math.hypot(ca * ux + sa * vx, ca * uy + sa * vy)
+        gq = math.hypot(-sa * ux + ca * vx, -sa * uy + ca * vy)
+        assert got[i, 0] == ca * u + sa * v and got[i, 1] == -sa * u + ca * v
+        if i == 0:
+            assert np.isnan(got[i, 2:]).all()
+        else:
+            # Python's hypot is correctly rounded, the C library's within an ulp
+            assert (got[i, 2], got[i, 3]) == (
+                pytest.approx(1 / gp, rel=1e-15),
+                pytest.approx(1 / gq, rel=1e-15),
+            )
+    s = tamiss.dyadic_scale(got[1:, 3], 4.0)
+    np.testing.assert_array_equal(s, [math.log2(d / 28.0) for d in got[1:, 3]])
+
+
+def test_density_stroke_and_coverage_match_python():
+    d = np.linspace(-0.2, 1.2, 15)
+    want = [min(max((x - 0.3) / 0.7 * 2.0, 0.0), 1.0) for x in d]
+    np.testing.assert_array_equal(tamiss.layer_density(d, 0.3, 2.0), want)
+    length = tamiss.stroke_length(np.array([0.0, 0.5, 0.99]), 1.5, 0.3, np.array([0, 1, 3]))
+    np.testing.assert_array_equal(length, [1.5 * 0.7, 1.5 * 1.0 / 2, 1.5 * (1 + 0.3 * 0.98) / 8])
+    p_start = tamiss.stroke_start(np.array([3, -2]), np.array([1, 4]), np.array([0, 2]), 0.5)
+    np.testing.assert_array_equal(p_start, [(3 + 6 / 7) - 0.25, (-2 + 3 / 7) / 4 - 0.25])
+    for p in (-1.0, 0.2, 0.5, 0.9, 1.3):
+        t, beyond = tamiss.stroke_param(p, 0.25, 0.5, 8.0)
+        assert t == (p - 0.25) / 0.5 and beyond == max(-t, t - 1) * 0.5 * 8.0
+    assert tamiss.row_distance(0.3, 5, 14.0, 20.0) == abs(0.3 - 5 / 14) * 20.0
+    np.testing.assert_array_equal(tamiss.width_factor(np.array([0.0, 1.0]), 0.2), [0.8, 1.2])
+    for limit, tau in ((0.5, 0.2), (0.5, 0.6), (0.3, 0.25)):
+        assert tamiss.tam_opacity(limit, tau, 0.15, True) == (1.0 if tau < limit else 0.0)
+        assert tamiss.tam_opacity(limit, tau, 0.15, False) == min(max((limit - tau) / 0.15, 0), 1)
+    for dist, beyond in ((0.0, -3.0), (1.2, 0.1), (2.0, 0.7), (0.4, -0.2)):
+        cov = min(max(1.5 * 1.1 / 2 - dist + 0.5, 0), 1) * min(max(0.5 - beyond, 0), 1)
+        assert tamiss.tam_coverage(1.5, 1.1, dist, beyond) == cov
+    assert tamiss.ink_over(0.25, 0.5) == 0.25 + 0.5 * 0.75
+
+
+def test_darkness_is_one_minus_the_clipped_luminance():
+    rgb = np.array([[0.2, 0.5, 0.9], [2.0, 2.0, 2.0], [-1.0, 0.0, 0.0], [np.nan, 0.0, 0.0]])
+    y = (rgb[:, 0] * 0.2126 + rgb[:, 1] * 0.7152) + rgb[:, 2] * 0.0722
+    got = tamiss.darkness(rgb)
+    np.testing.assert_array_equal(got[:3], 1.0 - np.clip(y[:3], 0.0, 1.0))
+    assert np.isnan(got[3])
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_cubic_and_slope_are_horner_in_the_coefficients_type(dtype):
+    rng = np.random.default_rng(9)
+    c = rng.normal(size=(40, 4)).astype(dtype)
+    s = rng.uniform(-1, 1, 40).astype(dtype)
+    got, slope = tamiss.cubic(c, s), tamiss.cubic_slope(c, s)
+    assert got.dtype == slope.dtype == dtype
+    for i in range(40):
+        c0, c1, c2, c3 = c[i]
+        assert got[i] == ((c3 * s[i] + c2) * s[i] + c1) * s[i] + c0
+        k2, k3 = dtype(2), dtype(3)
+        assert slope[i] == ((dtype(0) * s[i] + k3 * c3) * s[i] + k2 * c2) * s[i] + c1

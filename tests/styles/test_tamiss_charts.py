@@ -311,7 +311,7 @@ def test_smooth_needs_its_channels_else_warns_and_uses_flat():
     ("kwargs", "err", "match"),
     [
         ({"derivatives": "exact"}, ValueError, r"derivatives: expected one of \['smooth', 'flat'"),
-        ({"orient_charts": 1}, TypeError, "orient_charts: expected a bool, got 1"),
+        ({"orient_charts": 1}, TypeError, r"orient_charts: expected a bool \(true/false\), got 1"),
     ],
 )
 @pytest.mark.parametrize("style", ["tamiss", "tam"])

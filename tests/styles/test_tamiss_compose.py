@@ -1,6 +1,6 @@
-"""``composite_ink`` (one numba pass) against ``composite_ink_numpy`` (the whole-image numpy
-expression it replaced, kept as the oracle): bit for bit, over a base style, over paper, over
-nothing, with one ink colour or one per sample, and for any thread count."""
+"""``composite_ink`` (one numba pass) against the whole-image numpy expression it replaced
+(:func:`composite_ink_numpy`, kept here as the oracle): bit for bit, over a base style, over
+paper, over nothing, with one ink colour or one per sample, and for any thread count."""
 
 from __future__ import annotations
 
@@ -12,8 +12,32 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from refnpr.styles._common import rgba_from
 from refnpr.styles.base import Style
-from refnpr.styles.tamiss.compose import composite_ink, composite_ink_numpy
+from refnpr.styles.tamiss.compose import composite_ink
+
+
+def composite_ink_numpy(ctx, ink, ink_color, *, base, paper):
+    """Ink over the base's RGBA, the paper on covered samples or nothing, in numpy."""
+    shape = ink.shape
+    if base is not None:
+        under = np.asarray(base.shade(ctx), dtype=np.float64)
+    elif paper is not None:
+        under = rgba_from(np.asarray(paper), ctx.mask).astype(np.float64)
+    else:
+        under = np.zeros(shape + (4,))
+    a = np.clip(ink, 0.0, 1.0)
+    a_b = under[..., 3]
+    alpha = a + a_b * (1.0 - a)
+    premult = (
+        np.broadcast_to(np.asarray(ink_color, dtype=np.float64), shape + (3,)) * a[..., None]
+        + under[..., :3] * (a_b * (1.0 - a))[..., None]
+    )
+    rgb = np.divide(
+        premult, alpha[..., None], out=np.zeros_like(premult), where=alpha[..., None] > 0
+    )
+    out = np.concatenate([np.clip(rgb, 0.0, 1.0), alpha[..., None]], axis=-1)
+    return out.astype(np.float32)
 
 
 class _Fixed(Style):
@@ -79,14 +103,17 @@ def test_hand_values():
 
 
 @pytest.mark.parametrize("under", ["float64 base", "float32 ink"])
-def test_other_dtypes_take_the_numpy_expression(under):
+def test_other_dtypes_are_converted(under):
+    """A float64 base is read as the float32 a style's shade gives, float32 ink as float64."""
     ctx, ink, rgba, color = _case(5, (4, 6), False)
     if under == "float64 base":
         base, cov = _Fixed(rgba.astype(np.float64) + 1e-9), ink
+        as_given = _Fixed((rgba.astype(np.float64) + 1e-9).astype(np.float32))
     else:
         base, cov = _Fixed(rgba), ink.astype(np.float32)
+        as_given = base
     got = composite_ink(ctx, cov, color, base=base, paper=None)
-    want = composite_ink_numpy(ctx, cov, color, base=base, paper=None)
+    want = composite_ink_numpy(ctx, cov.astype(np.float64), color, base=as_given, paper=None)
     _same(got, want)
 
 

@@ -309,7 +309,7 @@ def test_strip_sides_equal_the_numpy_expressions():
     ux[::17, 3] = np.nan
     x, y, h = (rng.normal(size=(S, Kv)) * 100 for _ in range(3))
     left, right = np.empty((S, Kv, 2)), np.empty((S, Kv, 2))
-    K.strip_sides(x, y, -uy, ux, h, left, right)
+    K.strip_sides((x, y), (-uy, ux), h, (left, right))
     with np.errstate(invalid="ignore"):
         ref_l = np.stack([x + h * -uy, y + h * ux], axis=-1)
         ref_r = np.stack([x - h * -uy, y - h * ux], axis=-1)

@@ -1,7 +1,8 @@
 """The fused TAMISS kernels (inputs, one-pass gathering, grouped sums, strip raster) against
-independent references: the numpy formulas the pipeline used before, a stable argsort, a
-two-pass count-then-emit gathering through ``field_pass``, and a naive sub-sample rasterizer.
-All comparisons are bitwise unless stated; thread counts 1 and 2 give the same bits."""
+independent references: numpy expressions of the per-sample inputs, a stable argsort, the
+gathering with every chunk overflowing its room (rerun straight to its place), the formula
+layer's sums, and a naive sub-sample rasterizer. All comparisons are bitwise unless stated;
+thread counts 1 and 2 give the same bits."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ from refnpr.styles.tamiss import _kernels as K
 from refnpr.styles.tamiss import gather as G
 from refnpr.styles.tamiss.aggregate import aggregate_exact
 from refnpr.styles.tamiss.charts import SYMMETRIES
-from refnpr.styles.tamiss.field import SALT_LENGTH, SALT_TONE, SALT_WIDTH, StrokeField, salt_offset
+from refnpr.styles.tamiss.field import StrokeField
 from refnpr.styles.tamiss.gather import Fragments, field_inputs, gather_fragments
 from refnpr.styles.tamiss.raster import rasterize_strips
 from refnpr.styles.tamiss.strokes import Strips
@@ -33,6 +34,38 @@ CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal", "bary", "po
 def _gb(name: str, w: int, h: int, spp: int = 1, scene=None, dtype=np.float64):
     sc = scene if scene is not None else load_scene(name)
     return sc, rasterize(sc, None, w, h, CHANNELS, spp, dtype=dtype)
+
+
+def _smooth_duv(gb, sel, tri, faces, frames, eye, duv_dx, duv_dy):
+    """The smooth derivatives by numpy, sample by sample in the same operations: the vertex
+    frames interpolated with the barycentrics, the footprint moved onto the normal's plane,
+    least squares in the frame; the flat values where the frame or the view degenerates."""
+    f64 = lambda name: gb[name][sel].astype(np.float64)  # noqa: E731
+    bary, n, pos = f64("bary"), f64("normal"), f64("position")
+    gu, gv = np.zeros((tri.size, 3)), np.zeros((tri.size, 3))
+    for c in range(3):
+        v = faces[tri, c]
+        for k in range(3):
+            gu[:, k] = gu[:, k] + bary[:, c] * frames[v, k, 0]
+            gv[:, k] = gv[:, k] + bary[:, c] * frames[v, k, 1]
+
+    def dot(a, b):
+        return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+    a00, a01, a11 = dot(gu, gu), dot(gu, gv), dot(gv, gv)
+    det = a00 * a11 - a01 * a01
+    d = pos - eye
+    nd = dot(n, d)
+    dlen, nlen = np.sqrt(dot(d, d)), np.sqrt(dot(n, n))
+    ok = (det > 1e-12 * (a00 * a11)) & (det > 0) & (np.abs(nd) >= 0.05 * dlen * nlen) & (dlen > 0)
+    for name, flat in (("dposition_dx", duv_dx), ("dposition_dy", duv_dy)):
+        dp = f64(name)
+        with np.errstate(all="ignore"):
+            lam = dot(n, dp) / nd
+            p = dp - lam[:, None] * d
+            r0, r1 = dot(gu, p), dot(gv, p)
+            du, dv = (a11 * r0 - a01 * r1) / det, (a00 * r1 - a01 * r0) / det
+        flat[ok, 0], flat[ok, 1] = du[ok], dv[ok]
 
 
 def _reference_inputs(gb, scene, *, constant_tone=None, derivatives="smooth", orient=True):
@@ -51,10 +84,8 @@ def _reference_inputs(gb, scene, *, constant_tone=None, derivatives="smooth", or
     tri_sel = tri[sel].astype(np.int64)
     faces, frames, sym, offset, group = G._scene_frames(scene)
     if derivatives == "smooth":
-        f64 = lambda name: np.ascontiguousarray(gb[name][sel], dtype=np.float64)  # noqa: E731
         eye = np.asarray(scene.camera.eye, dtype=np.float64)
-        K.smooth_duv(tri_sel, f64("bary"), faces, frames, f64("normal"), f64("position"),
-                     f64("dposition_dx"), f64("dposition_dy"), eye, duv_dx, duv_dy)  # fmt: skip
+        _smooth_duv(gb, sel, tri_sel, faces, frames, eye, duv_dx, duv_dy)
     if orient:
         m = SYMMETRIES[sym[tri_sel]]
         uv = np.einsum("nij,nj->ni", m, uv) + offset[tri_sel]
@@ -114,42 +145,23 @@ def test_field_inputs_match_the_numpy_formulas(name, kw, dtype):
     assert np.ptp(inp.darkness) > 0.1 or "constant_tone" in kw
 
 
-def _two_pass(inp, field, width):
-    """Fragments by the count pass, then the emit pass of ``field_pass`` (MODE_COUNT/EMIT)."""
-    cos_a, sin_a, tone_lo = G._layer_arrays(field)
-    n = inp.sample.shape[0]
-    counts = np.zeros(n, dtype=np.int64)
-    di, df, db = np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1, dtype=np.int8)
-    args = (inp.uv, inp.duv_dx, inp.duv_dy, inp.uv_scale, inp.darkness, inp.chart, cos_a, sin_a,
-            tone_lo, float(field.density), float(field.period), int(field.max_level),
-            float(field.length), float(field.length_jitter), float(field.width_jitter),
-            float(width), 1.0, salt_offset(SALT_TONE), salt_offset(SALT_LENGTH),
-            salt_offset(SALT_WIDTH))  # fmt: skip
-    K.field_pass(K.MODE_COUNT, *args, di, counts, di, df, db, db, df)
-    offsets = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
-    total = int(counts.sum())
-    ids, t = np.empty(total, dtype=np.int64), np.empty(total)
-    layer, level = np.empty(total, dtype=np.int8), np.empty(total, dtype=np.int8)
-    K.field_pass(K.MODE_EMIT, *args, offsets, counts, ids, t, layer, level, df)
-    sample = np.repeat(inp.sample, counts)
-    sy, sx = np.divmod(sample, inp.shape[1])
-    return sample, (sx + 0.5) / inp.n, (sy + 0.5) / inp.n, t, ids, layer, level
-
-
-@pytest.mark.parametrize("room", [None, 3])  # 3: nearly every chunk overflows and is rerun
 @pytest.mark.parametrize("width", [1.0, 2.5])
-def test_one_pass_gathering_equals_count_then_emit(monkeypatch, room, width):
+def test_one_pass_gathering_equals_the_rerun_of_every_chunk(monkeypatch, width):
+    """Room for 3 fragments per chunk: nearly every chunk overflows, is gathered again straight
+    to its place and copied there; the fragments are the same as with the default room."""
     sc, gb = _gb("tamiss_teapot", 160, 120, spp=4)
     inp = field_inputs(gb, sc)
     field = StrokeField.from_params(directions=["u", "v"], period=2.0, density=1.0)
-    if room is not None:
-        monkeypatch.setattr(G, "_ROOM", room)
+    ref = gather_fragments(inp, field, gather_width=width)
+    monkeypatch.setattr(G, "_ROOM", 3)
     fr = gather_fragments(inp, field, gather_width=width)
-    ref = _two_pass(inp, field, width)
     got = (fr.sample, fr.x, fr.y, fr.t, fr.id, fr.layer, fr.level)
-    for a, b in zip(got, ref, strict=True):
+    want = (ref.sample, ref.x, ref.y, ref.t, ref.id, ref.layer, ref.level)
+    for a, b in zip(got, want, strict=True):
         assert a.dtype == b.dtype and np.array_equal(a, b)
-    assert len(fr) > 5000
+    sy, sx = np.divmod(ref.sample, inp.shape[1])
+    assert np.array_equal(ref.x, (sx + 0.5) / inp.n) and np.array_equal(ref.y, (sy + 0.5) / inp.n)
+    assert np.all(np.diff(ref.sample) >= 0) and len(fr) > 5000
 
 
 def test_group_keys_is_a_stable_argsort():

@@ -21,13 +21,40 @@ Pipeline: ``fit_fragments(ids, t, x, y)`` = min/max of t, x, y per stroke -> ``n
 renderer calls) -> ``StrokeFit.visible_segments`` -> ``extrude_stroke``. The GPU's double-hashed
 routing of fragments to aggregate texels is modelled separately by :class:`StrokeHashTable`.
 
-The package is split by stage: ``moments`` (regressors, aggregation), ``solve`` (CG, visibility
-prior), ``fit`` (fits), ``segments`` (visible segments, extrusion) and ``hashing`` (double
-hashing); this module re-exports their public API.
+The package is split by stage: ``field`` (the RPTAM stroke field the fragments are gathered
+from: ids, hashes, levels, the TAM baseline's coverage, the darkness), ``moments`` (regressors,
+aggregation), ``solve`` (CG, visibility prior), ``curve`` (the cubic and its slope), ``fit``
+(fits), ``segments`` (visible segments, extrusion) and ``hashing`` (double hashing); this
+module re-exports their public API. Per-sample formulas are scalar device functions
+(``f.scalar``) that the ``tam`` and ``tamiss`` kernels call, ``f`` their numpy faces; the
+per-stroke solves (CG, visibility prior, visible segments) are batched numpy host steps.
 """
 
 from __future__ import annotations
 
+from .curve import cubic, cubic_slope
+from .field import (
+    born_at,
+    darkness,
+    dyadic_scale,
+    fade_in,
+    hash01,
+    ink_over,
+    key32,
+    layer_density,
+    layer_frame,
+    level_rule,
+    pack_id,
+    row_distance,
+    splitmix64,
+    stroke_length,
+    stroke_param,
+    stroke_start,
+    tam_coverage,
+    tam_opacity,
+    unpack_id,
+    width_factor,
+)
 from .fit import LEGENDRE, StrokeFit, fit_fragments, fit_stroke, fit_strokes
 from .hashing import (
     CLAIM,
@@ -67,4 +94,26 @@ __all__ = [
     "FOUND",
     "CLAIM",
     "LOST",
+    "cubic",
+    "cubic_slope",
+    "splitmix64",
+    "hash01",
+    "key32",
+    "pack_id",
+    "unpack_id",
+    "born_at",
+    "layer_frame",
+    "dyadic_scale",
+    "level_rule",
+    "fade_in",
+    "layer_density",
+    "row_distance",
+    "stroke_length",
+    "stroke_start",
+    "stroke_param",
+    "width_factor",
+    "tam_opacity",
+    "tam_coverage",
+    "ink_over",
+    "darkness",
 ]

@@ -9,7 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._face import elementwise_in
 from .._validate import as_float, check_int, check_scalar, describe, result_dtype
+from .curve import cubic, cubic_slope
 from .moments import N_REGRESSORS, fragment_regressors, group_ids, normalize_t
 from .segments import visible_segments
 from .solve import cg_kernel, moment_matrix, visibility_prior
@@ -59,18 +61,15 @@ class StrokeFit:
         if self.basis == "raw":
             return t_
         lo, hi = self._expand(self.t_min), self._expand(self.t_max)
-        half = (hi - lo) * dt.type(0.5)
-        ok = half > 0
-        return np.where(ok, (t_ - (lo + half)) / np.where(ok, half, dt.type(1)), dt.type(0))
+        return elementwise_in(normalize_t.scalar, dt, t_, lo, hi, dt.type(0.5))
 
-    def _poly(self, c: np.ndarray, s: np.ndarray) -> np.ndarray:
-        c = (
-            self._expand(c[..., 0]),
-            self._expand(c[..., 1]),
-            self._expand(c[..., 2]),
-            self._expand(c[..., 3]),
-        )
-        return ((c[3] * s + c[2]) * s + c[1]) * s + c[0]  # r(t) = c^T (1, t, t^2, t^3)
+    def _poly(self, c: np.ndarray, s: np.ndarray, slope: bool = False) -> np.ndarray:
+        dt = self.c_x.dtype
+        cols = tuple(self._expand(c[..., k]) for k in range(4))
+        if slope:
+            k = (dt.type(2), dt.type(3), dt.type(0))
+            return elementwise_in(cubic_slope.scalar, dt, cols, s, k)
+        return elementwise_in(cubic.scalar, dt, cols, s)  # r(t) = c^T (1, t, t^2, t^3)
 
     def evaluate(self, t):
         """Screen position (x, y) at stroke parameter t."""
@@ -91,12 +90,10 @@ class StrokeFit:
             width = self._expand(self.t_max - self.t_min)
             ok = width > 0
             ds_dt = np.where(ok, dt.type(2) / np.where(ok, width, dt.type(1)), dt.type(0))
-
-        def d(c):
-            dc = np.stack([c[..., 1], 2 * c[..., 2], 3 * c[..., 3], np.zeros_like(c[..., 0])], -1)
-            return self._poly(dc, s) * ds_dt
-
-        return d(self.c_x), d(self.c_y)
+        return (
+            self._poly(self.c_x, s, slope=True) * ds_dt,
+            self._poly(self.c_y, s, slope=True) * ds_dt,
+        )
 
     def visible_segments(self, threshold: float | None = None):
         """Up to two visible t intervals where v >= threshold (sec. 3.2).

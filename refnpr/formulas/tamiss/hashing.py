@@ -25,6 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from refnpr._jit import njit
+
+from .._face import elementwise, face
 from .._validate import check_int, describe
 
 __all__ = [
@@ -44,13 +47,28 @@ EMPTY = np.uint32(0xFFFFFFFF)
 FOUND, CLAIM, LOST = 0, 1, 2
 
 
-def _lowbias32(x: np.ndarray) -> np.ndarray:
-    """Chris Wellons' lowbias32 integer hash on uint32 (wrapping arithmetic)."""
-    x = x ^ (x >> np.uint32(16))
-    x = x * np.uint32(0x7FEB352D)
-    x = x ^ (x >> np.uint32(15))
-    x = x * np.uint32(0x846CA68B)
-    return x ^ (x >> np.uint32(16))
+_MASK32 = np.uint64(0xFFFFFFFF)
+_LB1, _LB2, _GOLD = np.uint64(0x7FEB352D), np.uint64(0x846CA68B), np.uint64(0x9E3779B9)
+_S15, _S16 = np.uint64(15), np.uint64(16)
+
+
+@njit
+def _lowbias32(x):
+    """Chris Wellons' lowbias32 integer hash of a 32-bit value held in a uint64 (the uint32
+    wrapping products as products modulo 2^32)."""
+    x = x ^ (x >> _S16)
+    x = (x * _LB1) & _MASK32
+    x = x ^ (x >> _S15)
+    x = (x * _LB2) & _MASK32
+    return x ^ (x >> _S16)
+
+
+@njit
+def _hash_slot(u, k, mask):
+    u = np.uint64(u)
+    h1 = _lowbias32(u)
+    h2 = _lowbias32(u ^ _GOLD) | np.uint64(1)  # odd: coprime with the table size
+    return np.int64((h1 + np.uint64(k) * h2) & np.uint64(mask))  # double hashing, mod 2^32
 
 
 def _ids(ids) -> np.ndarray:
@@ -77,8 +95,11 @@ def _size(size) -> int:
     return m
 
 
+@face(_hash_slot)
 def hash_slot(ids, probe, size: int) -> np.ndarray:
     """Slot of the ``probe``-th double-hashing probe, (h1 + probe * h2) mod size.
+
+    ``hash_slot.scalar(id, probe, size - 1)`` is the device function.
 
     Parameters
     ----------
@@ -95,10 +116,7 @@ def hash_slot(ids, probe, size: int) -> np.ndarray:
     k = np.asarray(probe)
     if k.dtype.kind not in "iu" or (k.size and k.min() < 0):
         raise ValueError(f"probe: expected non-negative integers, got {describe(k)}")
-    h1 = _lowbias32(u)
-    h2 = _lowbias32(u ^ np.uint32(0x9E3779B9)) | np.uint32(1)
-    s = h1 + k.astype(np.uint32) * h2  # double hashing, wraps mod 2^32
-    return (s & np.uint32(m - 1)).astype(np.int64)
+    return elementwise(hash_slot.scalar, np.int64, u, k.astype(np.int64), m - 1)
 
 
 def probe_table(table, ids, *, max_probes: int | None = None):

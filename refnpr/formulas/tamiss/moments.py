@@ -7,6 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from refnpr._jit import njit
+
+from .._face import elementwise_in, face
 from .._validate import as_float, describe, result_dtype
 
 __all__ = ["N_REGRESSORS", "fragment_regressors", "normalize_t", "aggregate", "group_ids"]
@@ -15,8 +18,22 @@ __all__ = ["N_REGRESSORS", "fragment_regressors", "normalize_t", "aggregate", "g
 N_REGRESSORS = 15
 
 
+@njit
+def _fragment_regressors(s, x, y, one):
+    p2 = s * s
+    p3 = p2 * s
+    p4 = p3 * s
+    p5 = p4 * s
+    # eq. 1: t_i t_i^T (as power sums), t_i x_i, t_i y_i
+    return (one, s, p2, p3, p4, p5, p5 * s, x, s * x, p2 * x, p3 * x, y, s * y, p2 * y, p3 * y)
+
+
+@face(_fragment_regressors)
 def fragment_regressors(s, x, y) -> np.ndarray:
     """The terms one fragment adds to its stroke's sums (sec. 3.2, after eq. 1).
+
+    ``fragment_regressors.scalar(s, x, y, one)`` is the device function (``one``: 1 in the
+    float type of s, x, y; it computes in that type).
 
     Parameters
     ----------
@@ -30,24 +47,30 @@ def fragment_regressors(s, x, y) -> np.ndarray:
     s_, x_, y_ = (as_float(k, v, finite=True) for k, v in (("s", s), ("x", x), ("y", y)))
     dt = result_dtype(s_, x_, y_)
     try:
-        s_, x_, y_ = np.broadcast_arrays(s_.astype(dt), x_.astype(dt), y_.astype(dt))
+        np.broadcast_shapes(s_.shape, x_.shape, y_.shape)
     except ValueError:
         raise ValueError(
             f"s, x, y: expected equal shapes, got {np.shape(s)}, {np.shape(x)}, {np.shape(y)}"
         ) from None
-    powers = [np.ones_like(s_)]
-    for _ in range(6):
-        powers.append(powers[-1] * s_)
-    out = np.stack(
-        powers + [p * x_ for p in powers[:4]] + [p * y_ for p in powers[:4]], axis=-1
-    )  # eq. 1: t_i t_i^T (as power sums), t_i x_i, t_i y_i
-    return out
+    return elementwise_in(fragment_regressors.scalar, dt, s_, x_, y_, dt.type(1))
 
 
+@njit
+def _normalize_t(t, lo, hi, half_c):
+    half = (hi - lo) * half_c
+    if half > 0:
+        return (t - (lo + half)) / half
+    return half_c - half_c  # a single t: s = 0
+
+
+@face(_normalize_t)
 def normalize_t(t, t_min, t_max) -> np.ndarray:
     """s = (2 t - t_min - t_max) / (t_max - t_min), so [t_min, t_max] maps to [-1, 1].
 
-    Where t_max == t_min, s = 0. Inputs broadcast; float32 in -> float32 out.
+    Computed as (t - c) / h with h = (t_max - t_min) / 2, c = t_min + h. Where t_max == t_min,
+    s = 0. Inputs broadcast; float32 in -> float32 out (float32 arithmetic).
+    ``normalize_t.scalar(t, t_min, t_max, half)`` is the device function (``half``: 0.5 in
+    the float type of its arguments).
     """
     t_ = as_float("t", t, finite=True)
     lo = as_float("t_min", t_min, finite=True)
@@ -57,11 +80,7 @@ def normalize_t(t, t_min, t_max) -> np.ndarray:
             f"t_min, t_max: expected t_min <= t_max, got {describe(lo)}, {describe(hi)}; swap them"
         )
     dt = result_dtype(t, t_min, t_max)  # Python scalars do not promote float32
-    t_, lo, hi = t_.astype(dt), lo.astype(dt), hi.astype(dt)
-    half = (hi - lo) * dt.type(0.5)
-    centre = lo + half
-    ok = half > 0
-    return np.where(ok, (t_ - centre) / np.where(ok, half, dt.type(1)), dt.type(0)).astype(dt)
+    return elementwise_in(normalize_t.scalar, dt, t_, lo, hi, dt.type(0.5))
 
 
 def group_ids(ids):

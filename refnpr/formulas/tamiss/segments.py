@@ -9,13 +9,35 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from refnpr._jit import njit
+
+from .._face import elementwise
 from .._validate import as_float, check_int, check_scalar, describe, result_dtype
+from .curve import cubic
+
+_cubic_s = cubic.scalar
 
 __all__ = ["visible_segments", "StrokeStrip", "extrude_stroke"]
 
 
 def _cubic(c: np.ndarray, s):
-    return ((c[..., 3] * s + c[..., 2]) * s + c[..., 1]) * s + c[..., 0]
+    """The cubic of the float64 coefficients ``c`` (..., 4) at ``s`` (:func:`.curve.cubic`)."""
+    return elementwise(cubic.scalar, np.float64, tuple(c[..., k] for k in range(4)), s)
+
+
+@njit
+def _crossing(c, left, right, f_left):
+    """The zero of the cubic ``c`` on its monotone piece [left, right] (``f_left`` its value at
+    left; the signs at the ends differ): 64 bisection steps, to full precision."""
+    for _ in range(64):
+        mid = 0.5 * (left + right)
+        f_mid = _cubic_s(c, mid)
+        if (f_mid < 0) == (f_left < 0):
+            left = mid
+            f_left = f_mid
+        else:
+            right = mid
+    return 0.5 * (left + right)
 
 
 def _critical_points(c: np.ndarray) -> np.ndarray:
@@ -77,16 +99,9 @@ def visible_segments(c_v, *, threshold: float = 0.25, lo=-1.0, hi=1.0):
     # bisection on the crossing pieces only (the others' roots are hi): elementwise, the same
     # values as over every piece
     c_x = np.broadcast_to(c[..., None, :], a.shape + (4,))[cross]
-    left, right, fleft = a[cross], b[cross], fa[cross]
-    for _ in range(64):
-        mid = 0.5 * (left + right)
-        fm = _cubic(c_x, mid)
-        same = (fm < 0) == (fleft < 0)
-        left = np.where(same, mid, left)
-        fleft = np.where(same, fm, fleft)
-        right = np.where(same, right, mid)
+    cols = tuple(c_x[:, k] for k in range(4))
     roots = np.broadcast_to(hi_[..., None], a.shape).copy()
-    roots[cross] = 0.5 * (left + right)
+    roots[cross] = elementwise(_crossing, np.float64, cols, a[cross], b[cross], fa[cross])
     bps = np.concatenate([lo_[..., None], np.sort(roots, axis=-1), hi_[..., None]], axis=-1)
     starts, ends = bps[..., :-1], bps[..., 1:]
     positive = _cubic(c[..., None, :], 0.5 * (starts + ends)) >= 0

@@ -1,6 +1,6 @@
 """Kit export of the ``tam`` style (the texture-space RPTAM baseline of TAMISS, Szécsi et al.).
 
-The stroke field's parameters are the style's validated :class:`StrokeField` (directions as
+The parameters are the style's resolved declaration (``TAM_PARAMS.resolved``: directions as
 angles in degrees, layer tones resolved to k / layers when not given); the constants the field
 is defined by (seed columns, id bit layout, SplitMix64 hash salts) are exported as numbers (the
 64-bit ones as hex strings: JSON numbers hold 53 bits). What the style derives from the meshes
@@ -159,37 +159,25 @@ def export(
     StyleExport
         params, derived texts and the per-vertex chart data of every object.
     """
-    from refnpr.styles.tamiss import _kernels as K
-    from refnpr.styles.tamiss import field as F
+    from refnpr.formulas.lighting import LUMA_709
+    from refnpr.formulas.tamiss.field import CELL_BITS, KX, N_ROWS, SPLITMIX64, salt_offset
+    from refnpr.styles.tamiss.gather import CANDIDATE_CAP
+    from refnpr.styles.tamiss.params import SALTS, TAM_PARAMS
 
     style = _unwrap(style)
-    fld = style.field
-    a = np.radians(np.asarray(fld.directions, dtype=np.float64))
-    params: dict[str, Any] = {
-        **fld.as_dict(),
-        "cos_a": np.cos(a).tolist(),
-        "sin_a": np.sin(a).tolist(),
-        "width": float(style.width),
-        "density_mode": style.density_mode,
-        "fade": float(style.fade),
-        "constant_tone": style.constant_tone,
-        "derivatives": style.derivatives,
-        "orient_charts": bool(style.orient_charts),
-        "ink": list(style.ink),
-        "paper": None if style.paper is None else list(style.paper),
-        "base": None if style.base is None else {"name": style.base.name, **style.base.params()},
-        "luma": [0.2126, 0.7152, 0.0722],
-        "kx": [int(x) for x in F.KX],
-        "n_rows": int(F.N_ROWS),
-        "cell_bits": 22,
-        "splitmix": {"m1": _hex(F._M1), "m2": _hex(F._M2), "m3": _hex(F._M3)},
-        "salts": {
-            "tone": _hex(F.salt_offset(F.SALT_TONE)),
-            "length": _hex(F.salt_offset(F.SALT_LENGTH)),
-            "width": _hex(F.salt_offset(F.SALT_WIDTH)),
-        },
-        "cap": int(K._CAP),
-    }
+    a = np.radians(np.asarray(style.field.directions, dtype=np.float64))
+    params = TAM_PARAMS.resolved(
+        style.values,
+        cos_a=np.cos(a).tolist(),
+        sin_a=np.sin(a).tolist(),
+        luma=list(LUMA_709),
+        kx=[int(x) for x in KX],
+        n_rows=int(N_ROWS),
+        cell_bits=CELL_BITS,
+        splitmix={k: _hex(m) for k, m in zip(("m1", "m2", "m3"), SPLITMIX64, strict=True)},
+        salts={k: _hex(salt_offset(v)) for k, v in SALTS.items()},
+        cap=CANDIDATE_CAP,
+    )
     return StyleExport(
         params=jsonable(params, where="style 'tam' params"),
         derived=dict(DERIVED),

@@ -1,16 +1,17 @@
 """Kit export of the ``tamiss`` style (Szécsi, Szirányi, Kacsó: TAMISS).
 
-Every parameter is resolved by the style's own code: :class:`TamissParams` (``directions`` as
-angles in degrees, ``layer_tones`` as numbers, ``visibility_threshold`` from the formula's
-default 1 / (2 (1 + prior_weight))), and the brush as a texture file. What TAMISS derives from the
+Every parameter is resolved by the style's own code: its declaration's resolved values
+(``PARAMS.resolved``: ``directions`` as angles in degrees, ``layer_tones`` as numbers),
+``visibility_threshold`` from the formula's default 1 / (2 (1 + prior_weight)), and the brush
+as a texture file. What TAMISS derives from the
 mesh topology (uv charts, their orientation, offset and id group, the smooth per-vertex tangent
 frames) is exported per vertex, computed by refnpr's own functions
 (:func:`refnpr.styles.tamiss.charts.chart_layout`, :func:`~refnpr.styles.tamiss.charts
 .vertex_frames`), so that a backend needs no mesh analysis.
 
-Params layout (``case.json`` ``style.params``): the fields of :class:`TamissParams` (field
-parameters flattened: directions, layer_tones, period, length, length_jitter, width_jitter,
-density, max_level; then gather_width, aggregation, ..., show), ``ink``, ``paper``, ``base``, and
+Params layout (``case.json`` ``style.params``): the declared parameters in their order
+(directions, layer_tones, period, length, length_jitter, width_jitter, density, max_level,
+gather_width, aggregation, ..., smooth, ``ink``, ``paper``, ``base``), with
 
 * ``brush``: ``{"name": <refnpr's brush name or "solid">, "role": "brush", "wrap_t": bool}``
   (texture ``brush``: (Hb, Wb) float32 alpha, rows across the stroke, columns along t);
@@ -37,6 +38,7 @@ from refnpr.styles.tamiss import field as F
 from refnpr.styles.tamiss import strokes as ST
 from refnpr.styles.tamiss.charts import SYMMETRIES, chart_layout, vertex_frames
 from refnpr.styles.tamiss.gather import _mesh_charts
+from refnpr.styles.tamiss.params import PARAMS
 from refnpr.styles.tamiss.raster import brush_texture
 
 from .._json import jsonable
@@ -211,18 +213,21 @@ def export(
     p = style.pipeline_params
     from refnpr.styles.tamiss.show import LEVEL_COLORS
 
-    params = jsonable(style.params(), where="style 'tamiss' params")
     threshold = (
         p.visibility_threshold
         if p.visibility_threshold is not None
         else 0.5 / (1.0 + p.prior_weight)
     )
-    params["visibility_threshold"] = float(threshold)
     tex, wrap = brush_texture(p.brush)
-    params["brush"] = {"name": p.brush or "solid", "role": "brush", "wrap_t": bool(wrap)}
     consts = _constants()
     consts["level_colors"] = LEVEL_COLORS.tolist()
-    params["constants"] = consts
+    resolved = PARAMS.resolved(
+        p.values,
+        visibility_threshold=float(threshold),
+        brush={"name": p.brush or "solid", "role": "brush", "wrap_t": bool(wrap)},
+        constants=consts,
+    )
+    params = jsonable(resolved, where="style 'tamiss' params")
     textures = {
         "brush": write_texture_levels(
             Path(case_dir),

@@ -9,6 +9,10 @@ with taper, per-stroke randomisation, an optional brush texture and a choice of 
 segments, [t_min, t_max], the whole stroke, or visible segments run on over outlines), then drawn
 anti-aliased over a background or any other style (``contours`` add outlines).
 
+Parameters of both styles are declared once in :mod:`.params` (``PARAMS``, ``TAM_PARAMS``); the
+per-sample formulas are the scalar device functions of :mod:`refnpr.formulas.tamiss`, which the
+kernels (:mod:`._kernels`) call.
+
 Public API: the style :class:`TamissStyle` (registered as ``"tamiss"``), and for inspecting the
 phases :func:`run_pipeline` -> :class:`PipelineResult`, :class:`TamissParams`,
 :class:`StrokeField`, :func:`stroke_geometry`, :class:`AggregateHistory`, the chart layout

@@ -145,19 +145,9 @@ def _sums(keys, t, x, y, dtype):
     S = uid.shape[0]
     lo, hi = np.empty(S, dtype=dtype), np.empty(S, dtype=dtype)
     origin, M = np.empty((S, 2), dtype=dtype), np.empty((S, N_REGRESSORS), dtype=dtype)
-    K.group_sums(
-        perm,
-        starts,
-        np.ascontiguousarray(t, dtype=dtype),
-        np.ascontiguousarray(x, dtype=dtype),
-        np.ascontiguousarray(y, dtype=dtype),
-        np.full(1, 0.5, dtype=dtype),
-        lo,
-        hi,
-        origin,
-        M,
-        np.empty((keys.shape[0], N_REGRESSORS), dtype=dtype),
-    )
+    frags = tuple(np.ascontiguousarray(a, dtype=dtype) for a in (t, x, y))
+    rows = np.empty((keys.shape[0], N_REGRESSORS), dtype=dtype)
+    K.group_sums((perm, starts), frags, np.full(1, 0.5, dtype=dtype), (lo, hi, origin, M), rows)
     count = np.diff(starts).astype(np.int64)
     return uid, count, lo, hi, origin, M
 

@@ -6,10 +6,10 @@ from typing import Any
 
 import numpy as np
 
-from .._common import rgba_from, rgba_out, short_repr
+from .._common import rgba_out, short_repr
 from ..base import ShadeContext, Style, nested_style
 
-__all__ = ["check_color", "field_channels", "base_style", "composite_ink", "composite_ink_numpy"]
+__all__ = ["check_color", "field_channels", "base_style", "composite_ink"]
 
 
 def check_color(
@@ -66,23 +66,18 @@ def composite_ink(
     shows through, also where strokes run past the silhouette). ``ink_color`` is one linear RGB
     or an (nH, nW, 3) colour per sample (the ``show`` views).
 
-    One numba pass (``styles._kernels.ink_composite``) for float64 coverage over a float32 base;
-    other dtypes take :func:`composite_ink_numpy`, the same expression in numpy (and the tests'
-    oracle): the two agree bit for bit."""
+    One numba pass (``styles._kernels.ink_composite``): the coverage in float64, the base's
+    RGBA in float32 (a style's ``shade`` gives float32; other dtypes are converted)."""
     from .._kernels import UNDER_NONE, UNDER_PAPER, UNDER_RGBA, Under, ink_composite
 
-    ink = np.asarray(ink)
+    ink = np.asarray(ink, dtype=np.float64)
     shape = ink.shape
     under = None
     if base is not None:
-        under = np.asarray(base.shade(ctx))
+        under = np.broadcast_to(np.asarray(base.shade(ctx), dtype=np.float32), shape + (4,))
     colors = np.asarray(ink_color, dtype=np.float64)
-    if (
-        ink.dtype != np.float64
-        or (under is not None and (under.dtype != np.float32 or under.shape != shape + (4,)))
-        or colors.shape not in ((3,), shape + (3,))
-    ):
-        return composite_ink_numpy(ctx, ink, ink_color, base=base, paper=paper, under=under)
+    if colors.shape != (3,):
+        colors = np.broadcast_to(colors, shape + (3,))
     if under is not None:
         base_of = Under(
             UNDER_RGBA, np.ascontiguousarray(under), np.zeros((1, 1), bool), np.zeros(3)
@@ -101,35 +96,3 @@ def composite_ink(
     ink_rgb = np.ascontiguousarray(colors.reshape(-1, 3))
     ink_composite(base_of, (np.ascontiguousarray(ink), ink_rgb), out)
     return out
-
-
-def composite_ink_numpy(
-    ctx: ShadeContext,
-    ink: np.ndarray,
-    ink_color: tuple[float, float, float] | np.ndarray,
-    *,
-    base: Style | None,
-    paper: tuple[float, float, float] | None,
-    under: np.ndarray | None = None,
-) -> np.ndarray:
-    """:func:`composite_ink` in numpy over whole images (``under``: the base's RGBA if already
-    shaded)."""
-    shape = ink.shape
-    if base is not None:
-        under = np.asarray(base.shade(ctx) if under is None else under, dtype=np.float64)
-    elif paper is not None:
-        under = rgba_from(np.asarray(paper), ctx.mask).astype(np.float64)
-    else:
-        under = np.zeros(shape + (4,))
-    a = np.clip(ink, 0.0, 1.0)
-    a_b = under[..., 3]
-    alpha = a + a_b * (1.0 - a)
-    premult = (
-        np.broadcast_to(np.asarray(ink_color, dtype=np.float64), shape + (3,)) * a[..., None]
-        + under[..., :3] * (a_b * (1.0 - a))[..., None]
-    )
-    rgb = np.divide(
-        premult, alpha[..., None], out=np.zeros_like(premult), where=alpha[..., None] > 0
-    )
-    out = np.concatenate([np.clip(rgb, 0.0, 1.0), alpha[..., None]], axis=-1)
-    return out.astype(np.float32)

@@ -1,8 +1,10 @@
 """The RPTAM stroke field of TAMISS: nested seeds, levels, stroke ids and per-stroke attributes.
 
 TAMISS (Szécsi et al.) gathers its fragments from an RPTAM (Szécsi and Szirányi 2014), which the
-paper only cites; DESIGN.md's notes fix what is needed. This module is the pure definition (numpy,
-no rasterization); ``_kernels`` evaluates the same definition per G-buffer sample.
+paper only cites; DESIGN.md's notes fix what is needed. Its per-sample formulas are the scalar
+functions of :mod:`refnpr.formulas.tamiss.field` (re-exported here with their numpy faces), which
+the ``_kernels`` call per G-buffer sample; this module holds the field's parameters
+(:class:`StrokeField`) and the geometry of strokes from their ids.
 
 Coordinates. Per hatching layer with angle ``a`` (0: strokes along u, 90: along v), the scaled
 texture coordinates uv' = uv * uv_scale are rotated into stroke coordinates::
@@ -51,12 +53,31 @@ uses rho 2^s instead: the rows are thinned at random so that the ink stays the s
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from .._common import check_count, check_number
+from refnpr.formulas.tamiss.field import (
+    KX,
+    MAX_LEVEL,
+    N_ROWS,
+    born_at,
+    fade_in,
+    hash01,
+    key32,
+    pack_id,
+    salt_offset,
+    seed_set,
+    splitmix64,
+    stroke_length,
+    stroke_start,
+    unpack_id,
+    width_factor,
+)
+
+from .._declare import Values
+from .params import DEFAULT_DENSITY, FIELD, FIELD_PARAMS, SALTS, resolve_field
 
 __all__ = [
     "KX",
@@ -83,69 +104,24 @@ __all__ = [
     "layer_angles",
 ]
 
-#: Column (in sevenths) of the base seed of row r: S_0 = {(KX[r] / 7, r / 7)}.
-KX = np.array([0, 6, 5, 1, 3, 4, 2], dtype=np.int64)
-#: Rows (and seeds) per cell.
-N_ROWS = 7
-#: Deepest level; ids hold the birth level in 4 bits and cells in 22 bits.
-MAX_LEVEL = 12
 #: Charts (objects x uv charts) an id can hold (10 bits).
 MAX_CHARTS = 1024
 #: |p|, |q| must stay below this many tiles (cells at level 12 then fit 22 bits).
 TILE_LIMIT = 512
-
-_CELL_BITS = 22
-_CELL_OFF = 1 << (_CELL_BITS - 1)
-_MASK22 = (1 << _CELL_BITS) - 1
-
-#: Default ``density``: each layer is complete halfway from its starting darkness to black, so
-#: that the darkest tones are fully cross-hatched (strokes of ``width`` 1.5 px every 4 px cover
-#: at most about 37 % per layer; with density 1 a drawing stays pale: ink about a quarter of the
-#: darkness, see ``docs/tamiss.md``, "Defaults").
-DEFAULT_DENSITY = 2.0
-
 #: Salts of the per-stroke hashes.
-SALT_TONE, SALT_LENGTH, SALT_WIDTH = 1, 2, 3
-
-
-def _finite(d: float) -> bool:
-    """Whether the number ``d`` is a finite float (a Python int past float64 is not)."""
-    try:
-        return math.isfinite(float(d))
-    except OverflowError:
-        return False
-
-
-def _check_angle_list(directions) -> tuple[float, ...]:
-    vals = directions if isinstance(directions, (list, tuple)) else [directions]
-    if not 1 <= len(vals) <= 4:
-        raise ValueError(
-            f"directions: expected 1 to 4 hatching layers, got {len(vals)} ({directions!r})"
-        )
-    out = []
-    for d in vals:
-        if d == "u":
-            out.append(0.0)
-        elif d == "v":
-            out.append(90.0)
-        elif isinstance(d, (int, float)) and not isinstance(d, bool) and _finite(d):
-            out.append(float(d))
-        else:
-            raise ValueError(
-                f"directions: each layer is 'u', 'v' or an angle in degrees from u towards v, "
-                f"got {d!r}"
-            )
-    return tuple(out)
+SALT_TONE, SALT_LENGTH, SALT_WIDTH = SALTS["tone"], SALTS["length"], SALTS["width"]
+_FIELD = {p.name: p for p in FIELD}
 
 
 def layer_angles(directions) -> tuple[float, ...]:
     """Angles in degrees (0 = along u, 90 = along v) of ``directions`` ('u', 'v' or numbers)."""
-    return _check_angle_list(directions)
+    return _FIELD["directions"].check(directions)
 
 
 @dataclass(frozen=True)
 class StrokeField:
-    """Parameters of the RPTAM stroke field shared by the ``tam`` and ``tamiss`` styles.
+    """Parameters of the RPTAM stroke field shared by the ``tam`` and ``tamiss`` styles
+    (declared in :data:`refnpr.styles.tamiss.params.FIELD`).
 
     Attributes
     ----------
@@ -177,41 +153,16 @@ class StrokeField:
     max_level: int = 10
 
     @classmethod
-    def from_params(
-        cls,
-        *,
-        directions=("u", "v"),
-        layer_tones=None,
-        period: float = 4.0,
-        length: float = 1.0,
-        length_jitter: float = 0.3,
-        width_jitter: float = 0.2,
-        density: float = DEFAULT_DENSITY,
-        max_level: int = 10,
-    ) -> StrokeField:
-        """Validate style parameters (TOML values) into a field; ``layer_tones`` defaults to
-        ``k / n_layers`` for layer k."""
-        angles = _check_angle_list(directions)
-        if layer_tones is None:
-            tones = tuple(k / len(angles) for k in range(len(angles)))
-        else:
-            vals = layer_tones if isinstance(layer_tones, (list, tuple)) else [layer_tones]
-            if len(vals) != len(angles):
-                raise ValueError(
-                    f"layer_tones: expected one darkness per layer ({len(angles)}), got "
-                    f"{layer_tones!r}"
-                )
-            tones = tuple(check_number("layer_tones", v, lo=0.0, hi=0.999) for v in vals)
-        return cls(
-            directions=angles,
-            layer_tones=tones,
-            period=check_number("period", period, lo=0.0, lo_open=True),
-            length=check_number("length", length, lo=0.0, lo_open=True, hi=8.0),
-            length_jitter=check_number("length_jitter", length_jitter, lo=0.0, hi=0.9),
-            width_jitter=check_number("width_jitter", width_jitter, lo=0.0, hi=0.9),
-            density=check_number("density", density, lo=0.0),
-            max_level=check_count("max_level", max_level, lo=0, hi=MAX_LEVEL),
-        )
+    def from_params(cls, **params: Any) -> StrokeField:
+        """Validate the field's parameters (TOML values; :data:`~.params.FIELD`) into a field;
+        ``layer_tones`` defaults to ``k / n_layers`` for layer k."""
+        return cls.of(FIELD_PARAMS.validate(params))
+
+    @classmethod
+    def of(cls, values: Values) -> StrokeField:
+        """The field of a style's validated parameters (``tam`` or ``tamiss``)."""
+        values = resolve_field(values)
+        return cls(**{name: values[name] for name in _FIELD})
 
     @property
     def n_layers(self) -> int:
@@ -228,86 +179,6 @@ class StrokeField:
             "density": self.density,
             "max_level": self.max_level,
         }
-
-
-def seed_set(level: int) -> np.ndarray:
-    """S_level of one tile: (7 4^level, 2) float64 seed positions (p, q) in [0, 1)^2."""
-    level = check_count("level", level, lo=0, hi=MAX_LEVEL)
-    n = 1 << level
-    g = np.arange(n)
-    gx, gy, r = np.meshgrid(g, g, np.arange(N_ROWS), indexing="ij")
-    return np.stack([(gx + KX[r] / 7.0) / n, (gy + r / 7.0) / n], axis=-1).reshape(-1, 2)
-
-
-def born_at(level, gx, gy, r) -> np.ndarray:
-    """Whether the seed of row r in cell (gx, gy) of ``level`` is new there (not in level - 1)."""
-    level, gx, gy, r = (np.asarray(a, dtype=np.int64) for a in (level, gx, gy, r))
-    inherited = (level > 0) & ((gx & 1) == (KX[r] & 1)) & ((gy & 1) == (r & 1))
-    return ~inherited
-
-
-def pack_id(chart, layer, level, gx, gy, r) -> np.ndarray:
-    """Globally unique stroke id: int64 from (chart, layer, birth level, birth cell, row).
-
-    Bit layout (63 bits): chart 10 | layer 2 | level 4 | gx + 2^21 (22) | gy + 2^21 (22) | row 3.
-    """
-    chart, layer, level, gx, gy, r = (
-        np.asarray(a, dtype=np.int64) for a in (chart, layer, level, gx, gy, r)
-    )
-    v = chart * 4 + layer
-    v = v * 16 + level
-    v = (v << _CELL_BITS) + (gx + _CELL_OFF)
-    v = (v << _CELL_BITS) + (gy + _CELL_OFF)
-    return v * 8 + r
-
-
-def unpack_id(ids) -> dict[str, np.ndarray]:
-    """Inverse of :func:`pack_id`: dict of int64 arrays chart, layer, level, gx, gy, row."""
-    v = np.asarray(ids, dtype=np.int64)
-    r = v & 7
-    v = v >> 3
-    gy = (v & _MASK22) - _CELL_OFF
-    v = v >> _CELL_BITS
-    gx = (v & _MASK22) - _CELL_OFF
-    v = v >> _CELL_BITS
-    level = v & 15
-    v = v >> 4
-    return {"chart": v >> 2, "layer": v & 3, "level": level, "gx": gx, "gy": gy, "row": r}
-
-
-_M1 = np.uint64(0x9E3779B97F4A7C15)
-_M2 = np.uint64(0xBF58476D1CE4E5B9)
-_M3 = np.uint64(0x94D049BB133111EB)
-
-
-def splitmix64(x) -> np.ndarray:
-    """SplitMix64 finalizer on uint64 (wrapping), elementwise."""
-    z = np.atleast_1d(np.asarray(x).astype(np.uint64)) + _M1
-    z = (z ^ (z >> np.uint64(30))) * _M2
-    z = (z ^ (z >> np.uint64(27))) * _M3
-    return z ^ (z >> np.uint64(31))
-
-
-def salt_offset(salt: int) -> np.uint64:
-    """salt * 0x9E3779B97F4A7C15 modulo 2^64 (added to ids before hashing)."""
-    return np.uint64((int(salt) * 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF)
-
-
-def hash01(ids, salt: int) -> np.ndarray:
-    """A uniform float64 in [0, 1) per id: the top 53 bits of splitmix64(id + salt * M1)."""
-    z = np.atleast_1d(np.asarray(ids, dtype=np.int64)).astype(np.uint64)
-    z = z + salt_offset(salt)
-    return (splitmix64(z) >> np.uint64(11)).astype(np.float64) * (1.0 / 9007199254740992.0)
-
-
-def key32(ids) -> np.ndarray:
-    """32-bit key of each id for the double-hashing table (top half of splitmix64(id)).
-
-    0xFFFFFFFF marks empty slots, so that value is folded to 0xFFFFFFFE. Distinct ids may share
-    a key (probability about S^2 / 2^33 for S strokes); the hashed route reports such aliases.
-    """
-    k = (splitmix64(np.asarray(ids, dtype=np.int64)) >> np.uint64(32)).astype(np.uint32)
-    return np.where(k == np.uint32(0xFFFFFFFF), np.uint32(0xFFFFFFFE), k)
 
 
 @dataclass(frozen=True)
@@ -343,26 +214,20 @@ class StrokeGeometry:
 
 
 def stroke_geometry(ids, field: StrokeField) -> StrokeGeometry:
-    """Texture-space geometry and attributes of strokes from their ids (see module docstring)."""
+    """Texture-space geometry and attributes of strokes from their ids (see module docstring):
+    the length, start, tone threshold and width factor of each, as the kernels compute them."""
     d = unpack_id(ids)
-    scale = np.ldexp(1.0, -d["level"])
-    p_seed = (d["gx"] + KX[d["row"]] / 7.0) * scale
-    q = (d["gy"] + d["row"] / 7.0) * scale
     h_len = hash01(ids, SALT_LENGTH)
-    length = field.length * (1.0 + field.length_jitter * (2.0 * h_len - 1.0)) * scale
+    length = stroke_length(h_len, field.length, field.length_jitter, d["level"])
+    p_start = stroke_start(d["gx"], d["row"], d["level"], length)
     return StrokeGeometry(
         chart=d["chart"],
         layer=d["layer"],
         level=d["level"],
-        p_start=p_seed - 0.5 * length,
-        p_end=p_seed + 0.5 * length,
-        q=q,
+        p_start=p_start,
+        p_end=p_start + length,
+        q=(d["gy"] + d["row"] / 7.0) * np.ldexp(1.0, -d["level"]),
         length=length,
         tau=hash01(ids, SALT_TONE),
-        width_factor=1.0 + field.width_jitter * (2.0 * hash01(ids, SALT_WIDTH) - 1.0),
+        width_factor=width_factor(hash01(ids, SALT_WIDTH), field.width_jitter),
     )
-
-
-def fade_in(f) -> np.ndarray:
-    """alpha(f) = 2^f - 1: the fraction of the next level's strokes shown at transition f."""
-    return np.exp2(np.asarray(f, dtype=np.float64)) - 1.0

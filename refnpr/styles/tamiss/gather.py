@@ -18,24 +18,19 @@ from __future__ import annotations
 import warnings
 import weakref
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from refnpr.formulas import lighting
-from refnpr.formulas._shading_checks import unit_vectors
+from refnpr.formulas.tamiss import dyadic_scale, layer_frame
 
+from .._declare import Params, Values
+from .._frame import frame_record
 from ..base import ShadeContext
 from . import _kernels as K
 from .charts import SYMMETRIES, chart_layout, vertex_frames
-from .field import (
-    MAX_CHARTS,
-    SALT_LENGTH,
-    SALT_TONE,
-    SALT_WIDTH,
-    TILE_LIMIT,
-    StrokeField,
-    salt_offset,
-)
+from .field import MAX_CHARTS, TILE_LIMIT, StrokeField
+from .params import DERIVATIVES, PARAMS, TAM_PARAMS, salts
 
 __all__ = [
     "FieldInputs",
@@ -43,19 +38,18 @@ __all__ = [
     "field_inputs",
     "scene_charts",
     "DERIVATIVES",
-    "darkness",
     "gather_fragments",
     "tam_ink",
     "layer_scale",
+    "CANDIDATE_CAP",
 ]
+
+#: Candidates the TAM pass keeps per sample and layer (in enumeration order).
+CANDIDATE_CAP = K._CAP
 
 _CHART_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
-#: How the field takes d(uv)/d(x, y): "smooth" (continuous across triangle edges, from vertex
-#: tangent frames; ``charts``) or "flat" (the rasterizer's per-triangle analytic derivatives).
-DERIVATIVES = ("smooth", "flat")
 _SMOOTH_CHANNELS = frozenset({"bary", "normal", "position", "dposition_dx", "dposition_dy"})
-_REC709 = np.array([0.2126, 0.7152, 0.0722])
 
 
 def _mesh_charts(mesh) -> np.ndarray:
@@ -91,28 +85,6 @@ def scene_charts(scene, gb=None) -> np.ndarray:
             f"{charts.size}; pass the scene the G-buffer was rendered from"
         )
     return charts
-
-
-def darkness(ctx: ShadeContext, sel: np.ndarray, constant_tone: float | None) -> np.ndarray:
-    """(N,) float64 darkness 1 - luminance(m_a l_a + sum_i m_d f_d l_i) at the samples ``sel``.
-
-    The diffuse tone of Veryovka eq. 1 without the specular term (hatching conveys shading, not
-    highlights); Rec. 709 luminance, clipped to [0, 1]. ``constant_tone`` overrides it.
-    """
-    n_sel = int(np.count_nonzero(sel))
-    if constant_tone is not None:
-        return np.full(n_sel, float(constant_tone))
-    gb = ctx.gb
-    n = gb["normal"][sel].astype(np.float64)
-    mesh_id = np.maximum(gb["mesh_id"][sel], 0)
-    objs = ctx.scene.objects
-    m_a = np.array([o.material.ambient for o in objs], dtype=np.float64)[mesh_id]
-    m_d = np.array([o.material.diffuse for o in objs], dtype=np.float64)[mesh_id]
-    rgb = m_a * np.asarray(ctx.scene.ambient, dtype=np.float64)
-    for light_dir, color in ctx.light_dirs():
-        ld = light_dir[sel] if np.ndim(light_dir) > 1 else light_dir
-        rgb = rgb + m_d * lighting.diffuse(n, ld)[..., None] * color
-    return 1.0 - np.clip(lighting.luminance(rgb), 0.0, 1.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,7 +161,6 @@ def field_inputs(
     sample = np.flatnonzero(tri_flat >= 0)
     n_sel = sample.shape[0]
     charts = scene_charts(scene, gb)
-    scale = np.array([o.material.uv_scale for o in scene.objects], dtype=np.float64).reshape(-1, 2)
     if derivatives == "smooth":
         missing = sorted(_SMOOTH_CHANNELS - set(gb.channels))
         if missing:
@@ -204,77 +175,36 @@ def field_inputs(
     smooth = derivatives == "smooth" and n_sel > 0
     orient = bool(orient_charts) and n_sel > 0
     shade = constant_tone is None and n_sel > 0
-
-    def flat(name: str, width: int) -> np.ndarray:  # (H W, width) view of a channel
-        a = np.asarray(gb[name])
-        if a.dtype not in (np.float32, np.float64):
-            a = a.astype(np.float64)
-        return np.ascontiguousarray(a).reshape(-1, width)
-
-    d3 = np.zeros((1, 3))
+    point = any(light.kind == "point" for light in scene.lights)
+    channels = ["uv", "duv_dx", "duv_dy"]
+    channels += ["normal"] if smooth or shade else []
+    channels += ["position"] if smooth or (shade and point) else []
+    channels += ["dposition_dx", "dposition_dy"] if smooth else []
+    frame = frame_record(ctx, tuple(channels))
     faces, frames = np.zeros((1, 3), dtype=np.int64), np.zeros((1, 3, 2))
     sym = np.zeros(1, dtype=np.int64)
     offset, group = np.zeros((1, 2)), np.zeros(1, dtype=np.int64)
     if smooth or orient:
         faces, frames, sym, offset, group = _scene_frames(scene)
-    m_a = m_d = d3
-    ambient = np.zeros(3)
-    l_dir, l_color, l_pos = np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))
-    l_point = np.zeros(0, dtype=np.bool_)
-    if shade:
-        objs = scene.objects
-        m_a = np.array([o.material.ambient for o in objs], dtype=np.float64).reshape(-1, 3)
-        m_d = np.array([o.material.diffuse for o in objs], dtype=np.float64).reshape(-1, 3)
-        ambient = np.broadcast_to(np.asarray(scene.ambient, dtype=np.float64), (3,)).copy()
-        l_dir, l_color, l_pos, l_point = _light_arrays(scene)
-    uses_position = smooth or (shade and bool(l_point.any()))
-    uses_normal = smooth or shade
-    uv = np.empty((n_sel, 2))
-    duv_dx = np.empty((n_sel, 2))
-    duv_dy = np.empty((n_sel, 2))
-    uv_scale = np.empty((n_sel, 2))
-    chart = np.empty(n_sel, dtype=np.int64)
-    dark = np.empty(n_sel if shade else 0)
-    chunk_max = np.zeros((n_sel + K._CHUNK - 1) // K._CHUNK)
-    K.sample_inputs(
-        sample,
-        tri_flat,
-        np.ascontiguousarray(gb["mesh_id"]).reshape(-1),
-        flat("uv", 2),
-        flat("duv_dx", 2),
-        flat("duv_dy", 2),
-        scale,
-        charts,
-        smooth,
-        flat("bary", 3) if smooth else d3,
-        faces,
-        frames,
-        flat("normal", 3) if uses_normal else d3,
-        flat("position", 3) if uses_position else d3,
-        flat("dposition_dx", 3) if smooth else d3,
-        flat("dposition_dy", 3) if smooth else d3,
-        np.asarray(scene.camera.eye, dtype=np.float64).reshape(3),
-        orient,
-        SYMMETRIES,
-        sym,
-        offset,
-        group,
-        shade,
-        m_a,
-        m_d,
-        ambient,
-        l_dir,
-        l_color,
-        l_point,
-        l_pos,
-        uv,
-        duv_dx,
-        duv_dy,
-        uv_scale,
-        chart,
-        dark,
-        chunk_max,
+    bary = np.zeros((1, 3))
+    if smooth:
+        bary = np.asarray(gb["bary"])
+        if bary.dtype not in (np.float32, np.float64):
+            bary = bary.astype(np.float64)
+        bary = np.ascontiguousarray(bary).reshape(-1, 3)
+    tables = K.InputTables(
+        sample, bary, charts, faces, frames, SYMMETRIES, sym, offset, group, smooth, orient, shade
     )
+    out = K.InputArrays(
+        uv=np.empty((n_sel, 2)),
+        duv_dx=np.empty((n_sel, 2)),
+        duv_dy=np.empty((n_sel, 2)),
+        uv_scale=np.empty((n_sel, 2)),
+        darkness=np.empty(n_sel if shade else 0),
+        chart=np.empty(n_sel, dtype=np.int64),
+    )
+    chunk_max = np.zeros((n_sel + K._CHUNK - 1) // K._CHUNK)
+    K.sample_inputs(frame, tables, out, chunk_max)
     if n_sel:
         extent = float(np.max(chunk_max)) * np.sqrt(2.0)
         if not extent < TILE_LIMIT:
@@ -282,39 +212,20 @@ def field_inputs(
                 f"uv: scaled texture coordinates reach {extent:.4g} tiles, but stroke ids hold "
                 f"tiles within +-{TILE_LIMIT}; lower the material's uv_scale"
             )
+    dark = out.darkness
     if constant_tone is not None:
         dark = np.full(n_sel, float(constant_tone))
-    elif not n_sel:
-        dark = darkness(ctx, tri >= 0, None)
     return FieldInputs(
         sample=sample,
-        uv=uv,
-        duv_dx=duv_dx,
-        duv_dy=duv_dy,
-        uv_scale=uv_scale,
+        uv=out.uv,
+        duv_dx=out.duv_dx,
+        duv_dy=out.duv_dy,
+        uv_scale=out.uv_scale,
         darkness=np.ascontiguousarray(dark),
-        chart=chart,
+        chart=out.chart,
         shape=shape,
         n=gb.n,
     )
-
-
-def _light_arrays(scene) -> tuple[np.ndarray, ...]:
-    """Per light of ``scene``: unit direction (directional lights; as ``ShadeContext.light_dirs``
-    then ``lighting.diffuse`` normalize it), colour, position (point lights), is-point flag."""
-    lights = list(scene.lights)
-    n = len(lights)
-    l_dir, l_color, l_pos = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
-    l_point = np.zeros(n, dtype=np.bool_)
-    for k, light in enumerate(lights):
-        l_color[k] = np.asarray(light.color, dtype=np.float64)
-        if light.kind == "point":
-            l_point[k] = True
-            l_pos[k] = np.asarray(light.position, dtype=np.float64)
-        else:
-            d = np.asarray(light.direction, dtype=np.float64)
-            l_dir[k] = unit_vectors(d / np.linalg.norm(d))
-    return l_dir, l_color, l_pos, l_point
 
 
 def layer_scale(inp: FieldInputs, field: StrokeField) -> np.ndarray:
@@ -323,49 +234,31 @@ def layer_scale(inp: FieldInputs, field: StrokeField) -> np.ndarray:
     D_q = 1 / |grad q| in pixels per unit of q (the spacing of q's iso-lines): Veryovka's eq. 5
     for the coordinate across the strokes, with line period 7 * ``period`` (7 rows per cell). For
     strokes along u (q = v, uv_scale 1) it is the rasterizer's ``dyadic_scale`` channel with
-    ``line_period = 7 * period``. The kernels evaluate the same expression per sample.
+    ``line_period = 7 * period``. The kernels' values (``formulas.tamiss.layer_frame``,
+    ``dyadic_scale``): NaN where a layer has no strokes (|grad p| or |grad q| 0 or huge).
     """
-    cos_a, sin_a, _ = _layer_arrays(field)
-    su, sv = inp.uv_scale[:, :1], inp.uv_scale[:, 1:]
-    qx = -sin_a * inp.duv_dx[:, :1] * su + cos_a * inp.duv_dx[:, 1:] * sv
-    qy = -sin_a * inp.duv_dy[:, :1] * su + cos_a * inp.duv_dy[:, 1:] * sv
-    with np.errstate(divide="ignore"):
-        return np.log2(1.0 / np.hypot(qx, qy) / (7.0 * field.period))
+    out = np.empty((inp.uv.shape[0], field.n_layers))
+    for k, angle in enumerate(field.directions):
+        d_q = layer_frame(inp.uv, inp.duv_dx, inp.duv_dy, inp.uv_scale, angle)[:, 3]
+        out[:, k] = dyadic_scale(d_q, field.period)
+    return out
 
 
-def _layer_arrays(field: StrokeField):
+def _layers(field: StrokeField) -> K.Layers:
     a = np.radians(np.asarray(field.directions, dtype=np.float64))
-    return np.cos(a), np.sin(a), np.asarray(field.layer_tones, dtype=np.float64)
+    return K.Layers(np.cos(a), np.sin(a), np.asarray(field.layer_tones, dtype=np.float64))
 
 
-def _run(mode, inp: FieldInputs, field: StrokeField, width_px, fade, offsets, counts, outs):
-    cos_a, sin_a, tone_lo = _layer_arrays(field)
-    K.field_pass(
-        mode,
-        inp.uv,
-        inp.duv_dx,
-        inp.duv_dy,
-        inp.uv_scale,
-        inp.darkness,
-        inp.chart,
-        cos_a,
-        sin_a,
-        tone_lo,
-        float(field.density),
-        float(field.period),
-        int(field.max_level),
-        float(field.length),
-        float(field.length_jitter),
-        float(field.width_jitter),
-        float(width_px),
-        float(fade),
-        salt_offset(SALT_TONE),
-        salt_offset(SALT_LENGTH),
-        salt_offset(SALT_WIDTH),
-        offsets,
-        counts,
-        *outs,
-    )
+def _samples(inp: FieldInputs) -> K.InputArrays:
+    return K.InputArrays(inp.uv, inp.duv_dx, inp.duv_dy, inp.uv_scale, inp.darkness, inp.chart)
+
+
+def field_record(decl: Params, field: StrokeField, **values: Any) -> Any:
+    """The style record of ``decl`` (``PARAMS`` or ``TAM_PARAMS``) the field kernels read:
+    ``field``'s numbers, ``values`` (already validated), the declared defaults for the rest,
+    and the hashes' salt offsets."""
+    vals = {**decl.defaults(), **field.as_dict(), **values}
+    return decl.record(Values(decl, vals, frozenset()), **salts())
 
 
 @dataclass(frozen=True, eq=False)
@@ -434,6 +327,7 @@ def gather_fragments(
     out = _fragment_arrays(total)
     sample, x, y = np.empty(total, dtype=np.int64), np.empty(total), np.empty(total)
     fits = count <= room
+    grid = (inp.shape[1], inp.n)
     run_src = np.empty(n_chunks, dtype=np.int64)
     run_src[fits] = chunks[fits] * _ROOM
     run_len = np.where(fits, count, 0)
@@ -446,13 +340,13 @@ def gather_fragments(
         run_src[over] = offsets[over]
         run_len[over] = count[over]
         K.finish_fragments(
-            offsets[over], count[over], offsets[over], src, inp.sample, inp.shape[1], inp.n,
-            *out[:4], *out[:4], sample, x, y,
+            K.Runs(offsets[over], count[over], offsets[over]), (src, inp.sample), out[:4],
+            (*out[:4], sample, x, y), grid,
         )  # fmt: skip
     sel = np.flatnonzero(fits)
     K.finish_fragments(
-        run_src[sel], run_len[sel], offsets[sel], buf[4], inp.sample, inp.shape[1], inp.n,
-        *buf[:4], *out[:4], sample, x, y,
+        K.Runs(run_src[sel], run_len[sel], offsets[sel]), (buf[4], inp.sample), buf[:4],
+        (*out[:4], sample, x, y), grid,
     )  # fmt: skip
     ids, t, layer, level = out[:4]
     return Fragments(sample, x, y, t, ids, layer, level, inp.shape, inp.n)
@@ -474,31 +368,9 @@ def _fragment_arrays(n: int) -> tuple[np.ndarray, ...]:
 
 
 def _gather(inp, field, width_px, chunks, dst_off, dst_cap, count, outs) -> None:
-    cos_a, sin_a, tone_lo = _layer_arrays(field)
-    K.field_gather(
-        chunks,
-        inp.uv,
-        inp.duv_dx,
-        inp.duv_dy,
-        inp.uv_scale,
-        inp.darkness,
-        inp.chart,
-        cos_a,
-        sin_a,
-        tone_lo,
-        float(field.density),
-        float(field.period),
-        int(field.max_level),
-        float(field.length),
-        float(field.length_jitter),
-        float(width_px),
-        salt_offset(SALT_TONE),
-        salt_offset(SALT_LENGTH),
-        dst_off,
-        dst_cap,
-        count,
-        *outs,
-    )
+    style = field_record(PARAMS, field, gather_width=float(width_px))
+    run = K.Chunks(chunks, dst_off, dst_cap, count)
+    K.field_gather(run, _samples(inp), _layers(field), style, outs)
 
 
 def tam_ink(
@@ -517,13 +389,11 @@ def tam_ink(
     f its width factor and o its density opacity: 1 if tau < rho * gain else 0 ("clip"), or
     clip((rho * gain - tau) / fade, 0, 1) ("fade"); strokes combine as 1 - prod(1 - a).
     """
-    n = inp.sample.shape[0]
-    ink = np.zeros(n)
-    dummy_i = np.zeros(1, dtype=np.int64)
-    dummy_f = np.zeros(1)
-    dummy_b = np.zeros(1, dtype=np.int8)
-    mode = K.MODE_TAM_CLIP if density_mode == "clip" else K.MODE_TAM_FADE
-    _run(mode, inp, field, width, fade, dummy_i, dummy_i, (dummy_i, dummy_f, dummy_b, dummy_b, ink))
+    style = field_record(
+        TAM_PARAMS, field, width=float(width), density_mode=density_mode, fade=float(fade)
+    )
+    ink = np.zeros(inp.sample.shape[0])
+    K.tam_pass(_samples(inp), _layers(field), style, ink)
     out = np.zeros(inp.shape[0] * inp.shape[1])
     out[inp.sample] = ink
     return out.reshape(inp.shape)

@@ -32,6 +32,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from refnpr.raster.projection import project_points
+
 if TYPE_CHECKING:
     from .aggregate import Aggregates
 
@@ -154,16 +156,6 @@ def stroke_anchors(agg: Aggregates, gb: Any, scene: Any) -> StrokeAnchors:
     )
 
 
-def _project(vp, p, width, height):
-    clip = p @ vp[:, :3].T + vp[:, 3]
-    w = clip[..., 3]
-    ws = np.where(w > 0, w, 1.0)
-    xy = np.stack(
-        [(clip[..., 0] / ws + 1.0) * 0.5 * width, (1.0 - clip[..., 1] / ws) * 0.5 * height], -1
-    )
-    return xy, w
-
-
 def transport(
     agg: Aggregates, anchors: StrokeAnchors, scene: Any, width: int, height: int
 ) -> tuple[Aggregates, np.ndarray]:
@@ -201,7 +193,7 @@ def transport(
     moved_pts = np.einsum("sij,skj->ski", r[:, :3, :3], pts) + r[:, None, :3, 3]
     cam = scene.camera
     vp = np.asarray(cam.view_projection(width, height), dtype=np.float64)
-    xy, w = _project(vp, moved_pts, width, height)  # (S, 5, 2), (S, 5)
+    xy, w = project_points(moved_pts, vp, width, height)  # (S, 5, 2), (S, 5); NaN behind
     ok = anchors.valid & np.all((w >= cam.near) & (w <= cam.far), axis=1)
     c_new = xy[:, 0]
     a = np.stack([xy[:, 1] - xy[:, 2], xy[:, 3] - xy[:, 4]], -1) / (2.0 * RING_PX)  # (S, 2, 2)

@@ -15,19 +15,19 @@ import numpy as np
 
 from refnpr.formulas.tamiss import StrokeFit, StrokeHashTable
 
-from .._common import check_choice, check_count, check_number
+from .._declare import Values
 from .aggregate import (
     AggregateHistory,
     Aggregates,
     aggregate_exact,
     aggregate_hashed,
 )
-from .field import DEFAULT_DENSITY, StrokeField
-from .gather import DERIVATIVES, FieldInputs, Fragments, field_inputs, gather_fragments
-from .raster import BRUSHES, rasterize_strips
+from .field import StrokeField
+from .gather import FieldInputs, Fragments, field_inputs, gather_fragments
+from .params import AVERAGE_MOTIONS, PARAMS, SHOW, resolve_field
+from .raster import rasterize_strips
 from .state import StrokeCoefficients, smooth_fit
 from .strokes import (
-    EXTENTS,
     Strips,
     drawn_segments,
     extrude,
@@ -39,194 +39,49 @@ from .strokes import (
 
 __all__ = ["AVERAGE_MOTIONS", "SHOW", "TamissParams", "PipelineResult", "run_pipeline"]
 
-#: What the ``tamiss`` style shows (``show``): the ink, or a stage of the pipeline (fig. 5)
-#: false-coloured by stroke id: the gathered ids per sample (fig. 6), the fitted cubics over
-#: [t_min, t_max] as thin lines, the extruded strokes; or the strokes coloured by their birth
-#: level (the nesting of fig. 2).
-SHOW = ("color", "ids", "fits", "strokes", "levels")
 
-#: Largest ``prior_weight`` (zero-visibility points per fragment): the prior's moment sums are
-#: float32 in the default precision, and a larger weight drowns every fragment anyway.
-MAX_PRIOR_WEIGHT = 1e6
-
-#: Largest ``gather_scale`` (gather samples per pixel along an axis): 16 x 16 per pixel.
-MAX_GATHER_SCALE = 16
-
-#: Default ``average_frames``: in a sequence, each frame's aggregates are averaged with the three
-#: frames before, moved along the exact motion (issue 12, docs/tamiss.md "Sequences": E / D of
-#: the ``tamiss-knot-pen`` orbit 0.663 -> 0.633, its floor with exactly carried strokes 0.608;
-#: stroke ends jitter 0.85 -> 0.26 px; no lag; 1.1x the frame). A still, frame 0, is unchanged.
-DEFAULT_AVERAGE_FRAMES = 4
-
-#: How ``average_frames`` averages (``average_motion``): "exact" moves each earlier frame's sums
-#: along the exact surface motion first (refnpr's; no lag), "none" averages them where they
-#: were (the paper's proposal as written; lags (k - 1) / 2 frames).
-AVERAGE_MOTIONS = ("exact", "none")
-
-
-def _check_bool(name: str, value: Any) -> bool:
-    if not isinstance(value, (bool, np.bool_)):  # 1 and 0 are not flags
-        raise TypeError(f"{name}: expected a bool, got {value!r}")
-    return bool(value)
-
-
-@dataclass(frozen=True)
 class TamissParams:
-    """Validated parameters of the TAMISS pipeline (see ``docs/tamiss.md`` for each).
+    """Validated parameters of the TAMISS pipeline: the ``tamiss`` style's declaration
+    (:data:`~refnpr.styles.tamiss.params.PARAMS`, tabled in ``docs/tamiss.md``) with
+    ``layer_tones`` resolved, and the stroke field they give (``field``).
 
-    Build with :meth:`from_params` from the style's keyword arguments.
+    Build with :meth:`from_params` from the style's keyword arguments; read a parameter as an
+    attribute (``p.gather_width``); ``values`` are the validated values.
     """
 
-    field: StrokeField = field(default_factory=StrokeField)
-    gather_width: float = 1.0
-    aggregation: str = "exact"
-    table_size: int = 1 << 16
-    max_probes: int = 32
-    warmup_frames: int = 2
-    dtype: str = "float32"
-    iterations: int = 4
-    prior_weight: float = 1.0
-    visibility_threshold: float | None = None
-    min_fragments: int = 6
-    min_t_span: float = 0.05
-    max_stretch: float | None = 3.0
-    extent: str = "overdraw"
-    overdraw: float = 6.0
-    width: float = 1.5
-    taper: float = 0.2
-    wobble: float = 0.0
-    wobble_frequency: float = 1.5
-    end_jitter: float = 0.0
-    samples: int = 16
-    aa: int = 4
-    brush: str | None = None
-    opacity: float = 1.0
-    constant_tone: float | None = None
-    derivatives: str = "smooth"
-    orient_charts: bool = True
-    show: str = "color"
-    gather_scale: int | None = None
-    average_frames: int = DEFAULT_AVERAGE_FRAMES
-    average_motion: str = "exact"
-    smooth: float = 0.0
+    __slots__ = ("values", "field")
+
+    def __init__(self, values: Values) -> None:
+        values = resolve_field(values)
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "field", StrokeField.of(values))
 
     @classmethod
-    def from_params(
-        cls,
-        *,
-        directions=("u", "v"),
-        layer_tones=None,
-        period: float = 4.0,
-        length: float = 1.0,
-        length_jitter: float = 0.3,
-        width_jitter: float = 0.2,
-        density: float = DEFAULT_DENSITY,
-        max_level: int = 10,
-        gather_width: float = 1.0,
-        aggregation: str = "exact",
-        table_size: int = 1 << 16,
-        max_probes: int = 32,
-        warmup_frames: int = 2,
-        dtype: str = "float32",
-        iterations: int = 4,
-        prior_weight: float = 1.0,
-        visibility_threshold: float | None = None,
-        min_fragments: int = 6,
-        min_t_span: float = 0.05,
-        max_stretch: float | None = 3.0,
-        extent: str = "overdraw",
-        overdraw: float = 6.0,
-        width: float = 1.5,
-        taper: float = 0.2,
-        wobble: float = 0.0,
-        wobble_frequency: float = 1.5,
-        end_jitter: float = 0.0,
-        samples: int = 16,
-        aa: int = 4,
-        brush: str | None = None,
-        opacity: float = 1.0,
-        constant_tone: float | None = None,
-        derivatives: str = "smooth",
-        orient_charts: bool = True,
-        show: str = "color",
-        gather_scale: int | None = None,
-        average_frames: int = DEFAULT_AVERAGE_FRAMES,
-        average_motion: str = "exact",
-        smooth: float = 0.0,
-    ) -> TamissParams:
-        fld = StrokeField.from_params(
-            directions=directions,
-            layer_tones=layer_tones,
-            period=period,
-            length=length,
-            length_jitter=length_jitter,
-            width_jitter=width_jitter,
-            density=density,
-            max_level=max_level,
-        )
-        table_size = check_count("table_size", table_size, lo=2, hi=1 << 30)
-        if table_size & (table_size - 1):
-            raise ValueError(
-                f"table_size: expected a power of two, got {table_size}; "
-                f"use {1 << table_size.bit_length()}"
-            )
-        if brush is not None and not isinstance(brush, str):
-            raise TypeError(
-                f"brush: expected None, {list(BRUSHES)} or a texture name, got {brush!r}"
-            )
-        if visibility_threshold is not None:
-            visibility_threshold = check_number("visibility_threshold", visibility_threshold)
-        if constant_tone is not None:
-            constant_tone = check_number("constant_tone", constant_tone, lo=0.0, hi=1.0)
-        if gather_scale is not None:
-            gather_scale = check_count("gather_scale", gather_scale, lo=1, hi=MAX_GATHER_SCALE)
-        smooth = check_number("smooth", smooth, lo=0.0, hi=1.0)
-        if smooth >= 1.0:
-            raise ValueError(
-                f"smooth: expected a weight in [0, 1) (0: off; the previous frame's curve gets "
-                f"weight smooth), got {smooth!r}; 1 would freeze every stroke forever"
-            )
-        return cls(
-            field=fld,
-            gather_width=check_number("gather_width", gather_width, lo=0.0, lo_open=True, hi=16.0),
-            aggregation=check_choice("aggregation", aggregation, ("exact", "hashed")),
-            table_size=table_size,
-            max_probes=check_count("max_probes", max_probes, lo=1),
-            warmup_frames=check_count("warmup_frames", warmup_frames, lo=0, hi=16),
-            dtype=check_choice("dtype", dtype, ("float32", "float64")),
-            iterations=check_count("iterations", iterations, lo=0, hi=64),
-            prior_weight=check_number("prior_weight", prior_weight, lo=0.0, hi=MAX_PRIOR_WEIGHT),
-            visibility_threshold=visibility_threshold,
-            min_fragments=check_count("min_fragments", min_fragments, lo=4),
-            min_t_span=check_number("min_t_span", min_t_span, lo=0.0, hi=1.0),
-            max_stretch=None
-            if max_stretch is None
-            else check_number("max_stretch", max_stretch, lo=1.0),
-            extent=check_choice("extent", extent, EXTENTS),
-            overdraw=check_number("overdraw", overdraw, lo=0.0),
-            width=check_number("width", width, lo=0.0, lo_open=True, hi=64.0),
-            taper=check_number("taper", taper, lo=0.0, hi=0.5),
-            wobble=check_number("wobble", wobble, lo=0.0, hi=64.0),
-            wobble_frequency=check_number("wobble_frequency", wobble_frequency, lo=0.0),
-            end_jitter=check_number("end_jitter", end_jitter, lo=0.0, hi=1.0),
-            samples=check_count("samples", samples, lo=2, hi=256),
-            aa=check_count("aa", aa, lo=1, hi=8),
-            brush=brush,
-            opacity=check_number("opacity", opacity, lo=0.0, hi=1.0),
-            constant_tone=constant_tone,
-            derivatives=check_choice("derivatives", derivatives, DERIVATIVES),
-            orient_charts=_check_bool("orient_charts", orient_charts),
-            show=check_choice("show", show, SHOW),
-            gather_scale=gather_scale,
-            average_frames=check_count("average_frames", average_frames, lo=1, hi=16),
-            average_motion=check_choice("average_motion", average_motion, AVERAGE_MOTIONS),
-            smooth=smooth,
-        )
+    def from_params(cls, **params: Any) -> TamissParams:
+        return cls(PARAMS.validate(params))
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__") or name in TamissParams.__slots__:
+            raise AttributeError(name)
+        return getattr(self.values, name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("TamissParams are read-only")
+
+    def __reduce__(self) -> tuple:
+        return (TamissParams, (self.values,))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, TamissParams) and self.as_dict() == other.as_dict()
+
+    __hash__ = None  # type: ignore[assignment]
 
     def as_dict(self) -> dict:
-        out = self.field.as_dict()
-        out.update({k: v for k, v in self.__dict__.items() if k != "field"})
-        return out
+        """Every parameter as ``params()`` shows it (None values kept), in declaration order."""
+        return self.values.as_dict(keep_none=True)
+
+    def __repr__(self) -> str:
+        return f"TamissParams({self.values!r})"
 
 
 @dataclass(frozen=True, eq=False)
@@ -315,7 +170,7 @@ def run_pipeline(
         The G-buffer fragments are gathered from (same scene, camera and pixel size as ``gb``,
         more samples: ``gather_scale``); default ``gb``. The ink is drawn on ``gb``'s samples.
     """
-    p = params if params is not None else TamissParams()
+    p = params if params is not None else TamissParams.from_params()
     if not isinstance(p, TamissParams):
         raise TypeError(f"params: expected TamissParams, got {type(p).__name__}")
     dtype = np.dtype(p.dtype)

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._common import check_count
 from . import _kernels as K
+from .params import PARAMS
 from .strokes import Strips
 
 __all__ = ["BRUSHES", "brush_texture", "rasterize_strips"]
@@ -81,7 +81,7 @@ def rasterize_strips(
     rgb : (nH, nW, 3) float64 premultiplied colour, only when ``colors`` (P, 3) is given (a
         colour per piece, composited with the same "over")
     """
-    aa = check_count("aa", aa, lo=1, hi=8)  # a kernel per aa (sub-sample bits: 64 at most)
+    aa = PARAMS["aa"].check(aa)  # a kernel per aa (sub-sample bits: 64 at most)
     nh, nw = int(shape[0]), int(shape[1])
     alpha = np.zeros((nh, nw))
     touched = np.zeros((nh, nw), dtype=np.int32)
@@ -101,19 +101,13 @@ def rasterize_strips(
     bbox = np.empty((left.shape[0], 4), dtype=np.int64)
     K.strip_bbox(left, right, nh, nw, bbox)
     tex, wrap = brush_texture(brush)
-    K.raster_strips_for(aa)(
+    pieces = K.Strips(
         left,
         right,
         np.ascontiguousarray(strips.strip.t, dtype=np.float64),
         np.full(left.shape[0], float(opacity)),
-        bbox,
-        nh,
-        nw,
-        np.ascontiguousarray(tex),
-        bool(wrap),
-        alpha,
-        touched,
         colors if colors is not None else np.zeros((0, 3)),
-        rgb,
     )
+    brush_tex = (np.ascontiguousarray(tex), bool(wrap))
+    K.raster_strips_for(aa)(pieces, bbox, (nh, nw), brush_tex, (alpha, touched, rgb))
     return (alpha, touched) if colors is None else (alpha, touched, rgb)

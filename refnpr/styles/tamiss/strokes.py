@@ -32,11 +32,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from refnpr.formulas.tamiss import StrokeFit, StrokeStrip, fit_strokes
+from refnpr.formulas.tamiss import StrokeFit, StrokeStrip, fit_strokes, width_factor
 
 from . import _kernels as kernels
 from .aggregate import Aggregates
 from .field import SALT_WIDTH, StrokeField, hash01
+from .params import EXTENTS
 
 __all__ = [
     "EXTENTS",
@@ -54,7 +55,6 @@ __all__ = [
     "take_fit",
 ]
 
-EXTENTS = ("visible", "range", "stroke", "overdraw")
 SALT_WOBBLE_AMP, SALT_WOBBLE_PHASE, SALT_END_A, SALT_END_B = 11, 12, 13, 14
 
 
@@ -107,47 +107,47 @@ def keep_mask(
     return keep
 
 
-def _fast_fit(fit: StrokeFit) -> bool:
-    """Whether the kernels take ``fit``: a batch (S,) of centred-basis cubics with the
-    coefficients and the t range in one float dtype (then they compute what its methods do)."""
-    dt = fit.c_x.dtype
-    return (
-        fit.basis == "centred"
-        and len(fit.batch_shape) == 1
-        and dt in (np.float32, np.float64)
-        and all(np.asarray(a).dtype == dt for a in (fit.c_y, fit.t_min, fit.t_max))
-        and np.shape(fit.t_min) == np.shape(fit.t_max) == fit.batch_shape
-    )
-
-
 def _fit_arrays(fit: StrokeFit) -> tuple[np.ndarray, ...]:
-    """c_x, c_y, t_min, t_max of a ``_fast_fit`` fit as the kernels take them (contiguous)."""
-    return tuple(np.ascontiguousarray(a) for a in (fit.c_x, fit.c_y, fit.t_min, fit.t_max))
+    """c_x, c_y, t_min, t_max of a batch (S,) of centred-basis fits as the kernels take them:
+    contiguous, in the coefficients' float type (as ``StrokeFit``'s methods compute)."""
+    dt = fit.c_x.dtype if fit.c_x.dtype in (np.float32, np.float64) else np.dtype(np.float64)
+    if fit.basis != "centred" or len(fit.batch_shape) != 1:
+        raise ValueError(
+            f"fit: expected a batch (S,) of centred-basis fits (fit_strokes' legendre or "
+            f"monomial bases), got basis {fit.basis!r} with batch shape {fit.batch_shape}"
+        )
+    out = tuple(
+        np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=dt), shape))
+        for a, shape in (
+            (fit.c_x, fit.c_x.shape),
+            (fit.c_y, fit.c_x.shape),
+            (fit.t_min, fit.batch_shape),
+            (fit.t_max, fit.batch_shape),
+        )
+    )
+    if not (np.all(np.isfinite(out[2])) and np.all(np.isfinite(out[3]))):
+        raise ValueError("fit: t_min, t_max: expected finite values")
+    return out
 
 
 def mean_speed(fit: StrokeFit) -> np.ndarray:
     """(S,) float64 pixels per unit t of the fitted curve over [t_min, t_max] (17-point polyline
     length / (t_max - t_min); 0 for a single t)."""
-    lo = np.asarray(fit.t_min, dtype=np.float64).reshape(-1, 1)
-    hi = np.asarray(fit.t_max, dtype=np.float64).reshape(-1, 1)
+    arrays = _fit_arrays(fit)
+    dt = arrays[0].dtype
+    lo = arrays[2].astype(np.float64)[:, None]
+    hi = arrays[3].astype(np.float64)[:, None]
     ts = lo + (hi - lo) * np.linspace(0.0, 1.0, 17)
-    dt = fit.c_x.dtype
-    if _fast_fit(fit) and np.all(np.isfinite(ts)):  # else fit.evaluate raises
-        # fit.evaluate, the lengths and their sums in one kernel, the same values
-        out = np.empty(ts.shape[0])
-        kernels.mean_speeds(
-            ts.astype(dt),
-            *_fit_arrays(fit),
-            np.full(1, 0.5, dtype=dt),
-            np.ascontiguousarray((hi - lo)[:, 0]),
-            np.empty((ts.shape[0], 16)),
-            out,
-        )
-        return out
-    px, py = (np.asarray(a, dtype=np.float64) for a in fit.evaluate(ts))
-    arc = np.sum(np.hypot(np.diff(px, axis=1), np.diff(py, axis=1)), axis=1)
-    span = (hi - lo)[:, 0]
-    return np.where(span > 0, arc / np.where(span > 0, span, 1.0), 0.0)
+    out = np.empty(ts.shape[0])
+    kernels.mean_speeds(
+        ts.astype(dt),
+        arrays,
+        np.full(1, 0.5, dtype=dt),
+        np.ascontiguousarray((hi - lo)[:, 0]),
+        np.empty((ts.shape[0], 16)),
+        out,
+    )
+    return out
 
 
 def drawn_segments(
@@ -185,60 +185,37 @@ def drawn_segments(
     return seg, count
 
 
-def _unit(dx, dy, fx, fy):
-    n = np.hypot(dx, dy)
-    ok = n > 1e-12
-    fn = np.hypot(fx, fy)
-    fok = fn > 1e-12
-    ux = np.where(ok, dx / np.where(ok, n, 1), np.where(fok, fx / np.where(fok, fn, 1), 1.0))
-    uy = np.where(ok, dy / np.where(ok, n, 1), np.where(fok, fy / np.where(fok, fn, 1), 0.0))
-    return ux, uy
-
-
 def centreline(fit: StrokeFit, t, *, speed: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
     """Points and unit tangents of the drawn curve at t, ``(S, K)`` each: x, y, tx, ty (float64).
 
     r(t) from the fit on [t_min, t_max]; outside, the tangent line at the nearer end, traversed
     at the fit's mean speed over [t_min, t_max] (:func:`mean_speed`; ``speed`` (S,): its
-    values if already known).
+    values if already known). The unit tangent is dr/dt normalized, the chord r(t_max) -
+    r(t_min) where dr/dt vanishes, (1, 0) where that does too.
     """
-    t = np.asarray(t, dtype=np.float64)
-    lo = np.asarray(fit.t_min, dtype=np.float64)[:, None]
-    hi = np.asarray(fit.t_max, dtype=np.float64)[:, None]
-    if (
-        _fast_fit(fit)
-        and t.ndim == 2
-        and t.shape[0] == lo.shape[0]
-        and all(np.all(np.isfinite(a)) for a in (t, lo, hi))  # else fit.evaluate raises
-    ):
-        speed = mean_speed(fit) if speed is None else np.asarray(speed, dtype=np.float64)
-        dt = fit.c_x.dtype
-        out = tuple(np.empty(t.shape) for _ in range(4))
-        kernels.centrelines(
-            np.ascontiguousarray(t),
-            *_fit_arrays(fit),
-            np.array([0.5, 2.0, 3.0, 0.0], dtype=dt),
+    arrays = _fit_arrays(fit)
+    t = np.ascontiguousarray(t, dtype=np.float64)
+    if t.ndim != 2 or t.shape[0] != arrays[0].shape[0]:
+        raise ValueError(f"t: expected shape ({arrays[0].shape[0]}, K), got {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise ValueError("t: expected finite stroke parameters")
+    lo = arrays[2].astype(np.float64)[:, None]
+    hi = arrays[3].astype(np.float64)[:, None]
+    speed = mean_speed(fit) if speed is None else np.asarray(speed, dtype=np.float64)
+    dt = arrays[0].dtype
+    out = tuple(np.empty(t.shape) for _ in range(4))
+    kernels.centrelines(
+        t,
+        arrays,
+        np.array([0.5, 2.0, 3.0, 0.0], dtype=dt),
+        (
             np.ascontiguousarray(np.broadcast_to(speed, lo.shape[:1])),
             bool(np.any((t < lo) | (t > hi))),
-            np.empty(t.shape, dtype=dt),
-            *out,
-        )  # the numpy below in one kernel, the same values
-        return out
-    tc = np.clip(t, lo, hi)
-    x, y = (np.asarray(a, dtype=np.float64) for a in fit.evaluate(tc))
-    dx, dy = (np.asarray(a, dtype=np.float64) for a in fit.derivative(tc))
-    speed = (mean_speed(fit) if speed is None else np.asarray(speed, dtype=np.float64))[:, None]
-    (x0, y0), (x1, y1) = fit.evaluate(lo), fit.evaluate(hi)
-    chord_x = np.asarray(x1, dtype=np.float64) - np.asarray(x0, dtype=np.float64)
-    chord_y = np.asarray(y1, dtype=np.float64) - np.asarray(y0, dtype=np.float64)
-    tx, ty = _unit(dx, dy, chord_x, chord_y)
-    below = t < lo
-    above = t > hi
-    if np.any(below | above):
-        d_out = np.where(below, t - lo, np.where(above, t - hi, 0.0)) * speed
-        x = x + d_out * tx
-        y = y + d_out * ty
-    return x, y, tx, ty
+        ),
+        np.empty(t.shape, dtype=dt),
+        out,
+    )
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -316,7 +293,7 @@ def extrude(
     sub_speed = None if speed is None else np.asarray(speed)[stroke]
     x, y, tx, ty = centreline(sub, t, speed=sub_speed) if P else (np.zeros((0, K)),) * 4
     nx, ny = -ty, tx  # left normal
-    wf = 1.0 + field.width_jitter * (2.0 * hash01(ids, SALT_WIDTH) - 1.0)
+    wf = width_factor(hash01(ids, SALT_WIDTH), field.width_jitter)
     w = width * wf[stroke]
     if taper > 0:
         profile = np.minimum(1.0, np.minimum(u, 1.0 - u) / taper)
@@ -334,7 +311,7 @@ def extrude(
         np.ascontiguousarray(np.broadcast_to(a, (P, K)), dtype=np.float64)
         for a in (x, y, nx, ny, h)
     )
-    kernels.strip_sides(x, y, nx, ny, h, left, right)  # x + h n, x - h n
+    kernels.strip_sides((x, y), (nx, ny), h, (left, right))  # x + h n, x - h n
     return Strips(
         strip=StrokeStrip(left=left, right=right, t=t),
         stroke=stroke.astype(np.int64),

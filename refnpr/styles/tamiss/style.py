@@ -5,7 +5,6 @@ docstring (:mod:`refnpr.styles.tamiss`) describes the technique and the pipeline
 from __future__ import annotations
 
 import copy
-import inspect
 from typing import Any
 
 import numpy as np
@@ -15,8 +14,9 @@ from refnpr.raster import rasterize
 
 from ..base import ShadeContext, Style, register
 from .aggregate import AggregateHistory, aggregate_exact
-from .compose import base_style, check_color, composite_ink, field_channels
+from .compose import composite_ink, field_channels
 from .motion import MOTION_CHANNELS, stroke_anchors
+from .params import PARAMS
 from .pipeline import PipelineResult, TamissParams, run_pipeline
 from .show import show_layers
 from .state import StrokeCoefficients, TamissState
@@ -28,42 +28,10 @@ __all__ = ["TamissStyle"]
 class TamissStyle(Style):
     """Hatching with image-space strokes fitted to stroke-ID TAM fragments (TAMISS).
 
-    Parameters (all keyword; TOML values; see ``docs/tamiss.md``)
-    ----------
-    directions : 'u', 'v', an angle in degrees, or a list of them (one per hatching layer)
-    layer_tones : list of float, darkness at which each layer starts (default k / layers)
-    period : float, stroke row spacing in pixels (4)
-    length : float, stroke length in cells of its birth level (1)
-    length_jitter, width_jitter : float, relative per-stroke jitter (0.3, 0.2)
-    density : float, scales the fraction of strokes drawn (1)
-    max_level : int, deepest RPTAM level (10, at most 12)
-    gather_width : float, pixel width of the band that gathers fragments (1)
-    aggregation : 'exact' | 'hashed'; table_size (65536), max_probes (32), warmup_frames (2)
-    dtype : 'float32' | 'float64', precision of sums and CG; iterations (4); prior_weight (1)
-    visibility_threshold : float or None (formula default 1 / (2 (1 + prior_weight)))
-    min_fragments (6), min_t_span (0.05), max_stretch (3; None: off) : the drop rule (a fit may
-    be at most max_stretch times as long as the pixels its fragments cover, plus 4 px)
-    extent : 'overdraw' (default: visible segments run on over outlines, Fig. 4) | 'visible' |
-    'range' | 'stroke'; overdraw : run-on in px (6)
-    width (1.5 px), taper (0.2), wobble (0 px), wobble_frequency (1.5 per stroke),
-    end_jitter (0), samples (16 per interval), aa (4 sub-samples per axis), brush (None),
-    opacity (1)
-    constant_tone : float or None, darkness to use instead of lighting
-    derivatives : 'smooth' | 'flat', d(uv)/d(x, y) for the field's levels: continuous across
-    triangle edges (default) or the rasterizer's per-triangle values
-    orient_charts : bool, orient each uv chart so that directions agree across borders (True)
-    show : 'color' | 'ids' | 'fits' | 'strokes' | 'levels', the drawing (default) or a pipeline stage (fig. 5, 6)
-    false-coloured by stroke id
-    ink : colour of the strokes (black); paper : colour of the paper under them on the object
-    (None: the background shows); base : a style drawn under the strokes (overrides paper)
-    gather_scale : int or None, gather fragments on a grid of gather_scale x gather_scale samples
-    per pixel (its own rasterization), independent of spp (None: the G-buffer's samples)
-    average_frames : int, average aggregates over this many frames in a sequence (4; 1: off;
-    sec. 4.1's proposal); average_motion : 'exact' (default: earlier frames' sums moved along
-    the exact surface motion first, no lag; refnpr's) | 'none' (averaged where they were, the
-    paper's proposal as written: lags (k - 1) / 2 frames); smooth : float in [0, 1),
-    exponential smoothing of the fitted curves by stroke id in a sequence (0: off; refnpr's
-    remedy, not the paper's)
+    Parameters are declared once in :data:`refnpr.styles.tamiss.params.PARAMS` (their table is
+    in ``docs/tamiss.md``): the stroke field (shared with ``tam``), gathering, aggregation, the
+    fits and the drop rule, the drawn extent and the strokes' look, the raster, the tone, the
+    ``show`` views, the jitter remedies of sequences and the colours.
 
     Sequences: :meth:`initial_state` / :meth:`shade_frame` carry a
     :class:`~refnpr.styles.tamiss.state.TamissState` (hash table, aggregate window, previous
@@ -71,32 +39,14 @@ class TamissStyle(Style):
     """
 
     name = "tamiss"
-    renamed = {"fill": "paper"}  # the halftone style's name for the same colour
+    renamed = PARAMS.renamed  # fill: the halftone style's name for the paper colour
     description = "TAMISS: stroke-ID TAM fragments fitted to image-space strokes (Szécsi et al.)"
+    PARAMS = PARAMS
 
-    @classmethod
-    def parameters(cls) -> tuple[str, ...]:
-        own = super().parameters()
-        sig = inspect.signature(TamissParams.from_params)
-        return tuple(sorted((*own, *(n for n in sig.parameters if n != "cls"))))
-
-    def __init__(
-        self,
-        *,
-        ink: Any = (0.0, 0.0, 0.0),
-        paper: Any = None,
-        base: Any = None,
-        **params: Any,
-    ) -> None:
-        self.pipeline_params = TamissParams.from_params(**params)
-        self.ink = check_color("ink", ink, optional=False)
-        self.paper = check_color("paper", paper)
-        self.base = base_style(base)
-        self._params = self.pipeline_params.as_dict() | {
-            "ink": list(self.ink),
-            "paper": None if self.paper is None else list(self.paper),
-            "base": None if self.base is None else self.base.params() | {"name": self.base.name},
-        }
+    def __init__(self, **params: Any) -> None:
+        self.pipeline_params = p = TamissParams(PARAMS.validate(params))
+        self.ink, self.paper, self.base = p.ink, p.paper, p.base
+        self._params = p.as_dict()
 
     def requires(self, scene: Any) -> frozenset[str]:
         p = self.pipeline_params

@@ -15,11 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from .._common import check_choice, check_number
 from ..base import ShadeContext, Style, register
-from .compose import base_style, check_color, composite_ink, field_channels
-from .field import DEFAULT_DENSITY, StrokeField
-from .gather import DERIVATIVES, field_inputs, tam_ink
+from .compose import composite_ink, field_channels
+from .field import StrokeField
+from .gather import field_inputs, tam_ink
+from .params import TAM_PARAMS, resolve_field
 
 __all__ = ["TamStyle"]
 
@@ -28,79 +28,26 @@ __all__ = ["TamStyle"]
 class TamStyle(Style):
     """Texture-space hatching with the RPTAM stroke field (the TAMISS paper's baseline).
 
-    Parameters
-    ----------
-    directions, layer_tones, period, length, length_jitter, width_jitter, density, max_level :
-        the stroke field, as for the ``tamiss`` style
-    width : float, stroke width in pixels (1.5)
-    density_mode : 'clip' | 'fade' (per-sample binary or smooth density decision)
-    fade : float, threshold range of the smooth decision (0.15)
-    constant_tone : float or None, darkness to use instead of lighting
-    derivatives, orient_charts : as for the ``tamiss`` style
-    ink, paper, base : as for the ``tamiss`` style
+    Parameters are declared once in :data:`refnpr.styles.tamiss.params.TAM_PARAMS` (their table
+    is in ``docs/tamiss.md``): the stroke field, ``width``, ``constant_tone``, ``derivatives``,
+    ``orient_charts``, ``ink``, ``paper`` and ``base`` as for the ``tamiss`` style, and the
+    per-sample density decision (``density_mode``, ``fade``).
     """
 
     name = "tam"
-    renamed = {"fill": "paper"}  # the halftone style's name for the same colour
+    renamed = TAM_PARAMS.renamed  # fill: the halftone style's name for the paper colour
     description = "TAM/RPTAM texture-space hatching on the TAMISS stroke field (baseline)"
+    PARAMS = TAM_PARAMS
 
-    def __init__(
-        self,
-        *,
-        directions: Any = ("u", "v"),
-        layer_tones: Any = None,
-        period: float = 4.0,
-        length: float = 1.0,
-        length_jitter: float = 0.3,
-        width_jitter: float = 0.2,
-        density: float = DEFAULT_DENSITY,
-        max_level: int = 10,
-        width: float = 1.5,
-        density_mode: str = "fade",
-        fade: float = 0.15,
-        constant_tone: float | None = None,
-        derivatives: str = "smooth",
-        orient_charts: bool = True,
-        ink: Any = (0.0, 0.0, 0.0),
-        paper: Any = None,
-        base: Any = None,
-    ) -> None:
-        self.field = StrokeField.from_params(
-            directions=directions,
-            layer_tones=layer_tones,
-            period=period,
-            length=length,
-            length_jitter=length_jitter,
-            width_jitter=width_jitter,
-            density=density,
-            max_level=max_level,
-        )
-        self.width = check_number("width", width, lo=0.0, lo_open=True, hi=64.0)
-        self.density_mode = check_choice("density_mode", density_mode, ("clip", "fade"))
-        self.fade = check_number("fade", fade, lo=0.0, lo_open=True, hi=1.0)
-        self.constant_tone = (
-            None
-            if constant_tone is None
-            else check_number("constant_tone", constant_tone, lo=0.0, hi=1.0)
-        )
-        self.derivatives = check_choice("derivatives", derivatives, DERIVATIVES)
-        if not isinstance(orient_charts, (bool, np.bool_)):
-            raise TypeError(f"orient_charts: expected a bool, got {orient_charts!r}")
-        self.orient_charts = bool(orient_charts)
-        self.ink = check_color("ink", ink, optional=False)
-        self.paper = check_color("paper", paper)
-        self.base = base_style(base)
-        self._params = self.field.as_dict() | {
-            "width": self.width,
-            "density_mode": self.density_mode,
-            "fade": self.fade,
-            "constant_tone": self.constant_tone,
-            "derivatives": self.derivatives,
-            "orient_charts": self.orient_charts,
-            "ink": list(self.ink),
-            "paper": None if self.paper is None else list(self.paper),
-            "base": None if self.base is None else self.base.params() | {"name": self.base.name},
-        }
+    def __init__(self, **params: Any) -> None:
+        p = resolve_field(TAM_PARAMS.validate(params))
+        self.values = p
+        self.field = StrokeField.of(p)
+        self.width, self.density_mode, self.fade = p.width, p.density_mode, p.fade
+        self.constant_tone, self.derivatives = p.constant_tone, p.derivatives
+        self.orient_charts = p.orient_charts
+        self.ink, self.paper, self.base = p.ink, p.paper, p.base
+        self._params = p.as_dict(keep_none=True)
 
     def requires(self, scene: Any) -> frozenset[str]:
         req = field_channels(scene, self.constant_tone, self.derivatives)
