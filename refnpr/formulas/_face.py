@@ -42,7 +42,7 @@ from numba.extending import overload
 
 from refnpr._jit import njit
 
-__all__ = ["face", "elementwise", "elementwise_in", "Whole"]
+__all__ = ["face", "elementwise", "Whole"]
 
 
 class Whole(NamedTuple):
@@ -167,7 +167,7 @@ def _loop_of(scalar: Any, arity: int) -> Any:
     return loop[0]
 
 
-def elementwise(scalar: Any, dtype: Any, *args: Any) -> np.ndarray:
+def elementwise(scalar: Any, dtype: Any, *args: Any, compute: Any = np.float64) -> np.ndarray:
     """``scalar`` at every element of the broadcast arguments, as an array of ``dtype``.
 
     Parameters
@@ -178,44 +178,19 @@ def elementwise(scalar: Any, dtype: Any, *args: Any) -> np.ndarray:
         The result's dtype (float32 or float64 for float results).
     *args
         ``scalar``'s arguments in order. A numpy array is broadcast with the other arrays and
-        read element by element (float arrays in float64); a tuple of arrays is a vector,
-        read as a tuple of its components' elements; anything else (a Python number, a bool, a
-        tuple of numbers, a named tuple such as a record or a :class:`Whole` array) is passed as
-        it is to every element.
+        read element by element (float arrays in ``compute``); a plain tuple of arrays is a
+        vector, read as a tuple of its components' elements; anything else (a Python number, a
+        bool, a tuple of numbers, a named tuple such as a record or a :class:`Whole` array) is
+        passed as it is to every element.
+    compute : numpy dtype, keyword-only
+        The float type arrays are read in (float64; float32 for a formula whose kernel computes
+        in float32, with its constants passed as ``np.float32``).
 
     Returns
     -------
     ndarray of the broadcast shape, or that shape + (C,) where ``scalar`` returns a C-tuple.
     """
-    arrays = [a for a in args if isinstance(a, np.ndarray)]
-    arrays += [c for a in args if _is_vector(a) for c in a]
-    shape = np.broadcast_shapes(*(a.shape for a in arrays)) if arrays else ()
-    size = int(np.prod(shape, dtype=np.int64))
-    n = max(size, 1)  # an empty result is typed from one element of zeros
-
-    def flat(a: np.ndarray) -> np.ndarray:
-        if a.dtype.kind == "f":
-            a = a.astype(np.float64, copy=False)
-        if size == 0:
-            return np.zeros(1, dtype=a.dtype)
-        return np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(size)
-
-    packed = tuple(
-        flat(a) if isinstance(a, np.ndarray) else tuple(flat(c) for c in a) if _is_vector(a) else a
-        for a in args
-    )
-    out = _loop_of(scalar, len(packed))(packed, n)[:size]
-    result = out.reshape(shape + out.shape[1:])
-    dt = np.dtype(dtype)
-    return result.astype(dt, copy=False) if out.dtype.kind == "f" else result
-
-
-def elementwise_in(scalar: Any, dtype: Any, *args: Any) -> np.ndarray:
-    """:func:`elementwise` computing in ``dtype``: float arrays are read as ``dtype`` (float32
-    stays float32), so a scalar function written for any float type (its constants passed in
-    as arguments of that type) runs float32 arithmetic where a kernel does; the result is cast
-    to ``dtype``. Numbers are passed as they are (give float32 constants as ``np.float32``)."""
-    dt = np.dtype(dtype)
+    fdt = np.dtype(compute)
     arrays = [a for a in args if isinstance(a, np.ndarray)]
     arrays += [c for a in args if _is_vector(a) for c in a]
     shape = np.broadcast_shapes(*(a.shape for a in arrays)) if arrays else ()
@@ -223,8 +198,8 @@ def elementwise_in(scalar: Any, dtype: Any, *args: Any) -> np.ndarray:
 
     def flat(a: np.ndarray) -> np.ndarray:
         if a.dtype.kind == "f":
-            a = a.astype(dt, copy=False)
-        if size == 0:
+            a = a.astype(fdt, copy=False)
+        if size == 0:  # an empty result is typed from one element of zeros
             return np.zeros(1, dtype=a.dtype)
         return np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(size)
 
@@ -234,7 +209,7 @@ def elementwise_in(scalar: Any, dtype: Any, *args: Any) -> np.ndarray:
     )
     out = _loop_of(scalar, len(packed))(packed, max(size, 1))[:size]
     result = out.reshape(shape + out.shape[1:])
-    return result.astype(dt, copy=False) if out.dtype.kind == "f" else result
+    return result.astype(np.dtype(dtype), copy=False) if out.dtype.kind == "f" else result
 
 
 def _is_vector(a: Any) -> bool:

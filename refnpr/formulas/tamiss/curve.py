@@ -12,7 +12,7 @@ import numpy as np
 
 from refnpr._jit import njit
 
-from .._face import elementwise_in, face
+from .._face import elementwise, face
 from .._validate import as_float, describe, result_dtype
 
 __all__ = ["cubic", "cubic_slope"]
@@ -38,7 +38,7 @@ def cubic(c, s) -> np.ndarray:
     arr = _coefficients(c)
     dt = result_dtype(arr, s)
     cols = tuple(arr[..., k] for k in range(4))
-    return elementwise_in(cubic.scalar, dt, cols, as_float("s", s).astype(dt))
+    return elementwise(cubic.scalar, dt, cols, as_float("s", s).astype(dt), compute=dt)
 
 
 @njit
@@ -55,4 +55,4 @@ def cubic_slope(c, s) -> np.ndarray:
     dt = result_dtype(arr, s)
     cols = tuple(arr[..., k] for k in range(4))
     k = (dt.type(2), dt.type(3), dt.type(0))
-    return elementwise_in(cubic_slope.scalar, dt, cols, as_float("s", s).astype(dt), k)
+    return elementwise(cubic_slope.scalar, dt, cols, as_float("s", s).astype(dt), k, compute=dt)

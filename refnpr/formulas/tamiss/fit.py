@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._face import elementwise_in
+from .._face import elementwise
 from .._validate import as_float, check_int, check_scalar, describe, result_dtype
 from .curve import cubic, cubic_slope
 from .moments import N_REGRESSORS, fragment_regressors, group_ids, normalize_t
@@ -61,15 +61,15 @@ class StrokeFit:
         if self.basis == "raw":
             return t_
         lo, hi = self._expand(self.t_min), self._expand(self.t_max)
-        return elementwise_in(normalize_t.scalar, dt, t_, lo, hi, dt.type(0.5))
+        return elementwise(normalize_t.scalar, dt, t_, lo, hi, dt.type(0.5), compute=dt)
 
     def _poly(self, c: np.ndarray, s: np.ndarray, slope: bool = False) -> np.ndarray:
         dt = self.c_x.dtype
         cols = tuple(self._expand(c[..., k]) for k in range(4))
         if slope:
             k = (dt.type(2), dt.type(3), dt.type(0))
-            return elementwise_in(cubic_slope.scalar, dt, cols, s, k)
-        return elementwise_in(cubic.scalar, dt, cols, s)  # r(t) = c^T (1, t, t^2, t^3)
+            return elementwise(cubic_slope.scalar, dt, cols, s, k, compute=dt)
+        return elementwise(cubic.scalar, dt, cols, s, compute=dt)  # r(t) = c^T (1, t, t^2, t^3)
 
     def evaluate(self, t):
         """Screen position (x, y) at stroke parameter t."""

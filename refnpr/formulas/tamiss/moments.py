@@ -9,7 +9,7 @@ import numpy as np
 
 from refnpr._jit import njit
 
-from .._face import elementwise_in, face
+from .._face import elementwise, face
 from .._validate import as_float, describe, result_dtype
 
 __all__ = ["N_REGRESSORS", "fragment_regressors", "normalize_t", "aggregate", "group_ids"]
@@ -52,7 +52,7 @@ def fragment_regressors(s, x, y) -> np.ndarray:
         raise ValueError(
             f"s, x, y: expected equal shapes, got {np.shape(s)}, {np.shape(x)}, {np.shape(y)}"
         ) from None
-    return elementwise_in(fragment_regressors.scalar, dt, s_, x_, y_, dt.type(1))
+    return elementwise(fragment_regressors.scalar, dt, s_, x_, y_, dt.type(1), compute=dt)
 
 
 @njit
@@ -80,7 +80,7 @@ def normalize_t(t, t_min, t_max) -> np.ndarray:
             f"t_min, t_max: expected t_min <= t_max, got {describe(lo)}, {describe(hi)}; swap them"
         )
     dt = result_dtype(t, t_min, t_max)  # Python scalars do not promote float32
-    return elementwise_in(normalize_t.scalar, dt, t_, lo, hi, dt.type(0.5))
+    return elementwise(normalize_t.scalar, dt, t_, lo, hi, dt.type(0.5), compute=dt)
 
 
 def group_ids(ids):
