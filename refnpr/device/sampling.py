@@ -27,6 +27,7 @@ __all__ = [
     "probes",
     "level_probes",
     "footprint",
+    "level_weights",
 ]
 
 
@@ -165,3 +166,14 @@ def footprint(dx, dy, rows, cols, anisotropy):
     if px >= py:
         return lod, n, (dx[0], dx[1])
     return lod, n, (dy[0], dy[1])
+
+
+@njit
+def level_weights(n_levels, lod):
+    """The two levels a trilinear sample of a pyramid of ``n_levels`` levels blends at ``lod``
+    and the weight of the second, as :func:`trilinear` picks them: ``(k0, k1, f)`` with lod
+    clamped to [0, L - 1], k0 = floor, k1 = min(k0 + 1, L - 1), f = frac."""
+    top = n_levels - 1
+    lam = min(max(lod, 0.0), float(top))
+    k0 = np.int64(math.floor(lam))
+    return k0, min(k0 + 1, top), lam - k0

@@ -9,13 +9,27 @@ Conventions (see ``docs/paper-notes.md``, "Freudenberg et al. 2002"): screens, i
 outputs are in [0, 1] with 0 = black and 1 = white. A screen value g is drawn black while
 ``g + intensity <= 1``, so darker screen values stay black up to lighter intensities. Inputs are
 finite reals whose shapes broadcast; float32 in -> float32 out, else float64.
+
+The per-sample formulas (the thresholds, indication mapping and the indication map's lookup, the
+tangent frame and the stroke lighting of sec. 5.2) are scalar device functions (``f.scalar``)
+that the ``halftone`` style's kernel calls for every sample; each public function here is their
+numpy face (:mod:`refnpr.formulas._face`), computing in float64. The stroke-map encoding is one
+too, run per texel by the texture builders (float32 layers encode in float32). The engraving
+ramp and the tone curve of the smooth threshold are numpy.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ._shading_checks import broadcast, check_range, frac, real, trailing, unit_vectors
+from refnpr._jit import njit
+from refnpr.device.scalars import clip01
+from refnpr.device.vectors import dot, unit_scaled
+
+from ._face import Whole, elementwise, face
+from ._shading_checks import broadcast, check_range, frac, real, trailing
 from ._validate import check_int, check_scalar, describe, result_dtype
 
 __all__ = [
@@ -27,6 +41,8 @@ __all__ = [
     "decode_stroke_map",
     "layer_onsets",
     "apply_indication",
+    "sample_indication",
+    "tangent_frame",
     "stroke_lighting",
     "engraving_screen",
     "engraving_ramp",
@@ -43,6 +59,13 @@ def _pair(screen, intensity) -> tuple[np.ndarray, np.ndarray, np.dtype]:
     return scr, x, dt
 
 
+@njit
+def _binary_threshold(s, x):
+    tmp = s + (x - 0.5)  # sec. 3.1: add(tex, col - 0.5)
+    return 1.0 if tmp > 0.5 else 0.0  # sec. 3.1: mux(tmp, 0, 1)
+
+
+@face(_binary_threshold)
 def binary_threshold(screen, intensity) -> np.ndarray:
     """Binary threshold of Freudenberg sec. 3.1 in its register-combiner (mux) form.
 
@@ -57,15 +80,24 @@ def binary_threshold(screen, intensity) -> np.ndarray:
     intensity : array_like
         Target intensity (``col``); broadcasts against ``screen``.
 
+    ``binary_threshold.scalar(s, x)`` is the device function.
+
     Returns
     -------
     ndarray of 0.0 / 1.0; float64, or float32 if the inputs are float32.
     """
     scr, x, dt = _pair(screen, intensity)
-    tmp = scr + (x - 0.5)  # sec. 3.1: add(tex, col - 0.5)
-    return np.asarray(tmp > 0.5, dtype=dt)  # sec. 3.1: mux(tmp, 0, 1)
+    return elementwise(binary_threshold.scalar, dt, scr, x)
 
 
+@njit
+def _smooth_threshold(s, x, c, centred):
+    tmp = (1.0 - s - x) * c  # sec. 3.2: add(1 - tex, -col) * C
+    top = 0.5 if centred else 1.0  # centred: the ramp straddles the binary threshold
+    return clip01(top - tmp)  # sec. 3.2: 1 - tmp, clamped
+
+
+@face(_smooth_threshold)
 def smooth_threshold(screen, intensity, c: float = 4.0, *, centred: bool = False) -> np.ndarray:
     """Smooth threshold of Freudenberg sec. 3.2: ``clip(1 - c (1 - screen - intensity), 0, 1)``.
 
@@ -87,17 +119,16 @@ def smooth_threshold(screen, intensity, c: float = 4.0, *, centred: bool = False
     centred : bool, keyword-only
         Use the centred variant.
 
+    ``smooth_threshold.scalar(s, x, c, centred)`` is the device function.
+
     Returns
     -------
-    ndarray in [0, 1]; float64, or float32 if the inputs are float32. Float32 results are within
-    4e-7 max(c, 1) (1 + |intensity|) of float64 on the same inputs (the ramp scales the rounding
-    of ``1 - screen - intensity`` by c).
+    ndarray in [0, 1]; float64, or float32 if the inputs are float32 (computed in float64 and
+    rounded once).
     """
     c = check_scalar("c", c, lo=0, lo_open=True, hint="c is the slope of the ramp, e.g. 4.0")
     scr, x, dt = _pair(screen, intensity)
-    tmp = (1 - scr - x) * c  # sec. 3.2: add(1 - tex, -col) * C
-    top = 0.5 if centred else 1.0
-    return np.asarray(np.clip(top - tmp, 0, 1), dtype=dt)  # sec. 3.2: 1 - tmp, clamped
+    return elementwise(smooth_threshold.scalar, dt, scr, x, c, bool(centred))
 
 
 def smooth_threshold_tone(intensity, c: float = 4.0, *, centred: bool = False) -> np.ndarray:
@@ -161,6 +192,12 @@ def _levels(levels, m: int) -> np.ndarray:
     return g
 
 
+@njit
+def _encode_stroke_map(screen, ink, grey, one):
+    return (one - ink) * screen + ink * grey  # sec. 4.2: layer i drawn over, in its grey g_i
+
+
+@face(_encode_stroke_map)
 def encode_stroke_map(layers, *, levels=None) -> np.ndarray:
     """Stroke-map encoding of Freudenberg sec. 4.2 (Fig. 3).
 
@@ -177,6 +214,10 @@ def encode_stroke_map(layers, *, levels=None) -> np.ndarray:
         is the darkest, drawn in the lightest regions already.
     levels : (m,) increasing values in [0, 1), keyword-only
         Ink grey of each layer; default :func:`stroke_levels`.
+
+    ``encode_stroke_map.scalar(screen, ink, grey, one)`` is the device function of one layer
+    drawn over ``screen`` (``one`` is 1 in the layers' float type: float32 layers encode in
+    float32).
 
     Returns
     -------
@@ -200,9 +241,12 @@ def encode_stroke_map(layers, *, levels=None) -> np.ndarray:
         check_range(f"layers[{i}]", a, 0.0, 1.0, "a layer holds ink coverage (0 = none, 1 = ink)")
     g = _levels(levels, len(arrs))
     screen = np.ones(np.broadcast_shapes(*(a.shape for a in arrs)), dtype=dt)
+    one = dt.type(1)
     for i in range(len(arrs) - 1, -1, -1):  # sec. 4.2: lightest layer first, darkest last
-        screen = (1 - arrs[i]) * screen + arrs[i] * dt.type(g[i])
-    return np.asarray(screen, dtype=dt)
+        screen = elementwise(
+            encode_stroke_map.scalar, dt, screen, arrs[i], dt.type(g[i]), one, compute=dt
+        )
+    return screen
 
 
 def decode_stroke_map(screen, intensity, *, c: float | None = None, centred: bool = False):
@@ -251,11 +295,18 @@ def layer_onsets(levels) -> np.ndarray:
     return 1 - _levels(arr, arr.size)
 
 
+@njit
+def _apply_indication(x, ind):
+    return clip01(x + ind)  # sec. 5.1: the signed map offsets the intensity
+
+
+@face(_apply_indication)
 def apply_indication(intensity, indication) -> np.ndarray:
     """Indication mapping of Freudenberg sec. 5.1: ``clip(intensity + indication, 0, 1)``.
 
     The signed indication map offsets the target intensity: 0 leaves the default lighting,
     positive values lighten (fading strokes out), negative values darken.
+    ``apply_indication.scalar(x, ind)`` is the device function.
 
     Parameters
     ----------
@@ -273,9 +324,154 @@ def apply_indication(intensity, indication) -> np.ndarray:
     ind = real("indication", indication, dt)
     check_range("indication", ind, -1.0, 1.0, "the indication map holds signed values in [-1, 1]")
     broadcast(intensity=x, indication=ind)
-    return np.asarray(np.clip(x + ind, 0, 1), dtype=dt)  # sec. 5.1
+    return elementwise(apply_indication.scalar, dt, x, ind)
 
 
+@njit
+def _sample_indication(imap, u, v):
+    rows, cols = imap.shape
+    x = min(max(u * cols - 0.5, 0.0), cols - 1.0)  # texel centres at (i + 1/2) / size
+    y = min(max(v * rows - 0.5, 0.0), rows - 1.0)
+    x0 = min(np.int64(math.floor(x)), cols - 1)
+    y0 = min(np.int64(math.floor(y)), rows - 1)
+    x1 = min(x0 + 1, cols - 1)
+    y1 = min(y0 + 1, rows - 1)
+    fx = x - x0
+    fy = y - y0
+    top = imap[y0, x0] * (1.0 - fx) + imap[y0, x1] * fx
+    bottom = imap[y1, x0] * (1.0 - fx) + imap[y1, x1] * fx
+    return top * (1.0 - fy) + bottom * fy  # sec. 5.1: the low-resolution map at (u, v)
+
+
+@face(_sample_indication)
+def sample_indication(indication_map, uv) -> np.ndarray:
+    """The indication map of Freudenberg sec. 5.1 at texture coordinates ``uv``: a
+    low-resolution signed map over [0, 1]^2, sampled bilinearly with clamp-to-edge (texel
+    centres at (i + 0.5) / size; u along columns, v along rows, row 0 at v = 0).
+
+    ``sample_indication.scalar(imap, u, v)`` is the device function.
+
+    Parameters
+    ----------
+    indication_map : (rows, cols) array in [-1, 1]
+    uv : (..., 2) array
+
+    Returns
+    -------
+    (...) float64 ndarray
+    """
+    imap = real("indication_map", indication_map, np.dtype(np.float64))
+    if imap.ndim != 2 or imap.size == 0:
+        raise ValueError(f"indication_map: expected a (rows, cols) map, got shape {imap.shape}")
+    check_range("indication_map", imap, -1.0, 1.0, "an indication map holds signed values")
+    uv = real("uv", uv, np.dtype(np.float64))
+    trailing("uv", uv, 2, "texture coordinates (u, v)")
+    imap = np.ascontiguousarray(imap)
+    return elementwise(sample_indication.scalar, np.float64, Whole(imap), uv[..., 0], uv[..., 1])
+
+
+_TINY_DET = 1e-20  # |det J| at or below this: no tangent frame (edge-on view, degenerate uv)
+_TINY_LEN = 1e-30  # a tangent at or below this length: none
+
+
+@njit
+def _tangent_frame(n, dp_dx, dp_dy, duv_dx, duv_dy):
+    dxu, dxv = duv_dx
+    dyu, dyv = duv_dy
+    det = dxu * dyv - dyu * dxv  # det J, J = [[du/dx, du/dy], [dv/dx, dv/dy]]
+    ok = abs(det) > _TINY_DET
+    inv = 1.0 / det if ok else 0.0
+    p_u = (  # dP/du = (dP/dx dv/dy - dP/dy dv/dx) / det J
+        (dp_dx[0] * dyv - dp_dy[0] * dxv) * inv,
+        (dp_dx[1] * dyv - dp_dy[1] * dxv) * inv,
+        (dp_dx[2] * dyv - dp_dy[2] * dxv) * inv,
+    )
+    p_v = (  # dP/dv = (dP/dy du/dx - dP/dx du/dy) / det J
+        (dp_dy[0] * dxu - dp_dx[0] * dyu) * inv,
+        (dp_dy[1] * dxu - dp_dx[1] * dyu) * inv,
+        (dp_dy[2] * dxu - dp_dx[2] * dyu) * inv,
+    )
+    d = dot(p_u, n)  # Gram-Schmidt: T from dP/du against N
+    t = (p_u[0] - d * n[0], p_u[1] - d * n[1], p_u[2] - d * n[2])
+    t_len = math.sqrt(dot(t, t))
+    if t_len > _TINY_LEN:
+        t = (t[0] / t_len, t[1] / t_len, t[2] / t_len)
+    else:
+        t = (0.0, 0.0, 0.0)
+    d1 = dot(p_v, n)  # B from dP/dv against N and T
+    d2 = dot(p_v, t)
+    b = (
+        (p_v[0] - d1 * n[0]) - d2 * t[0],
+        (p_v[1] - d1 * n[1]) - d2 * t[1],
+        (p_v[2] - d1 * n[2]) - d2 * t[2],
+    )
+    b_len = math.sqrt(dot(b, b))
+    if b_len > _TINY_LEN:
+        b = (b[0] / b_len, b[1] / b_len, b[2] / b_len)
+    else:
+        b = (0.0, 0.0, 0.0)
+    return t, b, ok and t_len > _TINY_LEN and b_len > _TINY_LEN
+
+
+@njit
+def _tangent_frame_flat(n, dp_dx, dp_dy, duv_dx, duv_dy):
+    """:func:`_tangent_frame` as one flat tuple (T, B, valid as 1.0 / 0.0), for ``elementwise``."""
+    t, b, valid = _tangent_frame(n, dp_dx, dp_dy, duv_dx, duv_dy)
+    return t[0], t[1], t[2], b[0], b[1], b[2], 1.0 if valid else 0.0
+
+
+@face(_tangent_frame)
+def tangent_frame(normal, dp_dx, dp_dy, duv_dx, duv_dy):
+    """The tangent frame (T, B) of the stroke lighting of Freudenberg sec. 5.2: unit vectors
+    along +u and +v in the tangent plane of N, from screen derivatives of position and uv.
+
+    ``[dP/dx dP/dy] = [dP/du dP/dv] J`` with ``J = [[du/dx, du/dy], [dv/dx, dv/dy]]``, so
+    ``dP/du = (dP/dx dv/dy - dP/dy dv/dx) / det J`` and ``dP/dv = (dP/dy du/dx - dP/dx du/dy) /
+    det J``; then Gram-Schmidt against N (T first, B against N and T; the handedness of (u, v)
+    is kept). Invalid where ``|det J| <= 1e-20`` or a tangent's length is ``<= 1e-30``
+    (edge-on views, degenerate uv).
+
+    ``tangent_frame.scalar(n, dp_dx, dp_dy, duv_dx, duv_dy)`` is the device function (3- and
+    2-tuples): ``(t, b, valid)``.
+
+    Parameters
+    ----------
+    normal, dp_dx, dp_dy : (..., 3) arrays
+        The normal N (any length: Gram-Schmidt uses it as given) and dP/dx, dP/dy.
+    duv_dx, duv_dy : (..., 2) arrays
+        (du/dx, dv/dx) and (du/dy, dv/dy).
+
+    Returns
+    -------
+    T, B : (..., 3) float64 unit vectors (0 where invalid); valid : (...) bool
+    """
+    dt = np.dtype(np.float64)
+    arrays = {
+        "normal": (real("normal", normal, dt), 3),
+        "dp_dx": (real("dp_dx", dp_dx, dt), 3),
+        "dp_dy": (real("dp_dy", dp_dy, dt), 3),
+        "duv_dx": (real("duv_dx", duv_dx, dt), 2),
+        "duv_dy": (real("duv_dy", duv_dy, dt), 2),
+    }
+    for name, (arr, size) in arrays.items():
+        trailing(name, arr, size, "a vector per sample")
+    broadcast(**{name: arr[..., 0] for name, (arr, _) in arrays.items()})
+    vectors = [tuple(arr[..., k] for k in range(size)) for arr, size in arrays.values()]
+    out = elementwise(_tangent_frame_flat, dt, *vectors)
+    return out[..., 0:3], out[..., 3:6], out[..., 6] > 0.0
+
+
+@njit
+def _stroke_lighting(nm, l, encoded, normalize):
+    n = nm
+    if encoded:  # sec. 5.2: the DOT3 expansion 2 rgb - 1
+        n = (2.0 * nm[0] - 1.0, 2.0 * nm[1] - 1.0, 2.0 * nm[2] - 1.0)
+    if normalize:
+        n = unit_scaled(n)
+    return clip01(dot(n, unit_scaled(l)))  # sec. 5.2: clip(N . L, 0, 1)
+
+
+@face(_stroke_lighting)
 def stroke_lighting(
     normal_map, light, *, encoded: bool = True, normalize: bool = False
 ) -> np.ndarray:
@@ -285,6 +481,7 @@ def stroke_lighting(
     unit direction to the light in the same (tangent) space. Used as (or multiplied into) the
     target intensity, it thins a stroke on its lit side and keeps it on the shadowed side, so a
     stroke's width depends on the light direction.
+    ``stroke_lighting.scalar(nm, l, encoded, normalize)`` is the device function (3-tuples).
 
     Parameters
     ----------
@@ -307,11 +504,9 @@ def stroke_lighting(
     trailing("normal_map", nm, 3, "a normal per pixel")
     trailing("light", li, 3, "a light direction")
     broadcast(normal_map=nm, light=li)
-    n = 2 * nm - 1 if encoded else nm  # sec. 5.2: DOT3 expansion
-    if normalize:
-        n = unit_vectors(n)
-    li = unit_vectors(li)
-    return np.asarray(np.clip(np.sum(n * li, axis=-1), 0, 1), dtype=dt)  # sec. 5.2
+    n = (nm[..., 0], nm[..., 1], nm[..., 2])
+    v = (li[..., 0], li[..., 1], li[..., 2])
+    return elementwise(stroke_lighting.scalar, dt, n, v, bool(encoded), bool(normalize))
 
 
 def _profile(profile: str) -> str:

@@ -61,10 +61,10 @@ def sample_trilinear(pyramid: MipPyramid, uv, lod, *, dtype=np.float32) -> np.nd
         raise ValueError(f"lod: expected shape {shape} (uv's leading shape), got {lam.shape}")
     if not np.all(np.isfinite(lam)):
         raise ValueError("lod: contains NaN or inf")
-    texels, offsets, shapes = pyramid.packed()
-    out = np.empty((flat.shape[0], texels.shape[1]), dtype=np.float64)
-    K.sample_trilinear(texels, offsets, shapes, flat, np.ascontiguousarray(lam.ravel()), out)
-    return _finish(out, shape, texels.shape[1], dtype)
+    pyr = pyramid.packed()
+    out = np.empty((flat.shape[0], pyr[0].shape[1]), dtype=np.float64)
+    K.sample_trilinear(pyr, flat, np.ascontiguousarray(lam.ravel()), out)
+    return _finish(out, shape, pyr[0].shape[1], dtype)
 
 
 def sample_level(pyramid: MipPyramid, uv, level, *, dtype=np.float32) -> np.ndarray:
@@ -76,10 +76,10 @@ def sample_level(pyramid: MipPyramid, uv, level, *, dtype=np.float32) -> np.ndar
     if lv.dtype.kind not in "iu":
         raise TypeError(f"level: expected integer level indices, got dtype {lv.dtype}")
     lv = np.ascontiguousarray(np.broadcast_to(lv, shape).ravel(), dtype=np.int64)
-    texels, offsets, shapes = pyramid.packed()
-    out = np.empty((flat.shape[0], texels.shape[1]), dtype=np.float64)
-    K.sample_level(texels, offsets, shapes, flat, lv, out)
-    return _finish(out, shape, texels.shape[1], dtype)
+    pyr = pyramid.packed()
+    out = np.empty((flat.shape[0], pyr[0].shape[1]), dtype=np.float64)
+    K.sample_level(pyr, flat, lv, out)
+    return _finish(out, shape, pyr[0].shape[1], dtype)
 
 
 def level_weights(pyramid: MipPyramid, lod) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -17,10 +17,12 @@ from refnpr.formulas.halftone import (
     engraving_ramp,
     engraving_screen,
     layer_onsets,
+    sample_indication,
     smooth_threshold,
     smooth_threshold_tone,
     stroke_levels,
     stroke_lighting,
+    tangent_frame,
 )
 
 unit = st.floats(0.0, 1.0, allow_nan=False)
@@ -137,6 +139,21 @@ def test_encode_stroke_map_matches_naive_loop():
     )
 
 
+def test_encode_stroke_map_of_float32_layers_is_float32_arithmetic():
+    """Float32 layers (the texture builders') encode in float32, as numpy computes them."""
+    rng = np.random.default_rng(6)
+    layers = (rng.uniform(0, 1, (4, 33, 17)) * (rng.uniform(0, 1, (4, 33, 17)) < 0.5)).astype(
+        np.float32
+    )
+    g = stroke_levels(4)
+    want = np.ones((33, 17), np.float32)
+    for i in range(3, -1, -1):
+        want = (1 - layers[i]) * want + layers[i] * np.float32(g[i])
+    got = encode_stroke_map(layers)
+    assert got.dtype == np.float32
+    np.testing.assert_array_equal(got.view(np.uint32), want.view(np.uint32))
+
+
 def test_stroke_levels_and_onsets():
     np.testing.assert_allclose(stroke_levels(4), [0, 0.25, 0.5, 0.75])
     np.testing.assert_allclose(layer_onsets(stroke_levels(4)), [1, 0.75, 0.5, 0.25])
@@ -220,6 +237,66 @@ def test_stroke_lighting_matches_naive_loop():
     assert float(stroke_lighting(flat, [0, 0, 2])) == 1.0
     tilt = math.radians(60)
     assert float(stroke_lighting(flat, [math.sin(tilt), 0, math.cos(tilt)])) == pytest.approx(0.5)
+
+
+def naive_indication(imap: np.ndarray, u: float, v: float) -> float:
+    """Bilinear, clamp-to-edge, texel centres at (i + 1/2) / size: by the book."""
+    rows, cols = imap.shape
+    x = min(max(u * cols - 0.5, 0.0), cols - 1.0)
+    y = min(max(v * rows - 0.5, 0.0), rows - 1.0)
+    i0, j0 = int(math.floor(x)), int(math.floor(y))
+    i1, j1 = min(i0 + 1, cols - 1), min(j0 + 1, rows - 1)
+    a, b = x - i0, y - j0
+    top = (1 - a) * imap[j0, i0] + a * imap[j0, i1]
+    bottom = (1 - a) * imap[j1, i0] + a * imap[j1, i1]
+    return (1 - b) * top + b * bottom
+
+
+def test_sample_indication_matches_naive_loop_and_its_texels():
+    rng = np.random.default_rng(8)
+    imap = rng.uniform(-1, 1, (3, 5))
+    uv = rng.uniform(-0.3, 1.3, (300, 2))
+    want = [naive_indication(imap, u, v) for u, v in uv]
+    np.testing.assert_allclose(sample_indication(imap, uv), want, atol=1e-12)
+    centres = np.array([[(i + 0.5) / 5, (j + 0.5) / 3] for j in range(3) for i in range(5)])
+    np.testing.assert_allclose(sample_indication(imap, centres), imap.ravel(), atol=1e-12)
+    with pytest.raises(ValueError, match=r"indication_map: expected a \(rows, cols\) map"):
+        sample_indication([0.1, 0.2], uv)
+    with pytest.raises(ValueError, match=r"indication_map: expected values in \[-1.0, 1.0\]"):
+        sample_indication([[2.0]], uv)
+
+
+def test_tangent_frame_matches_the_solved_jacobian():
+    rng = np.random.default_rng(9)
+    n = rng.normal(size=(200, 3))
+    dpdx, dpdy = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
+    dudx, dudy = rng.normal(size=(200, 2)), rng.normal(size=(200, 2))
+    t, b, valid = tangent_frame(n, dpdx, dpdy, dudx, dudy)
+    assert valid.all()
+    for k in range(200):  # [dP/dx dP/dy] = [dP/du dP/dv] J, then Gram-Schmidt against N
+        jac = np.array([[dudx[k, 0], dudy[k, 0]], [dudx[k, 1], dudy[k, 1]]])
+        pu, pv = (np.stack([dpdx[k], dpdy[k]], axis=1) @ np.linalg.inv(jac)).T
+        tk = pu - (pu @ n[k]) * n[k]
+        tk /= np.linalg.norm(tk)
+        bk = pv - (pv @ n[k]) * n[k] - (pv @ tk) * tk
+        np.testing.assert_allclose(t[k], tk, atol=1e-9)
+        np.testing.assert_allclose(b[k], bk / np.linalg.norm(bk), atol=1e-9)
+    singular = tangent_frame(n[:1], dpdx[:1], dpdy[:1], [[1.0, 2.0]], [[2.0, 4.0]])
+    assert not singular[2][0] and not singular[0].any() and not singular[1].any()
+
+
+@pytest.mark.parametrize(
+    "face, args",
+    [
+        (binary_threshold, (0.3, 0.7000000000000001)),
+        (smooth_threshold, (0.3, 0.55, 4.0, True)),
+        (apply_indication, (0.4, -0.7)),
+    ],
+)
+def test_device_functions_are_the_faces(face, args):
+    """The kernels call ``f.scalar``; the numpy face gives its value, bit for bit."""
+    kwargs = {"centred": args[3]} if face is smooth_threshold else {}
+    assert float(face(*args[:3] if kwargs else args, **kwargs)) == face.scalar(*args)
 
 
 def test_stroke_lighting_thins_strokes_on_the_lit_side():

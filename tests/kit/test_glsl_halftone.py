@@ -209,7 +209,7 @@ def test_export_resolves_every_parameter(tmp_path):
             if role is not None:
                 entry = exp.textures[role]
                 assert all((tmp_path / f).is_file() for f in entry["levels"])
-    screen = style.screen_for(style._object_specs(scene)[1], None)
+    screen = style.screen_for(style.object_specs(scene)[1], None)
     wall = exp.textures[objs["back_wall"]["screen"]["role"]]
     assert len(wall["levels"]) == screen.pyramid.n_levels
     assert unresolved(STYLE, exp.params) == []

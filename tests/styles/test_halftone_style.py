@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from refnpr.cli import main as cli_main
+from refnpr.formulas.halftone import tangent_frame
 from refnpr.raster import rasterize
 from refnpr.render import render, required_channels
 from refnpr.scenes import load_scene
 from refnpr.styles import ShadeContext, get_style, style_from_spec
-from refnpr.styles.halftone.shading import tangent_frame
 
 from .test_halftone_scenes import wall
 
@@ -55,17 +55,17 @@ def _oracle(style, scene, gb, idx, *, direction=None):
         d = np.array(direction)
         uv, dx, dy = np.array([uv @ d, 0.5]), np.array([dx @ d, 0.0]), np.array([dy @ d, 0.0])
     rho = max(math.hypot(dx[0] * cols, dx[1] * rows), math.hypot(dy[0] * cols, dy[1] * rows))
-    lod = math.log2(rho) - (math.log2(gb.n) if style.sample_lod else 0.0)
+    lod = math.log2(rho) - (math.log2(gb.n) if style.p.sample_lod else 0.0)
     s = _trilinear(levels, uv[0], uv[1], lod)
     n = gb["normal"].reshape(-1, 3)[idx].astype(float)
     light = np.asarray(scene.lights[0].direction)
     mat = scene.objects[0].material
     intensity = mat.ambient[0] * scene.ambient[0] + mat.diffuse[0] * max(float(n @ light), 0.0)
     intensity = min(max(intensity, 0.0), 1.0)
-    if style.threshold == "binary":
+    if style.p.threshold == "binary":
         return (1.0 if s + intensity > 1.0 else 0.0), s + intensity - 1.0
-    top = 0.5 if style.centred else 1.0
-    return min(max(top - style.c * (1.0 - s - intensity), 0.0), 1.0), 1.0
+    top = 0.5 if style.p.centred else 1.0
+    return min(max(top - style.p.c * (1.0 - s - intensity), 0.0), 1.0), 1.0
 
 
 @pytest.mark.parametrize(
@@ -150,6 +150,9 @@ def test_requires_only_what_the_scene_needs():
 
 
 def test_screen_lod_equals_the_rasterizer_lod_channel():
+    """The kernel's isotropic LOD (``device.sampling.footprint`` of the uv derivatives in the
+    screen's texels) is the rasterizer's ``lod`` channel for a texture of that size."""
+    from refnpr.device.sampling import footprint
     from refnpr.styles.halftone import screens as HS
 
     scene = wall(0.5, distance=2.5, fov=50.0)
@@ -163,11 +166,11 @@ def test_screen_lod_equals_the_rasterizer_lod_channel():
     )
     m = gb["mesh_id"].reshape(-1) >= 0
     screen = HS.build_screen(HS.normalize_spec("hatching"), None)
-    lod = HS.screen_lod(
-        screen.pyramid,
-        gb["duv_dx"].reshape(-1, 2)[m].astype(float),
-        gb["duv_dy"].reshape(-1, 2)[m].astype(float),
-    )
+    rows, cols = screen.pyramid.levels[0].shape[:2]
+    dx = gb["duv_dx"].reshape(-1, 2)[m].astype(float)
+    dy = gb["duv_dy"].reshape(-1, 2)[m].astype(float)
+    pairs = zip(dx, dy, strict=True)
+    lod = [footprint(tuple(a), tuple(b), float(rows), float(cols), 1)[0] for a, b in pairs]
     np.testing.assert_allclose(lod, gb["lod"].reshape(-1)[m], atol=1e-4)
 
 

@@ -132,3 +132,53 @@ def test_huge_coordinates_wrap_without_overflow():
     got = sample_trilinear(p, uv, np.zeros(3))
     assert np.all(np.isfinite(got))
     np.testing.assert_allclose(got, sample_trilinear(p, uv - np.floor(uv), np.zeros(3)), atol=1e-6)
+
+
+def test_samplers_are_the_device_functions():
+    """sample_trilinear and sample_level run refnpr.device.sampling's lookups, bit for bit, at
+    the edges of the GL_REPEAT wrap too (texel centres and borders, a period, just below 1,
+    -0.0, huge coordinates)."""
+    from refnpr.device.sampling import level, trilinear
+
+    rng = np.random.default_rng(7)
+    p = build_pyramid(rng.random((37, 64, 3)).astype(np.float32))
+    pyr = p.packed()
+    uv = rng.uniform(-3, 3, (300, 2))
+    edge = [0.0, -0.0, 0.5 / 64, 1.0 / 64, 1.0, 1.0 - 2**-53, -1.0 + 2**-53, 2.0**60, -1e300]
+    uv[: len(edge) ** 2] = np.array([(a, b) for a in edge for b in edge])
+    lod = rng.uniform(-1, 8, 300)
+    lv = rng.integers(-1, 9, 300)
+    tri = sample_trilinear(p, uv, lod, dtype=np.float64)
+    lev = sample_level(p, uv, lv, dtype=np.float64)
+    for i in range(300):
+        for c in range(3):
+            assert tri[i, c] == trilinear(pyr, uv[i, 0], uv[i, 1], lod[i], c)
+            assert lev[i, c] == level(pyr, lv[i], uv[i, 0], uv[i, 1], c)
+
+
+def test_anisotropic_probes_match_naive_loop():
+    """device.sampling.probes / level_probes: the mean of n lookups spread along the footprint's
+    major axis at (j + 1/2) / n - 1/2 (EXT_texture_filter_anisotropic)."""
+    from refnpr.device.sampling import footprint, level_probes, probes
+
+    rng = np.random.default_rng(11)
+    p = build_pyramid(rng.random((64, 64)).astype(np.float32))
+    pyr = p.packed()
+    for _ in range(200):
+        uv = rng.uniform(0, 4, 2)
+        dx, dy = rng.normal(0, 0.05, 2), rng.normal(0, 0.005, 2)
+        lod, n, axis = footprint(tuple(dx), tuple(dy), 64.0, 64.0, 8)
+        px, py = np.hypot(*(dx * 64)), np.hypot(*(dy * 64))
+        assert n == max(1, min(math.ceil(max(px, py) / min(px, py) - 1e-9), 8))
+        assert lod == pytest.approx(math.log2(max(px, py) / n), abs=1e-12)
+        pts = [uv + np.asarray(axis) * ((j + 0.5) / n - 0.5) for j in range(n)]
+        k0, k1, f = level_weights(p, lod)
+        want = np.mean(
+            [
+                (1 - f) * naive_bilinear(p.levels[k0], *q) + f * naive_bilinear(p.levels[k1], *q)
+                for q in pts
+            ]
+        )
+        assert probes(pyr, uv[0], uv[1], lod, n, axis, 0) == pytest.approx(want, abs=1e-9)
+        want0 = np.mean([naive_bilinear(p.levels[int(k0)], *q) for q in pts])
+        assert level_probes(pyr, int(k0), uv[0], uv[1], n, axis) == pytest.approx(want0, abs=1e-9)

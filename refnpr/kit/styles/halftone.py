@@ -1,7 +1,7 @@
 """Kit export of the ``halftone`` style (Freudenberg, Masuch, Strothotte 2002).
 
 Every parameter is resolved by the style's own code for the case's scene: each object's screen
-spec (:meth:`HalftoneStyle._object_specs`), the built screen (:meth:`HalftoneStyle.screen_for`:
+spec (:meth:`HalftoneStyle.object_specs`), the built screen (:meth:`HalftoneStyle.screen_for`:
 engraving ramp, CLAHE dither pyramid or encoded stroke map, each with all its mip levels), the
 uv scale actually used (object setting, else the style's, else the material's), the anisotropy
 actually used (1 for an engraving ramp), the indication map and the tone-correction tables.
@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.styles.halftone.shading import LUMA
+from refnpr.formulas.lighting import LUMA_709
 
 from .._json import jsonable
 from ..textures import ORIENTATION_ROW0_V0, write_texture_levels
@@ -109,16 +109,20 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
     n_axis = int(round(math.sqrt(spp)))
     if n_axis * n_axis != spp:
         raise ValueError(f"spp: expected a square number n * n, got {spp!r}")
+    from refnpr.styles.halftone.params import PARAMS
+
+    p = style.p
     case_dir = Path(case_dir)
-    specs = style._object_specs(scene)
+    specs = style.object_specs(scene)
     textures: dict[str, dict] = {}
     roles: dict[str, int] = {}
     objects = []
+    per_level = p.mip == "per_level"
     for k, obj in enumerate(scene.objects):
         spec = specs[k]
         key = _spec_key(spec, obj.material.texture)
         screen = style.screen_for(spec, obj.material.texture)
-        equalize = bool(style.tone_correct and screen.kind != "strokes")
+        equalize = bool(p.tone_correct and screen.kind != "strokes")
         if key not in roles:
             i = roles[key] = len(roles)
             textures[f"screen-{i}"] = write_texture_levels(
@@ -127,9 +131,7 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
                 [np.asarray(lv, dtype=np.float32) for lv in screen.pyramid.levels],
                 encoding="linear",
                 wrap="repeat",
-                filter="per_level"
-                if (style.mip == "per_level" or equalize)
-                else "linear_mipmap_linear",
+                filter="per_level" if (per_level or equalize) else "linear_mipmap_linear",
                 orientation=ORIENTATION_ROW0_V0,
                 used_for=f"halftone screen ({screen.kind}) of object(s) using spec {spec}",
             )
@@ -189,33 +191,26 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
                     "source_spec": spec,
                 },
                 "uv_scale": [float(s) for s in scale],
-                "anisotropy": int(style.anisotropy if screen.direction is None else 1),
+                "anisotropy": int(p.anisotropy if screen.direction is None else 1),
                 "indication_role": ind_role,
                 "indication_scale": [float(s) for s in settings.get("indication_scale") or (1, 1)],
                 "equalize": equalize,
                 "tone_lut_role": f"tone-lut-{i}" if equalize else None,
-                "per_level": bool(style.mip == "per_level" or equalize),
+                "per_level": bool(per_level or equalize),
             }
         )
-    auto = style.c == "auto"
-    lod_offset = style.lod_bias - (math.log2(n_axis) if style.sample_lod else 0.0)
+    auto = p.c == "auto"
+    resolved = PARAMS.resolved(p)  # the declared values (None where the modes do not read them)
     params: dict[str, Any] = {
-        "threshold": style.threshold,
-        "c": None if auto else float(style.c),
+        "threshold": resolved["threshold"],
+        "c": None if auto else float(p.c),
         "c_mode": "fwidth" if auto else "constant",
-        "centred": bool(style.centred or auto),
-        "specular": style.specular,
-        "ink": list(style.ink),
-        "paper": list(style.paper),
-        "lod_bias": style.lod_bias,
-        "sample_lod": style.sample_lod,
-        "lod_offset": float(lod_offset),
+        "centred": bool(p.centred or auto),
+        **{k: resolved[k] for k in ("specular", "ink", "paper", "lod_bias", "sample_lod")},
+        "lod_offset": float(p.lod_bias - (math.log2(n_axis) if p.sample_lod else 0.0)),
         "samples_per_axis": n_axis,
-        "mip": style.mip,
-        "tone_correct": style.tone_correct,
-        "anisotropy": style.anisotropy,
-        "show": style.show,
-        "luma": [float(x) for x in LUMA],
+        **{k: resolved[k] for k in ("mip", "tone_correct", "anisotropy", "show")},
+        "luma": [float(x) for x in LUMA_709],
         "objects": objects,
     }
     params = jsonable(params, where="style 'halftone' params")

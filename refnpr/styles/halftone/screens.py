@@ -1,5 +1,6 @@
-"""Halftone screens of the ``halftone`` style: TOML-friendly specs -> built, mip-mapped screens,
-and sampling at a sample's uv and LOD (Freudenberg et al. 2002, secs. 3-4).
+"""Halftone screens of the ``halftone`` style: TOML-friendly specs -> built, mip-mapped screens
+and their tone look-up tables (Freudenberg et al. 2002, secs. 3-4). The kernel samples them
+(``_kernels.py``, with :mod:`refnpr.device.sampling`).
 
 A screen spec is a string or a table (scene files, ``--param``):
 
@@ -36,10 +37,8 @@ from refnpr.texture import (
     TILINGS,
     MipPyramid,
     clahe_pyramid,
-    level_weights,
     load_texture,
     sample_level,
-    sample_trilinear,
 )
 from refnpr.texture import screens as S
 
@@ -52,14 +51,7 @@ __all__ = [
     "has_normal_map",
     "build_screen",
     "cached_screen",
-    "screen_coords",
-    "screen_lod",
-    "Footprint",
-    "screen_footprint",
-    "sample_screen",
-    "sample_screen_levels",
     "tone_luts",
-    "apply_luts",
 ]
 
 KINDS = ("engraving", "dither", "strokes")
@@ -280,115 +272,6 @@ def cached_screen(spec: dict[str, Any], material_texture: str | None) -> Screen:
     return screen
 
 
-def screen_coords(
-    screen: Screen, uv: np.ndarray, duv_dx: np.ndarray, duv_dy: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Texture coordinates of the screen and their screen derivatives, each (N, 2) float64
-    (engraving: ``(t, 0.5)`` with t = uv . direction, sec. 4.1)."""
-    if screen.direction is None:
-        return uv, duv_dx, duv_dy
-    d = screen.direction
-
-    def along(a: np.ndarray, v: float) -> np.ndarray:
-        t = a[:, 0] * d[0] + a[:, 1] * d[1]  # sec. 4.1 (not a @ d: BLAS may fuse, by CPU)
-        return np.stack([t, np.full(a.shape[0], v)], axis=-1)
-
-    return along(uv, 0.5), along(duv_dx, 0.0), along(duv_dy, 0.0)
-
-
-def screen_lod(pyramid: MipPyramid, dx: np.ndarray, dy: np.ndarray) -> np.ndarray:
-    """GL isotropic LOD (OpenGL 4.6 sec. 8.14): ``log2 max(|dx * size|, |dy * size|)`` with the
-    derivatives of the texture coordinates (N, 2) scaled to texels of level 0; (N,) float64."""
-    cols, rows = pyramid.size
-    scale = np.array([cols, rows], dtype=np.float64)
-    rho = np.maximum(np.linalg.norm(dx * scale, axis=-1), np.linalg.norm(dy * scale, axis=-1))
-    return np.log2(np.maximum(rho, 1e-30))
-
-
-@dataclass(frozen=True, eq=False)
-class Footprint:
-    """Anisotropic footprint of N samples (EXT_texture_filter_anisotropic, as GL 4.6 sec. 8.14
-    describes it): ``probes`` (N,) int of at least 1 and ``axis`` (N, 2) float64, the major
-    axis of the footprint in texture coordinates. A sample averages ``probes`` trilinear probes
-    at ``coords + axis ((j + 1/2) / probes - 1/2)``, j = 0..probes-1, at the LOD of
-    :func:`screen_footprint`."""
-
-    probes: np.ndarray
-    axis: np.ndarray
-
-    def offsets(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Per probe index j: (the samples that take probe j, their offsets (n_j, 2))."""
-        out = []
-        for j in range(int(self.probes.max(initial=1))):
-            sel = np.flatnonzero(self.probes > j)
-            t = (j + 0.5) / self.probes[sel] - 0.5
-            out.append((sel, self.axis[sel] * t[:, None]))
-        return out
-
-
-def screen_footprint(
-    pyramid: MipPyramid, dx: np.ndarray, dy: np.ndarray, anisotropy: int
-) -> tuple[np.ndarray, Footprint | None]:
-    """LOD and anisotropic footprint of N samples, (N,) float64 and a :class:`Footprint` (None
-    when ``anisotropy == 1``: the isotropic :func:`screen_lod`).
-
-    With ``P_max, P_min`` the longer and shorter of the derivative vectors in level-0 texels,
-    ``probes = min(ceil(P_max / P_min), anisotropy)`` and ``lod = log2(P_max / probes)``: the
-    level is chosen for the footprint's *minor* axis (up to the anisotropy limit) and the
-    probes cover the major axis. The isotropic LOD uses ``P_max`` alone and so selects a level
-    as coarse as the most compressed direction needs: on a surface seen at a grazing angle the
-    strokes across the other direction are then magnified (a stroke map's coarse levels carry
-    wider strokes in uv), which is what made thorns of the hatching on the torus knot.
-    """
-    if anisotropy == 1:
-        return screen_lod(pyramid, dx, dy), None
-    cols, rows = pyramid.size
-    scale = np.array([cols, rows], dtype=np.float64)
-    px = np.linalg.norm(dx * scale, axis=-1)
-    py = np.linalg.norm(dy * scale, axis=-1)
-    p_max, p_min = np.maximum(px, py), np.minimum(px, py)
-    ratio = p_max / np.maximum(p_min, 1e-30)
-    probes = np.clip(np.ceil(ratio - 1e-9), 1, anisotropy).astype(np.int64)
-    lod = np.log2(np.maximum(p_max / probes, 1e-30))
-    axis = np.where((px >= py)[:, None], dx, dy)
-    return lod, Footprint(probes, axis)
-
-
-def sample_screen(
-    pyramid: MipPyramid, coords: np.ndarray, lod: np.ndarray, fp: Footprint | None = None
-) -> np.ndarray:
-    """Trilinear samples (N,) or (N, C) float64 of ``pyramid`` at ``coords`` (N, 2) and ``lod``;
-    with a footprint, the mean of its probes (anisotropic filtering)."""
-    if fp is None:
-        return sample_trilinear(pyramid, coords, lod, dtype=np.float64)
-    out = None
-    for sel, off in fp.offsets():
-        v = sample_trilinear(pyramid, coords[sel] + off, lod[sel], dtype=np.float64)
-        if out is None:
-            out = np.zeros((coords.shape[0],) + v.shape[1:])
-        out[sel] += v
-    n = fp.probes.reshape((-1,) + (1,) * (out.ndim - 1))
-    return out / n
-
-
-def sample_screen_levels(
-    pyramid: MipPyramid, coords: np.ndarray, lod: np.ndarray, fp: Footprint | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The two bilinear samples that trilinear filtering would blend, their levels and the blend
-    weight: (s0, s1, k0, k1, w1), each (N,) (with a footprint, each sample the mean of its
-    probes at that level)."""
-    k0, k1, w1 = level_weights(pyramid, lod)
-    if fp is None:
-        s0 = sample_level(pyramid, coords, k0, dtype=np.float64)
-        s1 = sample_level(pyramid, coords, k1, dtype=np.float64)
-        return s0, s1, k0, k1, w1
-    s0, s1 = np.zeros(coords.shape[0]), np.zeros(coords.shape[0])
-    for sel, off in fp.offsets():
-        s0[sel] += sample_level(pyramid, coords[sel] + off, k0[sel], dtype=np.float64)
-        s1[sel] += sample_level(pyramid, coords[sel] + off, k1[sel], dtype=np.float64)
-    return s0 / fp.probes, s1 / fp.probes, k0, k1, w1
-
-
 #: Bins of the tone look-up tables and sub-texel samples per axis used to build them.
 LUT_BINS = 2048
 LUT_SUBSAMPLES = 4
@@ -418,14 +301,4 @@ def tone_luts(pyramid: MipPyramid) -> np.ndarray:
         grid = np.stack(np.meshgrid(uu, vv), axis=-1).reshape(-1, 2)
         vals = np.sort(sample_level(pyramid, grid, k, dtype=np.float64))
         out[k] = np.searchsorted(vals, x, side="right") / vals.size
-    return out
-
-
-def apply_luts(luts: np.ndarray, values: np.ndarray, level: np.ndarray) -> np.ndarray:
-    """``luts[level](values)`` by linear interpolation; values, level (N,)."""
-    x = np.linspace(0.0, 1.0, luts.shape[1])
-    out = np.empty_like(values)
-    for k in np.unique(level):
-        sel = level == k
-        out[sel] = np.interp(values[sel], x, luts[int(k)])
     return out
