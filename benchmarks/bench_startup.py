@@ -71,7 +71,8 @@ class _Listener(event.Listener):
         start = self.starts.pop(key, None)
         if start is not None:
             d = ev.data["dispatcher"]
-            name = getattr(d, "py_func", d).__module__ + "." + getattr(d, "py_func", d).__qualname__
+            f = getattr(d, "py_func", d)
+            name = f"{f.__module__ or '?'}.{f.__qualname__}"
             compiles.append({"kernel": name, "args": str(ev.data["args"]),
                              "s": time.perf_counter() - start, "at": start})
 

@@ -76,7 +76,7 @@ def _put(out, i, r):  # noqa: ARG001
 
 
 def _generated(source: str, name: str) -> Callable:
-    scope = {"_at": _at}
+    scope = {"_at": _at, "__name__": __name__}
     exec(source, scope)  # noqa: S102  (a fixed template: the arity is the only variable)
     return scope[name]
 

@@ -414,11 +414,14 @@ def test_inconsistent_gbuffer_is_refused():
 
 
 def test_kernel_compiles_only_the_frames_modes():
-    """One kernel per (source, cross-hatching), built on first use (refnpr._jit.specialised)."""
+    """One kernel per (source, cross-hatching, filtered), built on first use
+    (refnpr._jit.specialised)."""
     from refnpr.styles.threshold import _kernels as K
 
     ctx = random_ctx(3, "directional", shape=(4, 5))
     ThresholdStyle(source="lines", directions=[0.0, 90.0], filter="analytic").shade(ctx)
     ThresholdStyle(source="constant").shade(ctx)
-    assert {(K.ANALYTIC, True), (K.CONSTANT, False)} <= set(K.shade_threshold_for.kernels)
+    ThresholdStyle(source="lines", filter="pcf", samples=4).shade(ctx)
+    want = {(K.ANALYTIC, True, False), (K.CONSTANT, False, False), (K.LINES, False, True)}
+    assert want <= set(K.shade_threshold_for.kernels)
     assert math.isfinite(K.ANALYTIC) and K.ANALYTIC not in (K.CONSTANT, K.LINES, K.IMAGE)

@@ -32,7 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from refnpr._jit import njit
-from refnpr.device.scalars import ONE_BELOW, clip
+from refnpr.device.scalars import ONE_BELOW, clip, interp
 
 from .._face import Whole, elementwise, face
 from .._shading_checks import broadcast, check_range, real
@@ -102,33 +102,11 @@ def layer_schedule(onsets) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(lams), np.asarray(levs)
 
 
-@njit(inline="always")
-def _interp(x, xp, fp, i):
-    """``np.interp(x, xp, fp[:, i])`` (numpy's branches: ends, exact knots, slope form)."""
-    nb = xp.shape[0]
-    if x < xp[0]:
-        return fp[0, i]
-    if x > xp[nb - 1]:
-        return fp[nb - 1, i]
-    j = 0
-    while j < nb - 1 and xp[j + 1] <= x:
-        j += 1
-    if j == nb - 1 or xp[j] == x:
-        return fp[j, i]
-    slope = (fp[j + 1, i] - fp[j, i]) / (xp[j + 1] - xp[j])
-    out = slope * (x - xp[j]) + fp[j, i]
-    if out != out:
-        out = slope * (x - xp[j + 1]) + fp[j + 1, i]
-        if out != out and fp[j, i] == fp[j + 1, i]:
-            out = fp[j, i]
-    return out
-
-
-@njit(inline="always")
+@njit
 def _layer_white(x, lam_bp, lev_bp, i):
     c = clip(x, 0.0, 1.0)
     lam = -math.log(c) if c > 0.0 else math.inf  # total darkness -ln x
-    li = _interp(lam, lam_bp, lev_bp, i)  # layer i's darkness: the water-filling schedule
+    li = interp(lam, lam_bp, lev_bp[:, i])  # layer i's darkness: the water-filling schedule
     last = lam_bp.shape[0] - 1
     if lam > lam_bp[last]:  # beyond the last breakpoint every layer gains 1 / L
         li = lev_bp[last, i] + (lam - lam_bp[last]) / lev_bp.shape[1]
@@ -165,7 +143,7 @@ def layer_whites(x, onsets) -> np.ndarray:
     return out
 
 
-@njit(inline="always")
+@njit
 def _darkness(f, lam_bp, lev_bp, i):
     """lambda*_i(F): the largest total darkness at which a sample with layer value F is white.
 
@@ -193,7 +171,7 @@ def _darkness(f, lam_bp, lev_bp, i):
     return lam_bp[lo] + (q - lev_bp[lo, i]) * (lam_bp[hi] - lam_bp[lo]) / safe
 
 
-@njit(inline="always")
+@njit
 def _combine_thresholds(fs, lam_bp, lev_bp):
     lam_star = math.inf
     for i in range(len(fs)):

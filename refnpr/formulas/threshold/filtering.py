@@ -24,7 +24,7 @@ __all__ = ["pcf_threshold", "mip_threshold", "line_coverage"]
 _HIT, _WEIGHTED_HIT, _WEIGHT = 0, 1, 2
 
 
-@njit(inline="always")
+@njit
 def _term(x, t, w, n, j, kind):
     if kind == _WEIGHT:
         return w[j]
@@ -32,7 +32,7 @@ def _term(x, t, w, n, j, kind):
     return h * w[j] if kind == _WEIGHTED_HIT else h
 
 
-@njit(inline="always")
+@njit
 def _block(x, t, w, n, lo, count, kind):
     """numpy's pairwise sum of up to 128 terms ``lo .. lo + count - 1`` (:func:`_term`, formed
     as they are read): a plain sum below 8, else 8 accumulators."""
@@ -78,22 +78,23 @@ def _psum(x, t, w, n, lo, count, kind):
     return _psum(x, t, w, n, lo, half, kind) + _psum(x, t, w, n, lo + half, count - half, kind)
 
 
-@njit(inline="always")
+@njit
 def _pairwise(x, t, w, n, kind):
     """The pairwise sum of the K terms of ``kind`` of thresholds ``t`` and weights ``w``."""
     k = t.shape[0]
     if k <= 128:
         return _block(x, t, w, n, 0, k, kind)
-    zero = k - k  # run-time values: a recursive function typed for literals fails to link
-    return _psum(x, t, w, n, zero, k, zero + kind)
+    zero = k - k  # a run-time value: a recursive function typed for literals fails to link
+    return _psum(x, t, w, n, zero, k, kind)
 
 
-@njit(inline="always")
+@njit
 def _pcf_threshold(x, t, w, n):
+    zero = t.shape[0] - t.shape[0]  # run-time kinds: one compilation, not one per literal
     if w.shape[0] == 0:  # sec. 4: the mean of the thresholding results
-        return _pairwise(x, t, w, n, _HIT) / t.shape[0]
-    total = _pairwise(x, t, w, n, _WEIGHT)
-    return _pairwise(x, t, w, n, _WEIGHTED_HIT) / total  # sec. 4: weighted
+        return _pairwise(x, t, w, n, zero + _HIT) / t.shape[0]
+    total = _pairwise(x, t, w, n, zero + _WEIGHT)
+    return _pairwise(x, t, w, n, zero + _WEIGHTED_HIT) / total  # sec. 4: weighted
 
 
 @njit

@@ -33,7 +33,7 @@ from refnpr._jit import banded, inline_copy, njit, specialised
 from refnpr.device import vectors
 from refnpr.device.lights import LIGHT_POINT, light_dir
 from refnpr.device.sampling import bilinear, footprint, level_probes, level_weights, probes
-from refnpr.device.scalars import clip01
+from refnpr.device.scalars import clip01, interp
 from refnpr.device.vectors import dot, towards
 from refnpr.formulas import halftone, lighting
 
@@ -250,13 +250,14 @@ def _vec2(a, y, x):
 
 
 @specialised
-def shade_object_for(show, bump):
-    """:func:`shade_object` for one output ``show`` (the record's code) and ``bump`` (the
-    screen has a normal map: the DOT3 lighting of sec. 5.2): numba prunes the other outputs'
-    branches and the tangent frame before typing them, so a frame compiles only the code it
-    uses (:func:`refnpr._jit.specialised`). The smaller options (per-level thresholds, tone
-    LUTs, the indication map, anisotropy) are run-time values: as modes they saved no
-    measurable compile time and would multiply the kernels a test suite compiles."""
+def shade_object_for(show, bump, fwidth, per_level):
+    """:func:`shade_object` for one output ``show`` (the record's code), ``bump`` (the screen
+    has a normal map: the DOT3 lighting of sec. 5.2), ``fwidth`` (``c = "auto"``: the smooth
+    ramp's slope from the screen's change across the sample) and ``per_level`` (a threshold
+    per mip level, with tone LUTs): numba prunes the other modes' branches before typing them,
+    so a frame compiles only the code it uses (:func:`refnpr._jit.specialised`; the sampling
+    and LUT functions those branches call are not compiled either). The smaller options (the
+    indication map, anisotropy) are run-time values."""
 
     @banded(lambda frame, style, tables, out, raw: frame.mesh_id.shape[0])
     def shade_object(lo, hi, frame, style, tables, out, raw):
@@ -297,7 +298,6 @@ def shade_object_for(show, bump):
         cols = np.float64(pyr[2][0, 1])
         binary = style.threshold == BINARY
         specular = style.specular
-        fwidth = style.fwidth
         centred = style.centred or fwidth
         ink = style.ink_rgb
         paper = style.paper_rgb
@@ -436,7 +436,7 @@ def shade_object_for(show, bump):
                     step = style.step
                     d = ((cdx[0] * step, cdx[1] * step), (cdy[0] * step, cdy[1] * step))
                     c = fwidth_slope(pyr, coords, d, lod, n, axis)
-                if not ov.per_level:  # sec. 3: threshold the screen sampled at (uv, LOD)
+                if not per_level:  # sec. 3: threshold the screen sampled at (uv, LOD)
                     s = screen_value(texels, offsets, shapes, coords, lod, n, axis)
                     value = threshold(binary, s, inten, c, centred)
                 else:  # a threshold per level, blended with the trilinear weight
@@ -444,8 +444,8 @@ def shade_object_for(show, bump):
                     s0 = level_probes(pyr, k0, cu, cv, n, axis)
                     s1 = level_probes(pyr, k1, cu, cv, n, axis)
                     if ov.equalize:  # the level's tone LUT
-                        s0 = np.interp(s0, lut_x, luts[k0])
-                        s1 = np.interp(s1, lut_x, luts[k1])
+                        s0 = interp(s0, lut_x, luts[k0])
+                        s1 = interp(s1, lut_x, luts[k1])
                     t0 = threshold(binary, s0, inten, c, centred)
                     t1 = threshold(binary, s1, inten, c, centred)
                     value = (1.0 - w1) * t0 + w1 * t1

@@ -112,8 +112,14 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
         if not present[i]:
             continue
         screen = style.screen_for(specs[i], obj.material.texture)
-        kernel = K.shade_object_for(PARAMS.code("show", p.show), screen.normals is not None)
-        kernel(frame, record, object_tables(style, i, obj, screen), out, raw)
+        tables = object_tables(style, i, obj, screen)
+        kernel = K.shade_object_for(
+            PARAMS.code("show", p.show),
+            screen.normals is not None,
+            bool(record.fwidth),
+            bool(tables.values.per_level),
+        )
+        kernel(frame, record, tables, out, raw)
     if not color:  # an 8-bit file of the image stores the raw values
         return rgba_from(srgb_to_linear(raw), frame.cover >= 0)
     return out

@@ -135,15 +135,6 @@ def _analytic(x, n, layers, n_sub, uniform, noise, schedule):
 
 
 @njit(inline="always")
-def _thresholded(x, tk, wk, n):
-    """T_n(x, t) of one threshold (eq. 4; eq. 3 for n = 1) or the PCF average of several
-    (sec. 4): the thresholds ``tk`` (K,), their weights ``wk`` (K,) or (0,)."""
-    if tk.shape[0] == 1 and wk.shape[0] == 0:
-        return _step_n(x, tk[0], n)
-    return _pcf_threshold(x, tk, wk, n)
-
-
-@njit(inline="always")
 def _stipple_at(u, v, dots, cdf):
     """The stipple threshold at (u, v); ``dots = (s_u, s_v, seed, jitter)``."""
     s_u, s_v, seed, jitter = dots
@@ -157,12 +148,13 @@ def _uv_at(frame_uv, y, x, scale):
 
 
 @specialised
-def shade_threshold_for(src, cross):
+def shade_threshold_for(src, cross, filtered):
     """:func:`shade_threshold` for one threshold source ``src`` (CONSTANT, IMAGE, LINES,
-    ANALYTIC, STIPPLE) and ``cross`` (more than one hatching direction, composed by the layer
-    schedule). numba prunes the other sources' branches, and the layer composition of a single
-    direction, before typing them, so a frame compiles only what it uses
-    (:func:`refnpr._jit.specialised`)."""
+    ANALYTIC, STIPPLE), ``cross`` (more than one hatching direction, composed by the layer
+    schedule) and ``filtered`` (several or weighted thresholds per sample: the PCF average of
+    sec. 4). numba prunes the other sources' branches, the layer composition of a single
+    direction and the PCF sums of one threshold before typing them, so a frame compiles only
+    what it uses (:func:`refnpr._jit.specialised`)."""
     lines = src == LINES or src == ANALYTIC
 
     @banded("out")
@@ -224,9 +216,6 @@ def shade_threshold_for(src, cross):
             kk = 1
         tk = np.empty(kk)  # the sample's thresholds, and their weights
         wk = np.empty(kk if has_w else 0)
-        one = np.empty(1)  # the constant specular threshold
-        none = np.empty(0)
-        one[0] = spec_t
         fk = np.empty((kk, n_dirs))  # per threshold, one value per hatching layer
         lv = np.empty(n_dirs)  # the layers: coordinate, its derivatives, eq. 5's scale
         ldx = np.empty(n_dirs)
@@ -344,8 +333,10 @@ def shade_threshold_for(src, cross):
                     f_d = f_d if f_d <= 1.0 else 1.0  # (<= 1 up to rounding)
                     if src == ANALYTIC:
                         tx = _analytic(f_d, steps, layers, n_sub, uniform, noise, schedule)
+                    elif filtered:
+                        tx = _pcf_threshold(f_d, tk, wk, steps)  # sec. 4
                     else:
-                        tx = _thresholded(f_d, tk, wk, steps)  # eq. 4, sec. 4
+                        tx = _step_n(f_d, tk[0], steps)  # eq. 4 (eq. 3 for n = 1)
                     st = st0 * _tone_strength(f_d, style.dark, style.bright)  # sec. 5
                     term = _strength_blend(f_d, tx, st)
                     r = _illumination_term(r, m_diffuse[mi, 0], term, light_color[i, 0])  # eq. 2
@@ -357,11 +348,13 @@ def shade_threshold_for(src, cross):
                     if shininess[mi] > 0.0:  # eq. 1: f_s, Blinn-Phong, N as given
                         f_s = _specular(n, l, v, shininess[mi], False, False)
                     if spec_t >= 0.0:
-                        tx = _thresholded(f_s, one, none, steps)
+                        tx = _step_n(f_s, spec_t, steps)  # a constant threshold
                     elif src == ANALYTIC:
                         tx = _analytic(f_s, steps, layers, n_sub, uniform, noise, schedule)
+                    elif filtered:
+                        tx = _pcf_threshold(f_s, tk, wk, steps)
                     else:
-                        tx = _thresholded(f_s, tk, wk, steps)
+                        tx = _step_n(f_s, tk[0], steps)
                     st = st0 * _tone_strength(f_s, style.dark, style.bright)
                     term = _strength_blend(f_s, tx, st)
                     r = _illumination_term(r, m_specular[mi, 0], term, light_color[i, 0])

@@ -150,7 +150,8 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
         has_grad=bool(has_grad),
     )
     out = rgba_out(ctx, mask.shape)  # written in full by the kernel
-    K.shade_threshold_for(src, len(dirs) > 1)(frame, record, tables, out)
+    filtered = tables.t.shape[1] > 1 or tables.w.shape[1] > 0 or tables.offsets.shape[0] > 1
+    K.shade_threshold_for(src, len(dirs) > 1, bool(filtered))(frame, record, tables, out)
     return out
 
 
