@@ -64,27 +64,15 @@ _IMAGE_BYTES_PER_PIXEL = 16
 #: Channels that go through the barycentric interpolation pass (the rasterizer's set: defined
 #: here because raster imports this module, never the other way round).
 INTERPOLATED = frozenset(
-    {
-        "ndc_z",
-        "bary",
-        "position",
-        "normal",
-        "uv",
-        "duv_dx",
-        "duv_dy",
-        "lod",
-        "dyadic_scale",
-        "dposition_dx",
-        "dposition_dy",
-    }
+    "ndc_z bary position normal uv duv_dx duv_dy lod dyadic_scale dposition_dx dposition_dy".split()
 )
 
 
 def needs_interpolation(wanted: Iterable[str], attrs: Iterable[str]) -> bool:
     """Whether ``wanted`` has a channel of the interpolation pass: one of :data:`INTERPOLATED`,
-    a vertex attribute of ``attrs`` or its derivative ``d<a>_x`` / ``d<a>_y``."""
+    a vertex attribute of ``attrs`` or its derivative ``d<a>_dx`` / ``d<a>_dy``."""
     wanted, attrs = set(wanted), set(attrs)
-    derived = {f"d{a}_{x}" for a in attrs for x in "xy"}
+    derived = {f"d{a}_d{x}" for a in attrs for x in "xy"}
     return bool(wanted & (INTERPOLATED | attrs | derived))
 
 
@@ -182,14 +170,10 @@ def rasterize_bytes(
     f = int(itemsize)
     n_tiles = -(-(n * width) // tile) * -(-(n * height) // tile)
     parts = {"tri_id": 4 * s, "binning": _BIN_BYTES_PER_TILE * n_tiles}
-    if "coverage_count" in wanted:
-        parts["coverage_count"] = 4 * s
-    if "mesh_id" in wanted:
-        parts["mesh_id"] = 4 * s
+    parts.update({k: 4 * s for k in ("coverage_count", "mesh_id") if k in wanted})
     if "coverage" in wanted:
         parts["coverage"] = p * f
-    interp = _interp_parts(wanted, dict(attributes or {}), s, f)
-    parts.update(interp)
+    parts.update(_interp_parts(wanted, dict(attributes or {}), s, f))
     return parts
 
 
@@ -203,24 +187,10 @@ def render_bytes(
     attributes: Mapping[str, int] | None = None,
     tile: int = 32,
 ) -> dict[str, int]:
-    """Bytes a ``render`` call allocates in proportion to its sample grid, by part.
-
-    The G-buffer (:func:`rasterize_bytes` of the style's channels, float32), the style's
-    per-sample shading (its temporaries and float32 RGBA, ``SHADE_BYTES_PER_SAMPLE``) or the
-    composite and box resolve, whichever is larger (they do not overlap), and the image.
-
-    Parameters
-    ----------
-    width, height, spp, channels, attributes, tile
-        As for :func:`rasterize_bytes`.
-    style : str
-        The style's name (its shading cost per sample).
-
-    Returns
-    -------
-    dict of str to int
-        Part name -> bytes.
-    """
+    """Bytes a ``render`` call allocates in proportion to its sample grid, by part: the G-buffer
+    (:func:`rasterize_bytes`, float32), the style's shading (``SHADE_BYTES_PER_SAMPLE`` of
+    ``style``, a name) or the composite and resolve, whichever is larger (they do not overlap),
+    and the image."""
     parts = rasterize_bytes(width, height, spp, channels, attributes=attributes, tile=tile)
     n = math.isqrt(spp)
     s = (n * height) * (n * width)
@@ -230,14 +200,22 @@ def render_bytes(
     return parts
 
 
-def _meminfo_available() -> int | None:
+def read_proc_number(path: str, key: str, base: int = 10) -> int | None:
+    """The number after ``key`` on its line of a ``/proc`` file (``MemAvailable:``), or None."""
     try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
+        with open(path, encoding="ascii") as fh:
             for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
+                if line.startswith(key):
+                    return int(line.split()[1], base)
     except (OSError, ValueError, IndexError):
         pass
+    return None
+
+
+def _meminfo_available() -> int | None:
+    kib = read_proc_number("/proc/meminfo", "MemAvailable:")
+    if kib is not None:
+        return kib * 1024
     try:
         return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     except (OSError, ValueError, AttributeError):
@@ -283,17 +261,6 @@ def _cgroup_available() -> int | None:
     return None
 
 
-def _address_space_used() -> int:
-    try:
-        with open("/proc/self/status", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("VmSize:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return 0
-
-
 def available_bytes() -> tuple[int | None, str]:
     """Memory this process can still allocate, and where the figure comes from.
 
@@ -307,7 +274,7 @@ def available_bytes() -> tuple[int | None, str]:
         avail, source = group, "memory left under the cgroup limit"
     soft = resource.getrlimit(resource.RLIMIT_AS)[0] if resource is not None else -1
     if resource is not None and soft != resource.RLIM_INFINITY and soft > 0:
-        left = max(0, soft - _address_space_used())
+        left = max(0, soft - (read_proc_number("/proc/self/status", "VmSize:") or 0) * 1024)
         if avail is None or left < avail:
             avail, source = left, "address space left under RLIMIT_AS"
     if avail is None:

@@ -1,6 +1,7 @@
 """Tile-based CPU rasterizer: camera, clipping, triangle setup, binning, numba kernels -> GBuffer.
 
-Depends on nothing else of refnpr (only the numba flags of ``refnpr._jit``).
+Depends on the numba flags of ``refnpr._jit``, the memory estimates of ``refnpr._memory`` and
+the device layer's world -> pixel projection (``refnpr.device.projection``).
 """
 
 from .camera import Camera

@@ -12,20 +12,140 @@ Conventions shared by every kernel
   ``lam[t] @ (sx, sy, 1)`` gives ``lambda'_i = b_i / w`` (perspective-correct barycentrics over w),
   their sum ``Q = 1 / w`` and ``b_i = lambda'_i / Q``. Both P = sum(lambda'_i f_i) and Q are affine in
   the sample position, so derivatives follow from the quotient rule.
+* Kernels take records (the named tuples below) and take their arrays into locals once, before
+  their loops (an array read from a record inside a loop takes and drops a reference each
+  time). Per-primitive helpers take numbers and tuples of numbers: a primitive's six snapped
+  coordinates ``c = (X0, Y0, X1, Y1, X2, Y2)``, its inclusive sample box ``b = (sx0, sx1, sy0,
+  sy1)``, a tile's rectangle ``(x0, y0, x1, y1)``, a vertex's clip ``(x, y, w)``. The banded
+  kernels are called through :func:`refnpr._jit.call_banded`, which types the records once
+  per call rather than once per band.
+* World -> clip -> pixel is :mod:`refnpr.device.projection` (``clip_of``, ``pixel_of``); the
+  snapping to 1/256 px (round half up) is the rasterizer's.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from refnpr._jit import banded, njit
+from refnpr.device.projection import clip_of, pixel_of
 
 # Clip planes as (a, b, c, d): inside where a x + b y + c z + d w >= 0. Guard band G fills d for x, y.
 # Order: near, far, left, right, bottom, top.
 N_PLANES = 6
 MAX_POLY = 3 + N_PLANES  # Sutherland-Hodgman adds at most one vertex per plane
+#: Smallest footprint / gradient ``lod`` and ``dyadic_scale`` take (finite logarithms).
+LOD_FLOOR = 2.0**-64
+
+
+# ---------------------------------------------------------------------------------------------
+# Records
+# ---------------------------------------------------------------------------------------------
+
+
+class Grid(NamedTuple):
+    """The image, its sample grid and its tiles (ints)."""
+
+    width: int  # pixels
+    height: int
+    n: int  # samples per pixel along each axis
+    nw: int  # n * width: samples per row
+    nh: int  # n * height
+    tile: int  # tile edge in samples (a power of two)
+    shift: int  # log2(tile)
+    tiles_x: int  # tiles per row
+
+
+class Setup(NamedTuple):
+    """How triangles are set up and binned."""
+
+    guard: float  # guard band half-width in NDC units (clipping planes x, y = +-guard w)
+    cull: int  # 1: drop back-facing (clockwise in NDC) triangles
+    chunk: int  # triangles per binning chunk
+
+
+class Verts(NamedTuple):
+    """The vertex stage's output (N vertices)."""
+
+    clip: np.ndarray  # (N, 4) float64 clip coordinates
+    snapped: np.ndarray  # (N, 2) int32 pixel position in 1/256 px (where outcode == 0)
+    outcode: np.ndarray  # (N,) uint8: bit p set where the vertex is outside clip plane p
+
+
+class Tris(NamedTuple):
+    """Per triangle (M), from ``setup_triangles``."""
+
+    coords: np.ndarray  # (M, 6) int32 snapped coordinates, canonical orientation
+    bbox: np.ndarray  # (M, 4) int32 inclusive sample box (sx0, sx1, sy0, sy1)
+    status: np.ndarray  # (M,) int8: 0 rejected, 1 one primitive, 2 needs clipping
+    qplane: np.ndarray  # (M, 3) float64: Q = 1/w = a sx + b sy + c
+
+
+class Pieces(NamedTuple):
+    """The clipped triangles' pieces (K), from ``clip_triangles``."""
+
+    todo: np.ndarray  # (T,) int64 the triangles clipped (status 2), increasing
+    first: np.ndarray  # (T + 1,) int64: the pieces of todo[i] are first[i] .. first[i + 1] - 1
+    coords: np.ndarray  # (K, 6) int32, as Tris.coords
+    bbox: np.ndarray  # (K, 4) int32, as Tris.bbox
+    parent: np.ndarray  # (K,) int64 the triangle of each piece
+
+
+class Bins(NamedTuple):
+    """Per-tile primitive lists: references r < M are triangles, r >= M pieces r - M."""
+
+    first: np.ndarray  # (tiles + 1,) int64: tile k's list is lists[first[k]:first[k + 1]]
+    lists: np.ndarray  # int32 or int64
+
+
+class DepthRange(NamedTuple):
+    """The per-sample near/far clip on Q = 1/w."""
+
+    q_lo: float
+    q_hi: float
+
+
+class Visible(NamedTuple):
+    """The visibility pass's output."""
+
+    tri_id: np.ndarray  # (nH, nW) int32
+    depth: np.ndarray  # (nH, nW) float32, or (0, 0): not written
+
+
+class Tables(NamedTuple):
+    """Per-vertex tables of the interpolation pass (N rows, float64)."""
+
+    dtab: np.ndarray  # (N, Cd) values with per-pixel derivatives
+    vtab: np.ndarray  # (N, Cv) values only
+    ntab: np.ndarray  # (N, 3k), k in {0, 1}: normals (renormalized after interpolation)
+
+
+class Outs(NamedTuple):
+    """The interpolation pass's outputs, (nH, nW, C) each (zero-width ones are not written)."""
+
+    d: np.ndarray  # (.., Cd) values of dtab
+    dx: np.ndarray  # (.., Cd) d/dx per pixel
+    dy: np.ndarray  # (.., Cd) d/dy per pixel
+    v: np.ndarray  # (.., Cv) values of vtab
+    normal: np.ndarray  # (.., 3k)
+    w: np.ndarray  # (.., k), k in {0, 1}: depth w = 1 / Q
+
+
+class Scales(NamedTuple):
+    """What ``lod`` and ``dyadic_scale`` are computed for."""
+
+    texels_u: float  # texture width in texels (lod)
+    texels_v: float  # texture height in texels (lod)
+    coord: int  # the coordinate of Veryovka eq. 5: 0 u, 1 v
+    log2_period: float  # log2 of eq. 5's w (pixels)
+
+
+# ---------------------------------------------------------------------------------------------
+# Vertices, clipping, triangle setup
+# ---------------------------------------------------------------------------------------------
 
 
 @njit
@@ -44,21 +164,21 @@ def _plane_dist(p, x, y, z, w, guard):
 
 
 @njit
-def _snap(x, w, half_w, half_h, out, k):
-    """Project clip (x, y, w) to pixels and snap to 1/256 px (round half up). out[k], out[k+1]."""
-    sx = (x[0] / w + 1.0) * half_w
-    sy = (1.0 - x[1] / w) * half_h
-    out[k] = np.int64(math.floor(sx * 256.0 + 0.5))
-    out[k + 1] = np.int64(math.floor(sy * 256.0 + 0.5))
+def _snap(cx, cy, w, width, height):
+    """Clip (cx, cy, ., w) -> pixels (``pixel_of``), snapped to 1/256 px (round half up):
+    ``(X, Y)`` int64, the position X / 256, Y / 256 px."""
+    px, py = pixel_of(cx, cy, w, width, height)
+    return np.int64(math.floor(px * 256.0 + 0.5)), np.int64(math.floor(py * 256.0 + 0.5))
 
 
 @njit
-def _signed_area(c0, c1, c2, c3, c4, c5):
-    """Twice the signed area of snapped (X0, Y0, X1, Y1, X2, Y2) = (c0, ..., c5), screen y down
-    (int64). Scalars, not a row: see the note above ``bin_fill``."""
-    x0 = np.int64(c0)
-    y0 = np.int64(c1)
-    return (np.int64(c2) - x0) * (np.int64(c5) - y0) - (np.int64(c3) - y0) * (np.int64(c4) - x0)
+def _signed_area(c):
+    """Twice the signed area of snapped ``c = (X0, Y0, X1, Y1, X2, Y2)``, screen y down (int64)."""
+    x0 = np.int64(c[0])
+    y0 = np.int64(c[1])
+    return (np.int64(c[2]) - x0) * (np.int64(c[5]) - y0) - (np.int64(c[3]) - y0) * (
+        np.int64(c[4]) - x0
+    )
 
 
 @njit
@@ -132,15 +252,18 @@ def _keep(area, cull):
 
 
 @njit
-def _lam_rows(x0, y0, w0, x1, y1, w1, x2, y2, w2, nw, nh):
-    """M^-1 S for M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]] (clip x, y, w of the exact vertices).
+def _lam_rows(v0, v1, v2, nw, nh):
+    """M^-1 S for M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]], ``vi = (xi, yi, wi)`` the clip x, y,
+    w of the exact vertices.
 
     Row i maps sample indices (sx, sy, 1) to lambda'_i = b_i / w. (ndc_x, ndc_y, 1) = S (sx, sy, 1)
     with ndc_x = 2 sx / nW + (1/nW - 1) and ndc_y = -2 sy / nH + (1 - 1/nH) (sample centres, row 0
     at the top). Returns (det, 9 coefficients row-major); det == 0 means the triangle's plane
-    passes through the eye. Scalars (x, y, w of each vertex), not rows: see the note above
-    ``bin_fill``.
+    passes through the eye.
     """
+    x0, y0, w0 = v0
+    x1, y1, w1 = v1
+    x2, y2, w2 = v2
     a00 = y1 * w2 - y2 * w1
     a01 = x2 * w1 - x1 * w2
     a02 = x1 * y2 - x2 * y1
@@ -171,62 +294,68 @@ def _lam_rows(x0, y0, w0, x1, y1, w1, x2, y2, w2, nw, nh):
 
 
 @banded("positions")
-def transform_vertices(lo, hi, positions, vp, width, height, guard, clip, snapped, outcode):
-    """Vertex stage: clip = VP (p, 1) with a fixed evaluation order (no BLAS, no FMA
+def transform_vertices(lo, hi, positions, vp, grid, guard, verts):
+    """Vertex stage: clip = VP (p, 1) (``clip_of``: a fixed evaluation order, no BLAS, no FMA
     contraction), the clip-plane outcode bits, and for vertices inside every plane the position
     snapped to 1/256 px (the same ``_snap`` the clipper uses, so shared vertices agree bitwise).
     """
-    half_w = 0.5 * width
-    half_h = 0.5 * height
+    clip = verts.clip
+    snapped = verts.snapped
+    outcode = verts.outcode
+    width = grid.width
+    height = grid.height
     for i in range(lo, hi):
-        x = positions[i, 0]
-        y = positions[i, 1]
-        z = positions[i, 2]
-        for r in range(4):
-            clip[i, r] = ((vp[r, 0] * x + vp[r, 1] * y) + vp[r, 2] * z) + vp[r, 3]
-        c = clip[i]
+        cx, cy, cz, cw = clip_of(vp, (positions[i, 0], positions[i, 1], positions[i, 2]))
+        clip[i, 0] = cx
+        clip[i, 1] = cy
+        clip[i, 2] = cz
+        clip[i, 3] = cw
         code = 0
         for p in range(N_PLANES):
-            if _plane_dist(p, c[0], c[1], c[2], c[3], guard) < 0.0:
+            if _plane_dist(p, cx, cy, cz, cw, guard) < 0.0:
                 code |= 1 << p
         outcode[i] = code
         if code == 0:
-            _snap(c, c[3], half_w, half_h, snapped[i], 0)
+            sx, sy = _snap(cx, cy, cw, width, height)
+            snapped[i, 0] = sx
+            snapped[i, 1] = sy
         else:
             snapped[i, 0] = 0
             snapped[i, 1] = 0
 
 
 @njit
-def _count_tiles(sx0, sx1, sy0, sy1, shift, tiles_x, counts_row):
-    for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
-        for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
-            counts_row[ty * tiles_x + tx] += 1
+def _sample_bbox(c, n, nw, nh):
+    """Inclusive sample-index box ``(sx0, sx1, sy0, sy1)`` of snapped ``c = (X0, Y0, ..., Y2)``
+    (1/256 px) on the n-times grid.
+
+    In units of 1/(512 n) px a snapped coordinate X is 2 n X and sample s has its centre at
+    512 s + 256, so the first sample right of xmin is ceil((xmin - 256) / 512) (shifts floor).
+    """
+    c0, c1, c2, c3, c4, c5 = c
+    xmin = np.int64(min(c0, min(c2, c4))) * 2 * n
+    xmax = np.int64(max(c0, max(c2, c4))) * 2 * n
+    ymin = np.int64(min(c1, min(c3, c5))) * 2 * n
+    ymax = np.int64(max(c1, max(c3, c5))) * 2 * n
+    sx0 = max(-((256 - xmin) >> 9), 0)
+    sx1 = min((xmax - 256) >> 9, nw - 1)
+    sy0 = max(-((256 - ymin) >> 9), 0)
+    sy1 = min((ymax - 256) >> 9, nh - 1)
+    return sx0, sx1, sy0, sy1
+
+
+# The per-primitive rows (a whole triangle's row t < M of coords / bbox, else a clipped piece's
+# row t - M of the pieces' coords / bbox) are read as scalars in the loops themselves: a row
+# view, or an array passed to a helper (inlined or not), updates the array's reference count
+# (atomically, on a cache line the threads share), which in the binning and visibility loops
+# cost 2-4x the loops' own work (benchmarks/README.md, cold start). For the same reason every
+# kernel takes its records' arrays into locals once, before its loops.
 
 
 @banded("counts")
-def setup_triangles(
-    lo,
-    hi,
-    clip,
-    snapped,
-    outcode,
-    faces,
-    n,
-    width,
-    height,
-    cull,
-    chunk,
-    shift,
-    tiles_x,
-    coords,
-    bbox,
-    status,
-    qplane,
-    counts,
-):
+def setup_triangles(lo, hi, verts, faces, grid, setup, tris, counts):
     """Per triangle: trivial reject, snapped screen coordinates (fast path), the depth plane, and
-    the first binning pass (tile counts), in one pass over chunks of ``chunk`` triangles.
+    the first binning pass (tile counts), in one pass over chunks of ``setup.chunk`` triangles.
 
     status[t]: 0 rejected (outside a plane, zero area, culled, or covering no sample centre),
     1 one primitive: coords[t] (1/256 px, vertices 1 and 2 swapped if needed so the signed area
@@ -235,8 +364,20 @@ def setup_triangles(
     a sx + b sy + c on the sample grid (exact vertices). counts[c, tile] += 1 for every tile a
     status-1 triangle of chunk c touches.
     """
-    nw = n * width
-    nh = n * height
+    clip = verts.clip
+    snapped = verts.snapped
+    outcode = verts.outcode
+    coords = tris.coords
+    bbox = tris.bbox
+    status = tris.status
+    qplane = tris.qplane
+    n = grid.n
+    nw = grid.nw
+    nh = grid.nh
+    shift = grid.shift
+    tiles_x = grid.tiles_x
+    cull = setup.cull
+    chunk = setup.chunk
     m = faces.shape[0]
     for c in range(lo, hi):
         for t in range(c * chunk, min(m, (c + 1) * chunk)):
@@ -251,7 +392,7 @@ def setup_triangles(
                 continue  # all three vertices outside one plane
             clipped = (o0 | o1 | o2) != 0
             sx0 = sx1 = sy0 = sy1 = 0
-            if not clipped:  # scalars, not row views: see the note above bin_fill
+            if not clipped:  # scalars, not row views (see above)
                 c0 = snapped[i0, 0]
                 c1 = snapped[i0, 1]
                 c2 = snapped[i1, 0]
@@ -264,7 +405,7 @@ def setup_triangles(
                 coords[t, 3] = c3
                 coords[t, 4] = c4
                 coords[t, 5] = c5
-                area = _signed_area(c0, c1, c2, c3, c4, c5)
+                area = _signed_area((c0, c1, c2, c3, c4, c5))
                 if not _keep(area, cull):
                     continue
                 if area < 0:  # canonical orientation: interior where all edge functions >= 0
@@ -273,19 +414,13 @@ def setup_triangles(
                     coords[t, 3] = c3
                     coords[t, 4] = c4
                     coords[t, 5] = c5
-                sx0, sx1, sy0, sy1 = _sample_bbox(c0, c1, c2, c3, c4, c5, n, nw, nh)
+                sx0, sx1, sy0, sy1 = _sample_bbox((c0, c1, c2, c3, c4, c5), n, nw, nh)
                 if sx0 > sx1 or sy0 > sy1:
                     continue  # covers no sample centre
             det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(
-                clip[i0, 0],
-                clip[i0, 1],
-                clip[i0, 3],
-                clip[i1, 0],
-                clip[i1, 1],
-                clip[i1, 3],
-                clip[i2, 0],
-                clip[i2, 1],
-                clip[i2, 3],
+                (clip[i0, 0], clip[i0, 1], clip[i0, 3]),
+                (clip[i1, 0], clip[i1, 1], clip[i1, 3]),
+                (clip[i2, 0], clip[i2, 1], clip[i2, 3]),
                 nw,
                 nh,
             )
@@ -302,78 +437,26 @@ def setup_triangles(
             bbox[t, 1] = sx1
             bbox[t, 2] = sy0
             bbox[t, 3] = sy1
-            for ty in range(sy0 >> shift, (sy1 >> shift) + 1):  # as _count_tiles, inline
+            for ty in range(sy0 >> shift, (sy1 >> shift) + 1):  # as bin_count_clipped, inline
                 for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
                     counts[c, ty * tiles_x + tx] += 1
 
 
 @njit
-def bin_count_clipped(todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts):
-    """Add the clipped triangles' pieces to the tile counts of their triangle's chunk."""
-    for i in range(todo.shape[0]):
-        c = todo[i] // chunk
-        for j in range(sub_first[i], sub_first[i + 1]):
-            b = sub_bbox[j]
-            _count_tiles(b[0], b[1], b[2], b[3], shift, tiles_x, counts[c])
-
-
-@njit
-def mark_visible(tri_id, mark):
-    """mark[t] = 1 for every triangle that owns at least one sample."""
-    for sy in range(tri_id.shape[0]):
-        for sx in range(tri_id.shape[1]):
-            t = tri_id[sy, sx]
-            if t >= 0:
-                mark[t] = 1
-
-
-@banded("faces")
-def lam_for_marked(lo, hi, clip, faces, mark, n, width, height, lam):
-    """lam[t] (3, 3) for every marked triangle (see _lam_rows); others are left untouched."""
-    nw = n * width
-    nh = n * height
-    for t in range(lo, hi):
-        if mark[t] == 0:
-            continue
-        i0 = faces[t, 0]
-        i1 = faces[t, 1]
-        i2 = faces[t, 2]
-        r = _lam_rows(
-            clip[i0, 0],
-            clip[i0, 1],
-            clip[i0, 3],
-            clip[i1, 0],
-            clip[i1, 1],
-            clip[i1, 3],
-            clip[i2, 0],
-            clip[i2, 1],
-            clip[i2, 3],
-            nw,
-            nh,
-        )
-        lam[t, 0, 0] = r[1]
-        lam[t, 0, 1] = r[2]
-        lam[t, 0, 2] = r[3]
-        lam[t, 1, 0] = r[4]
-        lam[t, 1, 1] = r[5]
-        lam[t, 1, 2] = r[6]
-        lam[t, 2, 0] = r[7]
-        lam[t, 2, 1] = r[8]
-        lam[t, 2, 2] = r[9]
-
-
-@njit
-def clip_triangles(clip, faces, todo, width, height, guard, cull, n, max_out):
+def clip_triangles(clip, faces, todo, grid, setup, max_out):
     """Clip the triangles listed in ``todo`` (status 2); fan-triangulate and snap the result.
 
-    Returns (sub_coords (K, 6) int32 in canonical orientation, sub_bbox (K, 4) int32, sub_parent
-    (K,) int64, first (len(todo)+1,) int64), in the order of ``todo`` (deterministic). Pieces
-    that cover no sample centre are dropped.
+    Returns (coords (K, 6) int32 in canonical orientation, bbox (K, 4) int32, parent (K,) int64,
+    first (len(todo)+1,) int64), in the order of ``todo`` (deterministic): the fields of
+    :class:`Pieces` after ``todo``. Pieces that cover no sample centre are dropped.
     """
-    nw = n * width
-    nh = n * height
-    half_w = 0.5 * width
-    half_h = 0.5 * height
+    width = grid.width
+    height = grid.height
+    n = grid.n
+    nw = grid.nw
+    nh = grid.nh
+    guard = setup.guard
+    cull = setup.cull
     sub = np.empty((max_out, 6), dtype=np.int32)
     sub_bbox = np.empty((max_out, 4), dtype=np.int32)
     parent = np.empty(max_out, dtype=np.int64)
@@ -381,7 +464,6 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, n, max_out):
     poly = np.empty((MAX_POLY + 1, 4))
     tmp = np.empty((MAX_POLY + 1, 4))
     pts = np.empty(2 * (MAX_POLY + 1), dtype=np.int64)
-    c = np.empty(6, dtype=np.int64)
     k = 0
     for i in range(todo.shape[0]):
         t = todo[i]
@@ -390,20 +472,20 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, n, max_out):
             clip[faces[t, 0]], clip[faces[t, 1]], clip[faces[t, 2]], guard, poly, tmp
         )
         for j in range(cnt):
-            _snap(poly[j, :2], poly[j, 3], half_w, half_h, pts, 2 * j)
+            x, y = _snap(poly[j, 0], poly[j, 1], poly[j, 3], width, height)
+            pts[2 * j] = x
+            pts[2 * j + 1] = y
         for j in range(1, cnt - 1):
-            c[0] = pts[0]
-            c[1] = pts[1]
-            c[2] = pts[2 * j]
-            c[3] = pts[2 * j + 1]
-            c[4] = pts[2 * j + 2]
-            c[5] = pts[2 * j + 3]
-            area = _signed_area(c[0], c[1], c[2], c[3], c[4], c[5])
+            c0, c1 = pts[0], pts[1]
+            c2, c3 = pts[2 * j], pts[2 * j + 1]
+            c4, c5 = pts[2 * j + 2], pts[2 * j + 3]
+            area = _signed_area((c0, c1, c2, c3, c4, c5))
             if not _keep(area, cull):
                 continue
             if area < 0:
-                c[2], c[3], c[4], c[5] = pts[2 * j + 2], pts[2 * j + 3], pts[2 * j], pts[2 * j + 1]
-            sx0, sx1, sy0, sy1 = _sample_bbox(c[0], c[1], c[2], c[3], c[4], c[5], n, nw, nh)
+                c2, c3, c4, c5 = c4, c5, c2, c3
+            c = (c0, c1, c2, c3, c4, c5)
+            sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
             if sx0 > sx1 or sy0 > sy1:
                 continue
             for q in range(6):
@@ -418,38 +500,41 @@ def clip_triangles(clip, faces, todo, width, height, guard, cull, n, max_out):
     return sub[:k].copy(), sub_bbox[:k].copy(), parent[:k].copy(), first
 
 
+# ---------------------------------------------------------------------------------------------
+# Binning and visibility
+# ---------------------------------------------------------------------------------------------
+
+
 @njit
-def _sample_bbox(c0, c1, c2, c3, c4, c5, n, nw, nh):
-    """Inclusive sample-index bounding box of snapped coords (c0, ..., c5) = (X0, Y0, ..., Y2)
-    (1/256 px) on the n-times grid.
-
-    In units of 1/(512 n) px a snapped coordinate X is 2 n X and sample s has its centre at
-    512 s + 256, so the first sample right of xmin is ceil((xmin - 256) / 512) (shifts floor).
-    """
-    xmin = np.int64(min(c0, min(c2, c4))) * 2 * n
-    xmax = np.int64(max(c0, max(c2, c4))) * 2 * n
-    ymin = np.int64(min(c1, min(c3, c5))) * 2 * n
-    ymax = np.int64(max(c1, max(c3, c5))) * 2 * n
-    sx0 = max(-((256 - xmin) >> 9), 0)
-    sx1 = min((xmax - 256) >> 9, nw - 1)
-    sy0 = max(-((256 - ymin) >> 9), 0)
-    sy1 = min((ymax - 256) >> 9, nh - 1)
-    return sx0, sx1, sy0, sy1
-
-
-# The per-primitive rows (a whole triangle's row t < M of coords / bbox, else a clipped piece's
-# row t - M of sub / sub_bbox) are read as scalars in the loops themselves: a row view, or an
-# array passed to a helper (inlined or not), updates the array's reference count (atomically, on
-# a cache line the threads share), which in the binning and visibility loops cost 2-4x the loops'
-# own work (benchmarks/README.md, cold start).
+def bin_count_clipped(pieces, grid, chunk, counts):
+    """Add the clipped triangles' pieces to the tile counts of their triangle's chunk."""
+    todo = pieces.todo
+    first = pieces.first
+    bbox = pieces.bbox
+    shift = grid.shift
+    tiles_x = grid.tiles_x
+    for i in range(todo.shape[0]):
+        c = todo[i] // chunk
+        for j in range(first[i], first[i + 1]):
+            sx0, sx1, sy0, sy1 = bbox[j, 0], bbox[j, 1], bbox[j, 2], bbox[j, 3]
+            for ty in range(sy0 >> shift, (sy1 >> shift) + 1):
+                for tx in range(sx0 >> shift, (sx1 >> shift) + 1):
+                    counts[c, ty * tiles_x + tx] += 1
 
 
 @banded("offsets")
-def bin_fill(
-    c_lo, c_hi, status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, offsets, lists
-):
-    """Write primitive references into per-tile lists (same traversal as bin_count), so every
-    tile's list is in increasing triangle order whatever the thread count."""
+def bin_fill(c_lo, c_hi, tris, pieces, grid, setup, offsets, lists):
+    """Write primitive references into per-tile lists (the traversal of the counts), so every
+    tile's list is in increasing triangle order whatever the thread count. ``offsets[c, k]``:
+    where chunk c's references of tile k start in ``lists``."""
+    status = tris.status
+    bbox = tris.bbox
+    todo = pieces.todo
+    sub_first = pieces.first
+    sub_bbox = pieces.bbox
+    shift = grid.shift
+    tiles_x = grid.tiles_x
+    chunk = setup.chunk
     m = status.shape[0]
     for c in range(c_lo, c_hi):
         lo = c * chunk
@@ -498,7 +583,7 @@ def _edge_setup(xa, ya, xb, yb, n):
 
 @njit
 def _tile_rect(k, tiles_x, tile, nw, nh):
-    """Sample rectangle [x0, x1) x [y0, y1) of tile k."""
+    """Sample rectangle [x0, x1) x [y0, y1) of tile k: ``(x0, y0, x1, y1)``."""
     ty = k // tiles_x
     tx = k - ty * tiles_x
     x0 = tx * tile
@@ -507,55 +592,55 @@ def _tile_rect(k, tiles_x, tile, nw, nh):
 
 
 @njit
-def _prim_in_tile(c0, c1, c2, c3, c4, c5, bx0, bx1, by0, by1, n, x0, y0, x1, y1):
+def _prim_in_tile(c, b, n, rect):
     """Sample range clipped to the tile and the three edge functions of a primitive: vertices
-    (c0, c1), (c2, c3), (c4, c5) in 1/256 px, bbox (bx0, bx1, by0, by1) its sample range."""
-    sx0 = max(np.int64(bx0), x0)
-    sx1 = min(np.int64(bx1), x1 - 1)
-    sy0 = max(np.int64(by0), y0)
-    sy1 = min(np.int64(by1), y1 - 1)
+    ``c = (X0, Y0, X1, Y1, X2, Y2)`` in 1/256 px, ``b = (sx0, sx1, sy0, sy1)`` its sample box,
+    ``rect = (x0, y0, x1, y1)`` the tile's."""
+    c0, c1, c2, c3, c4, c5 = c
+    x0, y0, x1, y1 = rect
+    sx0 = max(np.int64(b[0]), x0)
+    sx1 = min(np.int64(b[1]), x1 - 1)
+    sy0 = max(np.int64(b[2]), y0)
+    sy1 = min(np.int64(b[3]), y1 - 1)
     A0, B0, C0 = _edge_setup(c2, c3, c4, c5, n)  # edge 1 -> 2
     A1, B1, C1 = _edge_setup(c4, c5, c0, c1, n)  # edge 2 -> 0
     A2, B2, C2 = _edge_setup(c0, c1, c2, c3, n)  # edge 0 -> 1
     return sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2
 
 
-def _tiles(coords, bbox, sub, sub_bbox, sub_parent, qplane, q_lo, q_hi, tile_first, *_):
+def _tiles(tris, pieces, bins, *_):
     """The loop length of the tile kernels: one task per tile."""
-    return tile_first.shape[0] - 1
+    return bins.first.shape[0] - 1
 
 
 @banded(_tiles)
-def raster_visibility(
-    lo,
-    hi,
-    coords,
-    bbox,
-    sub,
-    sub_bbox,
-    sub_parent,
-    qplane,
-    q_lo,
-    q_hi,
-    tile_first,
-    tile_lists,
-    n,
-    nw,
-    nh,
-    tile,
-    tiles_x,
-    tri_id,
-    depth,
-):
-    """Depth-tested visibility, one tile per task: tri_id (nH, nW) int32 gets the nearest parent
-    triangle index (-1 where empty). Depth is Q = 1/w of the exact vertices (larger is nearer);
-    ties keep the earlier primitive (lists are in increasing triangle order), so the result is
-    independent of the thread count and of the tile size. Samples whose exact Q lies outside
-    [q_lo, q_hi] (beyond the far/near plane, with a relative slack) are not covered.
+def raster_visibility(lo, hi, tris, pieces, bins, grid, depth_range, out):
+    """Depth-tested visibility, one tile per task: out.tri_id (nH, nW) int32 gets the nearest
+    parent triangle index (-1 where empty). Depth is Q = 1/w of the exact vertices (larger is
+    nearer); ties keep the earlier primitive (lists are in increasing triangle order), so the
+    result is independent of the thread count and of the tile size. Samples whose exact Q lies
+    outside [q_lo, q_hi] (beyond the far/near plane, with a relative slack) are not covered.
 
-    depth (nH, nW) float32, or shape (0, 0): also w = 1 / Q of the winner (+inf where empty),
-    the value ``interp_depth`` computes from the same plane (so bit-identical), without its
-    second pass over the samples."""
+    out.depth (nH, nW) float32, or shape (0, 0): also w = 1 / Q of the winner (+inf where
+    empty), the value ``interp_depth`` computes from the same plane (so bit-identical), without
+    its second pass over the samples."""
+    coords = tris.coords
+    bbox = tris.bbox
+    qplane = tris.qplane
+    sub = pieces.coords
+    sub_bbox = pieces.bbox
+    sub_parent = pieces.parent
+    tile_first = bins.first
+    tile_lists = bins.lists
+    n = grid.n
+    nw = grid.nw
+    nh = grid.nh
+    tile = grid.tile
+    tiles_x = grid.tiles_x
+    q_lo = depth_range.q_lo
+    q_hi = depth_range.q_hi
+    tri_id = out.tri_id
+    depth = out.depth
     m = coords.shape[0]
     for k in range(lo, hi):
         x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
@@ -563,26 +648,24 @@ def raster_visibility(
         ibuf = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
         for e in range(tile_first[k], tile_first[k + 1]):
             ref = tile_lists[e]
-            if ref < m:  # scalars, not row views (see bin_fill)
+            if ref < m:  # scalars, not row views (see above)
                 t = ref
-                c0, c1, c2 = coords[ref, 0], coords[ref, 1], coords[ref, 2]
-                c3, c4, c5 = coords[ref, 3], coords[ref, 4], coords[ref, 5]
-                bx0, bx1, by0, by1 = bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3]
+                c = (
+                    coords[ref, 0],
+                    coords[ref, 1],
+                    coords[ref, 2],
+                    coords[ref, 3],
+                    coords[ref, 4],
+                    coords[ref, 5],
+                )
+                b = (bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3])
             else:
                 r = ref - m
                 t = sub_parent[r]
-                c0, c1, c2, c3, c4, c5 = (
-                    sub[r, 0],
-                    sub[r, 1],
-                    sub[r, 2],
-                    sub[r, 3],
-                    sub[r, 4],
-                    sub[r, 5],
-                )
-                bx0, bx1 = sub_bbox[r, 0], sub_bbox[r, 1]
-                by0, by1 = sub_bbox[r, 2], sub_bbox[r, 3]
+                c = (sub[r, 0], sub[r, 1], sub[r, 2], sub[r, 3], sub[r, 4], sub[r, 5])
+                b = (sub_bbox[r, 0], sub_bbox[r, 1], sub_bbox[r, 2], sub_bbox[r, 3])
             sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
-                c0, c1, c2, c3, c4, c5, bx0, bx1, by0, by1, n, x0, y0, x1, y1
+                c, b, n, (x0, y0, x1, y1)
             )
             qa = qplane[t, 0]
             qb = qplane[t, 1]
@@ -615,53 +698,47 @@ def raster_visibility(
 
 
 @banded(_tiles)
-def raster_count(
-    lo,
-    hi,
-    coords,
-    bbox,
-    sub,
-    sub_bbox,
-    sub_parent,
-    qplane,
-    q_lo,
-    q_hi,
-    tile_first,
-    tile_lists,
-    n,
-    nw,
-    nh,
-    tile,
-    tiles_x,
-    count,
-):
+def raster_count(lo, hi, tris, pieces, bins, grid, depth_range, count):
     """Debug: count[sy, sx] = how many primitives claim each sample: the coverage rule and the
     per-sample near/far clip of ``raster_visibility``, without the depth test between them."""
+    coords = tris.coords
+    bbox = tris.bbox
+    qplane = tris.qplane
+    sub = pieces.coords
+    sub_bbox = pieces.bbox
+    sub_parent = pieces.parent
+    tile_first = bins.first
+    tile_lists = bins.lists
+    n = grid.n
+    nw = grid.nw
+    nh = grid.nh
+    tile = grid.tile
+    tiles_x = grid.tiles_x
+    q_lo = depth_range.q_lo
+    q_hi = depth_range.q_hi
     m = coords.shape[0]
     for k in range(lo, hi):
         x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
         for e in range(tile_first[k], tile_first[k + 1]):
             ref = tile_lists[e]
-            if ref < m:  # scalars, not row views (see bin_fill)
+            if ref < m:  # scalars, not row views (see above)
                 t = ref
-                c0, c1, c2 = coords[ref, 0], coords[ref, 1], coords[ref, 2]
-                c3, c4, c5 = coords[ref, 3], coords[ref, 4], coords[ref, 5]
-                bx0, bx1, by0, by1 = bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3]
+                c = (
+                    coords[ref, 0],
+                    coords[ref, 1],
+                    coords[ref, 2],
+                    coords[ref, 3],
+                    coords[ref, 4],
+                    coords[ref, 5],
+                )
+                b = (bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3])
             else:
                 r = ref - m
                 t = sub_parent[r]
-                c0, c1, c2, c3, c4, c5 = (
-                    sub[r, 0],
-                    sub[r, 1],
-                    sub[r, 2],
-                    sub[r, 3],
-                    sub[r, 4],
-                    sub[r, 5],
-                )
-                bx0, bx1 = sub_bbox[r, 0], sub_bbox[r, 1]
-                by0, by1 = sub_bbox[r, 2], sub_bbox[r, 3]
+                c = (sub[r, 0], sub[r, 1], sub[r, 2], sub[r, 3], sub[r, 4], sub[r, 5])
+                b = (sub_bbox[r, 0], sub_bbox[r, 1], sub_bbox[r, 2], sub_bbox[r, 3])
             sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
-                c0, c1, c2, c3, c4, c5, bx0, bx1, by0, by1, n, x0, y0, x1, y1
+                c, b, n, (x0, y0, x1, y1)
             )
             for sy in range(sy0, sy1 + 1):
                 for sx in range(sx0, sx1 + 1):
@@ -678,6 +755,45 @@ def raster_count(
 # Interpolation kernels: depth, barycentrics, and one fused pass over every requested per-vertex
 # table (zero-width tables cost nothing), so a channel that is not asked for is not computed.
 # ---------------------------------------------------------------------------------------------
+
+
+@njit
+def mark_visible(tri_id, mark):
+    """mark[t] = 1 for every triangle that owns at least one sample."""
+    for sy in range(tri_id.shape[0]):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t >= 0:
+                mark[t] = 1
+
+
+@banded("faces")
+def lam_for_marked(lo, hi, clip, faces, mark, grid, lam):
+    """lam[t] (3, 3) for every marked triangle (see _lam_rows); others are left untouched."""
+    nw = grid.nw
+    nh = grid.nh
+    for t in range(lo, hi):
+        if mark[t] == 0:
+            continue
+        i0 = faces[t, 0]
+        i1 = faces[t, 1]
+        i2 = faces[t, 2]
+        r = _lam_rows(
+            (clip[i0, 0], clip[i0, 1], clip[i0, 3]),
+            (clip[i1, 0], clip[i1, 1], clip[i1, 3]),
+            (clip[i2, 0], clip[i2, 1], clip[i2, 3]),
+            nw,
+            nh,
+        )
+        lam[t, 0, 0] = r[1]
+        lam[t, 0, 1] = r[2]
+        lam[t, 0, 2] = r[3]
+        lam[t, 1, 0] = r[4]
+        lam[t, 1, 1] = r[5]
+        lam[t, 1, 2] = r[6]
+        lam[t, 2, 0] = r[7]
+        lam[t, 2, 1] = r[8]
+        lam[t, 2, 2] = r[9]
 
 
 @njit
@@ -721,18 +837,42 @@ def interp_bary(lo, hi, tri_id, lam, bary):
 
 
 @banded("tri_id")
-def interp_fused(
-    lo, hi, tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout
-):
+def interp_ndc_z(lo, hi, tri_id, lam, faces, z, ndc):
+    """OpenGL NDC depth z_clip / w_clip: z_clip interpolated as a value (``z (N,)`` float64, the
+    vertices' clip z), divided by w = 1 / Q, in float64; 1 where empty."""
+    for sy in range(lo, hi):
+        for sx in range(tri_id.shape[1]):
+            t = tri_id[sy, sx]
+            if t < 0:
+                ndc[sy, sx] = 1.0
+                continue
+            l0, l1, l2 = _lambdas(lam, t, sx, sy)
+            q = l0 + l1 + l2
+            inv_q = 1.0 / q
+            zc = (l0 * z[faces[t, 0]] + l1 * z[faces[t, 1]] + l2 * z[faces[t, 2]]) * inv_q
+            ndc[sy, sx] = zc / inv_q
+
+
+@banded("tri_id")
+def interp_fused(lo, hi, tri_id, lam, faces, n, tables, outs):
     """All requested per-vertex quantities in one pass over the samples, so each sample gathers
     its triangle's planes and indices once (on dense meshes these gathers dominate).
 
-    dtab (N, Cd): values with analytic per-pixel derivatives -> dout, dxout, dyout (nH, nW, Cd);
-    vtab (N, Cv): values only -> vout; ntab (N, 3k), k in {0, 1}: normals, renormalized -> nout.
-    wout (nH, nW, k), k in {0, 1}: depth w = 1 / Q (+inf where empty).
-    Zero-width tables cost nothing (their loops run zero times). Empty samples get 0.
-    f = P / Q and df = (dP - f dQ) / Q with d(sample)/d(pixel) = n.
+    tables.dtab (N, Cd): values with analytic per-pixel derivatives -> outs.d, outs.dx, outs.dy
+    (nH, nW, Cd); tables.vtab (N, Cv): values only -> outs.v; tables.ntab (N, 3k), k in {0, 1}:
+    normals, renormalized -> outs.normal. outs.w (nH, nW, k), k in {0, 1}: depth w = 1 / Q (+inf
+    where empty). Zero-width tables cost nothing (their loops run zero times). Empty samples get
+    0. f = P / Q and df = (dP - f dQ) / Q with d(sample)/d(pixel) = n.
     """
+    dtab = tables.dtab
+    vtab = tables.vtab
+    ntab = tables.ntab
+    dout = outs.d
+    dxout = outs.dx
+    dyout = outs.dy
+    vout = outs.v
+    nout = outs.normal
+    wout = outs.w
     cd = dtab.shape[1]
     cv = vtab.shape[1]
     k_n = ntab.shape[1] // 3
@@ -791,13 +931,21 @@ def interp_fused(
 
 
 @banded("tri_id")
-def interp_fused_full(lo, hi, tri_id, lam, faces, dtab, ntab, n, dout, dxout, dyout, nout, wout):
+def interp_fused_full(lo, hi, tri_id, lam, faces, n, tables, outs):
     """:func:`interp_fused` specialised to the full G-buffer (one 2-column table with
     derivatives, normals, depth; no plain values): the same operations in the same order, so
     bit-identical results, with the loop counts fixed at compile time (~1.5x faster).
 
-    dtab (N, 2); ntab (N, 3); dout, dxout, dyout (nH, nW, 2); nout (nH, nW, 3); wout (nH, nW, 1).
+    dtab (N, 2); ntab (N, 3); d, dx, dy (nH, nW, 2); normal (nH, nW, 3); w (nH, nW, 1); vtab and
+    v are not read.
     """
+    dtab = tables.dtab
+    ntab = tables.ntab
+    dout = outs.d
+    dxout = outs.dx
+    dyout = outs.dy
+    nout = outs.normal
+    wout = outs.w
     for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
@@ -868,17 +1016,46 @@ def mesh_ids(lo, hi, tri_id, first_tri, mesh_id):
             mesh_id[sy, sx] = lo - 1
 
 
-@banded("tri_id")
-def screen_scales(lo, hi, tri_id, duv_dx, duv_dy, tw, th, k, log2_period, floor, lod, dyadic):
-    """lod and dyadic_scale of every sample from its uv derivatives, in float64 (libm's hypot
-    and log2), 0 where empty; as ``channels.screen_scales`` computes them in numpy.
+# ---------------------------------------------------------------------------------------------
+# Screen-space scales of the uv derivatives
+# ---------------------------------------------------------------------------------------------
 
-    duv_dx, duv_dy (nH, nW, 2) float; tw, th: texture size in texels; k: the coordinate of
-    eq. 5 (1: v, 0: u); log2_period: log2 of eq. 5's w; floor: the smallest rho / |grad| taken.
-    lod (nH, nW) or (nH, 0); dyadic (nH, nW) or (nH, 0): zero-width ones are not computed.
-    rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels, lod = log2 rho (OpenGL 4.x sec. 8.14);
-    s = clip(-log2 |grad_k| - log2 w, -64, 64) (Veryovka eq. 5, d = 1 / |grad_k|, s = log2(d / w)).
+
+@njit
+def gl_lod(dx, dy, texels_u, texels_v):
+    """The isotropic LOD of OpenGL 4.x sec. 8.14 for uv derivatives ``dx = (du/dx, dv/dx)``,
+    ``dy = (du/dy, dv/dy)`` per pixel and a ``texels_u x texels_v`` texture: lambda = log2 rho,
+    rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels (libm's hypot and log2), rho at least
+    ``LOD_FLOOR``."""
+    rho = max(
+        math.hypot(dx[0] * texels_u, dx[1] * texels_v),
+        math.hypot(dy[0] * texels_u, dy[1] * texels_v),
+    )
+    return math.log2(max(rho, LOD_FLOOR))
+
+
+@njit
+def dyadic_scale_of(gx, gy, log2_period):
+    """Veryovka eq. 5 with d = 1 / |grad_k| for the gradient ``(gx, gy)`` of the line coordinate
+    per pixel: s = log2(d / w) = -log2 |grad_k| - log2 w, |grad_k| at least ``LOD_FLOOR``, s
+    clipped to [-64, 64] (finite even where the coordinate is constant on screen)."""
+    s = -math.log2(max(math.hypot(gx, gy), LOD_FLOOR)) - log2_period  # eq. 5
+    return min(max(s, -64.0), 64.0)
+
+
+@banded("tri_id")
+def screen_scales(lo, hi, tri_id, duv_dx, duv_dy, scales, lod, dyadic):
+    """lod and dyadic_scale of every sample from its uv derivatives (as stored, in float64),
+    0 where empty.
+
+    duv_dx, duv_dy (nH, nW, 2) float; lod (nH, nW) or (nH, 0); dyadic (nH, nW) or (nH, 0):
+    zero-width ones are not computed. ``gl_lod`` for ``scales.texels_u x scales.texels_v``
+    texels; ``dyadic_scale_of`` of the coordinate ``scales.coord`` (0: u, 1: v).
     """
+    tw = scales.texels_u
+    th = scales.texels_v
+    k = scales.coord
+    log2_period = scales.log2_period
     do_lod = lod.shape[1] > 0
     do_dyadic = dyadic.shape[1] > 0
     for sy in range(lo, hi):
@@ -889,12 +1066,14 @@ def screen_scales(lo, hi, tri_id, duv_dx, duv_dy, tw, th, k, log2_period, floor,
             uy = np.float64(duv_dy[sy, sx, 0])
             vy = np.float64(duv_dy[sy, sx, 1])
             if do_lod:
-                rho = max(math.hypot(ux * tw, vx * th), math.hypot(uy * tw, vy * th))
-                lod[sy, sx] = 0.0 if empty else math.log2(max(rho, floor))
+                lod[sy, sx] = 0.0 if empty else gl_lod((ux, vx), (uy, vy), tw, th)
             if do_dyadic:
-                grad = math.hypot(vx, vy) if k == 1 else math.hypot(ux, uy)
-                s = -math.log2(max(grad, floor)) - log2_period  # eq. 5
-                dyadic[sy, sx] = 0.0 if empty else min(max(s, -64.0), 64.0)
+                if empty:
+                    dyadic[sy, sx] = 0.0
+                elif k == 1:
+                    dyadic[sy, sx] = dyadic_scale_of(vx, vy, log2_period)
+                else:
+                    dyadic[sy, sx] = dyadic_scale_of(ux, uy, log2_period)
 
 
 @banded("coverage")

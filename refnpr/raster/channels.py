@@ -1,31 +1,31 @@
 """Per-sample channels interpolated from the visible triangle of each sample.
 
 Everything here reads ``tri_id`` from the visibility pass and the exact float64 vertex data: each
-channel family is computed only when asked for, and all per-vertex quantities go through one
-fused kernel so every sample gathers its triangle's data once.
+channel family is computed only when asked for and written straight into its array; the first
+family with derivatives, the first without, the normals and the depth go through one fused
+kernel, so every sample gathers its triangle's data once.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
+from .._jit import call_banded as run
 from .._memory import INTERPOLATED, needs_interpolation
 from . import _kernels as K
 from .mesh import Mesh
 
 __all__ = [
     "interpolated_channels",
-    "screen_scales",
     "attribute_names",
     "check_vertex_data",
     "INTERPOLATED",
 ]
 
-#: Smallest footprint / gradient ``lod`` and ``dyadic_scale`` take (finite logarithms).
-LOD_FLOOR = 2.0**-64
+#: Channels computed from the uv derivatives after the interpolation (``_kernels.screen_scales``).
+SCALES = frozenset({"lod", "dyadic_scale"})
 
 
 def attribute_names(meshes: Sequence[Mesh]) -> set[str]:
@@ -82,28 +82,10 @@ def _concat(meshes: Sequence[Mesh], key: str, what: str) -> np.ndarray:
     return frozen(np.ascontiguousarray(np.concatenate(arrays), dtype=np.float64))
 
 
-def _table(parts: list[tuple[str, np.ndarray]], n_rows: int) -> tuple[np.ndarray, list]:
-    """Concatenate (name, (N, C)) columns; returns the table and (name, start, stop) slices."""
-    if not parts:
-        return frozen(np.zeros((n_rows, 0))), []
-    slices, start = [], 0
-    for name, arr in parts:
-        slices.append((name, start, start + arr.shape[1]))
-        start += arr.shape[1]
-    table = parts[0][1] if len(parts) == 1 else np.concatenate([a for _, a in parts], axis=1)
-    return frozen(np.ascontiguousarray(table, dtype=np.float64)), slices
-
-
-def _column(arr: np.ndarray, start: int, stop: int, squeeze: bool) -> np.ndarray:
-    if squeeze:
-        return np.ascontiguousarray(arr[..., start])
-    if start == 0 and stop == arr.shape[-1]:
-        return arr
-    return np.ascontiguousarray(arr[..., start:stop])
-
-
 def interpolated_channels(
     wanted: set[str],
+    dest: dict[str, np.ndarray],
+    scratch,
     *,
     meshes: Sequence[Mesh],
     positions: np.ndarray,
@@ -111,148 +93,98 @@ def interpolated_channels(
     clip: np.ndarray,
     qplane: np.ndarray,
     tri_id: np.ndarray,
-    n: int,
-    width: int,
-    height: int,
+    grid: K.Grid,
     dtype: np.dtype,
-    texture_size: tuple[int, int] | None,
-    line_period: float,
-    dyadic_coord: str,
-) -> dict[str, np.ndarray]:
+    scales: K.Scales,
+    depth_done: bool = False,
+) -> None:
     """depth, ndc_z, bary, position, normal, uv and their derivatives, lod, dyadic_scale and
-    vertex attributes, for the samples of ``tri_id`` (nH, nW); only those in ``wanted``."""
+    vertex attributes (those in ``wanted``) for the samples of ``tri_id`` (nH, nW), written into
+    the arrays of ``dest`` (one per channel of ``wanted``: the arrays of ``out``, or fresh ones).
+
+    The first family with derivatives and the first without go through one fused pass with
+    the normals and the depth, every further family through a pass of its own (each column is
+    computed alone: the same values as in one table); ``lod`` and ``dyadic_scale`` from the uv
+    derivatives as stored. ``scratch.get(key, shape, dtype)`` gives work buffers: the derivatives
+    of uv when only ``lod`` or ``dyadic_scale`` asks for them, the per-triangle planes.
+    ``depth_done``: the visibility pass wrote ``depth``.
+    """
     nh, nw = tri_id.shape
-    out: dict[str, np.ndarray] = {}
     attrs = attribute_names(meshes)
-    need_depth = "depth" in wanted or "ndc_z" in wanted
-    depth_dtype = np.float64 if "ndc_z" in wanted else dtype
     if not needs_interpolation(wanted, attrs):
-        if need_depth:  # nothing to interpolate: depth from the depth planes alone
-            depth = np.empty((nh, nw), dtype=depth_dtype)
-            K.interp_depth(tri_id, qplane, depth)
-            out["depth"] = depth.astype(dtype, copy=False)
-        return out
+        if "depth" in wanted and not depth_done:  # nothing to interpolate: the depth planes
+            run(K.interp_depth, tri_id, qplane, dest["depth"])
+        return
+    d_parts, v_parts = [], []
+    for name in ["uv", "position", *sorted(attrs)]:
+        if {f"d{name}_dx", f"d{name}_dy"} & wanted or (name == "uv" and SCALES & wanted):
+            d_parts.append(name)
+        elif name in wanted:
+            v_parts.append(name)
+
+    def values(name):
+        if name == "uv":
+            return _concat(meshes, "uv", "uv")
+        if name == "position":
+            return frozen(np.ascontiguousarray(positions, dtype=np.float64))
+        return _concat(meshes, name, name)
+
+    def target(name, key, comps):
+        if name in wanted:
+            return dest[name].reshape(nh, nw, comps)  # a view: dest is C-contiguous
+        return scratch.get(key, (nh, nw, comps), dtype)
 
     # exact perspective-correct barycentric planes, only for triangles that own a sample
     m_tris = faces.shape[0]
-    mark = np.zeros(m_tris, dtype=np.uint8)
+    mark = scratch.get("mark", (m_tris,), np.uint8, zero=True)
     K.mark_visible(tri_id, mark)
-    lam = np.empty((m_tris, 3, 3), dtype=np.float64)
-    K.lam_for_marked(clip, faces, mark, n, width, height, lam)
+    lam = scratch.get("lam", (m_tris, 3, 3), np.float64)
+    run(K.lam_for_marked, clip, faces, mark, grid, lam)
     if "bary" in wanted:
-        bary = np.empty((nh, nw, 3), dtype=dtype)
-        K.interp_bary(tri_id, lam, bary)
-        out["bary"] = bary
-
-    # which quantities, with or without derivatives
-    need_uv_d = bool({"duv_dx", "duv_dy", "lod", "dyadic_scale"} & wanted)
-    d_parts: list[tuple[str, np.ndarray]] = []
-    v_parts: list[tuple[str, np.ndarray]] = []
-    squeeze: set[str] = set()
-
-    def add(name: str, values) -> None:
-        if {f"d{name}_dx", f"d{name}_dy"} & wanted or (name == "uv" and need_uv_d):
-            d_parts.append((name, values()))
-        elif name in wanted:
-            v_parts.append((name, values()))
-
-    add("uv", lambda: _concat(meshes, "uv", "uv"))
-    add("position", lambda: positions)
-    for a in sorted(attrs):
-        add(a, lambda a=a: _concat(meshes, a, a))
-        if meshes[0].attributes[a].ndim == 1:
-            squeeze.add(a)
+        run(K.interp_bary, tri_id, lam, dest["bary"])
     if "ndc_z" in wanted:
-        v_parts.append(("z_clip", frozen(np.ascontiguousarray(clip[:, 2:3]))))
-    dtab, d_slices = _table(d_parts, positions.shape[0])
-    vtab, v_slices = _table(v_parts, positions.shape[0])
-    ntab = _concat(meshes, "normals", "normal") if "normal" in wanted else _NONE
+        z = frozen(np.ascontiguousarray(clip[:, 2]))
+        run(K.interp_ndc_z, tri_id, lam, faces, z, dest["ndc_z"])
+    zero = np.empty((nh, nw, 0), dtype)
 
-    dout = np.empty((nh, nw, dtab.shape[1]), dtype=dtype)
-    dxout = np.empty_like(dout)
-    dyout = np.empty_like(dout)
-    vout = np.empty((nh, nw, vtab.shape[1]), dtype=np.float64 if "ndc_z" in wanted else dtype)
-    nout = np.empty((nh, nw, ntab.shape[1]), dtype=dtype)
-    wout = np.empty((nh, nw, 1 if need_depth else 0), dtype=depth_dtype)
-    K.interp_fused(tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout)
-    if need_depth:
-        depth = wout.reshape(nh, nw)  # w = 1 / Q, +inf where empty
-        if "depth" in wanted:
-            out["depth"] = depth.astype(dtype, copy=False)
+    def d_family(name):
+        tab = values(name)
+        c = tab.shape[1]
+        outs = (target(name, f"dval:{name}", c),)
+        return tab, outs + tuple(target(f"d{name}_d{x}", f"d{x}:{name}", c) for x in "xy")
 
-    internal: dict[str, np.ndarray] = {}
-    for name, a, b in d_slices:
-        sq = name in squeeze
-        internal[name] = _column(dout, a, b, sq)
-        internal[f"d{name}_dx"] = _column(dxout, a, b, sq)
-        internal[f"d{name}_dy"] = _column(dyout, a, b, sq)
-    for name, a, b in v_slices:
-        internal[name] = _column(vout, a, b, name in squeeze)
+    def v_family(name):
+        tab = values(name)
+        return tab, target(name, f"vval:{name}", tab.shape[1])
+
+    dtab = vtab = ntab = _NONE
+    dout = dxout = dyout = vout = nout = wout = zero
+    if d_parts:
+        dtab, (dout, dxout, dyout) = d_family(d_parts[0])
+    if v_parts:
+        vtab, vout = v_family(v_parts[0])
     if "normal" in wanted:
-        out["normal"] = nout
-    if "ndc_z" in wanted:
-        covered = tri_id >= 0
-        z = internal.pop("z_clip")[..., 0]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            out["ndc_z"] = np.where(covered, z / np.where(covered, depth, 1.0), 1.0).astype(dtype)
-    for key, arr in internal.items():
-        if key in wanted:
-            out[key] = arr.astype(dtype, copy=False)
-
-    if need_uv_d and {"lod", "dyadic_scale"} & wanted:
-        out.update(
-            screen_scales(
-                wanted,
-                internal["duv_dx"],
-                internal["duv_dy"],
-                tri_id,
-                dtype=dtype,
-                texture_size=texture_size,
-                line_period=line_period,
-                dyadic_coord=dyadic_coord,
-            )
-        )
-    return out
-
-
-def screen_scales(
-    wanted: set[str],
-    duv_dx: np.ndarray,
-    duv_dy: np.ndarray,
-    tri_id: np.ndarray,
-    *,
-    dtype: np.dtype,
-    texture_size: tuple[int, int] | None,
-    line_period: float,
-    dyadic_coord: str,
-) -> dict[str, np.ndarray]:
-    """``lod`` and ``dyadic_scale`` (those in ``wanted``), (nH, nW) of ``dtype``, from the
-    uv derivatives ``duv_dx, duv_dy (nH, nW, 2)`` as stored (``dtype``); 0 where empty.
-
-    The numpy form, for sets with ``ndc_z`` and as the tests' oracle of the kernel
-    ``_kernels.screen_scales`` the other sets take: the same operations, but numpy's ``log2``
-    may be a SIMD one (AVX-512) within an ulp of libm's, so the two can differ by an ulp in
-    float64 (not, in practice, after rounding to float32)."""
-    out: dict[str, np.ndarray] = {}
-    duv_dx = duv_dx.astype(np.float64)
-    duv_dy = duv_dy.astype(np.float64)
-    empty = tri_id < 0
-    if "lod" in wanted:
-        tw, th = texture_size
-        # OpenGL 4.x sec. 8.14: rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels, lambda = log2 rho
-        rho = np.maximum(
-            np.hypot(duv_dx[..., 0] * tw, duv_dx[..., 1] * th),
-            np.hypot(duv_dy[..., 0] * tw, duv_dy[..., 1] * th),
-        )
-        lod = np.log2(np.maximum(rho, LOD_FLOOR))
-        lod[empty] = 0.0
-        out["lod"] = lod.astype(dtype)
-    if "dyadic_scale" in wanted:
-        k = 1 if dyadic_coord == "v" else 0
-        grad = np.hypot(duv_dx[..., k], duv_dy[..., k])
-        # Veryovka eq. 5: d = 1/|grad v| (pixels between iso-lines v and v + 1), s = log2(d / w)
-        s = -np.log2(np.maximum(grad, LOD_FLOOR)) - math.log2(line_period)
-        s = np.clip(s, -64.0, 64.0)  # finite even where v is constant on screen
-        s[empty] = 0.0
-        out["dyadic_scale"] = s.astype(dtype)
-    return out
+        ntab = _concat(meshes, "normals", "normal")
+        nout = dest["normal"].reshape(nh, nw, ntab.shape[1])
+    if "depth" in wanted:
+        wout = dest["depth"].reshape(nh, nw, 1)
+    tables = K.Tables(dtab, vtab, ntab)
+    outs = K.Outs(dout, dxout, dyout, vout, nout, wout)
+    n = grid.n
+    if dtab.shape[1] == 2 and vtab.shape[1] == 0 and ntab.shape[1] == 3 and wout.shape[2] == 1:
+        # the full G-buffer (uv + derivatives, normal, depth): the specialised kernel
+        run(K.interp_fused_full, tri_id, lam, faces, n, tables, outs)
+    elif dtab.shape[1] + vtab.shape[1] + ntab.shape[1] + wout.shape[2] > 0:
+        run(K.interp_fused, tri_id, lam, faces, n, tables, outs)
+    for name in d_parts[1:]:
+        tab, (d, dx, dy) = d_family(name)
+        outs = K.Outs(d, dx, dy, zero, zero, zero)
+        run(K.interp_fused, tri_id, lam, faces, n, K.Tables(tab, _NONE, _NONE), outs)
+    for name in v_parts[1:]:
+        tab, v = v_family(name)
+        outs = K.Outs(zero, zero, zero, v, zero, zero)
+        run(K.interp_fused, tri_id, lam, faces, n, K.Tables(_NONE, tab, _NONE), outs)
+    if SCALES & wanted:  # from the uv derivatives as stored (d_parts[0] is uv)
+        lod = dest["lod"] if "lod" in wanted else np.empty((nh, 0), dtype)
+        dyadic = dest["dyadic_scale"] if "dyadic_scale" in wanted else np.empty((nh, 0), dtype)
+        run(K.screen_scales, tri_id, dxout, dyout, scales, lod, dyadic)

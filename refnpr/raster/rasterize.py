@@ -9,17 +9,10 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from .. import _memory
+from .._jit import call_banded as run
 from . import _kernels as K
 from .camera import Camera
-from .channels import (
-    _NONE,
-    LOD_FLOOR,
-    _concat,
-    attribute_names,
-    check_vertex_data,
-    frozen,
-    interpolated_channels,
-)
+from .channels import attribute_names, check_vertex_data, frozen, interpolated_channels
 from .gbuffer import BUILTIN_CHANNELS, GBuffer
 from .mesh import Mesh
 
@@ -120,10 +113,6 @@ def _parse_channels(channels: Iterable[str], attr_names: set[str]) -> set[str]:
 
 
 _INT_CHANNELS = frozenset({"tri_id", "mesh_id", "coverage_count"})
-#: Interpolated channels the in-place path cannot write straight into ``out`` (computed, then copied).
-_COPIED = frozenset({"ndc_z"})
-#: Channels computed from the uv derivatives after the interpolation (``screen_scales``).
-_SCALES = frozenset({"lod", "dyadic_scale"})
 #: Channels of the visibility pass (not of the interpolation).
 _NOT_INTERPOLATED = frozenset({"tri_id", "mesh_id", "coverage", "coverage_count"})
 
@@ -219,125 +208,6 @@ class _Scratch:
             a = np.empty(size + size // 4 + 1024, dtype)
             self.store[key] = a
         return a[:size]
-
-
-def _interp_into(
-    wanted,
-    dest,
-    scratch,
-    *,
-    meshes,
-    positions,
-    faces,
-    clip,
-    qplane,
-    tri_id,
-    n,
-    width,
-    height,
-    dtype,
-    texture_size=None,
-    line_period=1.0,
-    dyadic_coord="v",
-    depth_done=False,
-) -> bool:
-    """Interpolated channels written straight into ``dest`` (the arrays of ``out``, or fresh ones).
-
-    Mirrors :func:`refnpr.raster.channels.interpolated_channels` (same kernels, same
-    per-column arithmetic, so bit-identical values) without its combined tables and the copies
-    out of them: the first family with derivatives and the first without go through one fused
-    pass with the normals and depth, every further family through a pass of its own; ``lod``
-    and ``dyadic_scale`` from the uv derivatives so written. Returns False (nothing written) for
-    sets with ``ndc_z``.
-    """
-    if wanted & _COPIED:
-        return False
-    nh, nw = tri_id.shape
-    attrs = attribute_names(meshes)
-    if not _memory.needs_interpolation(wanted, attrs):
-        if "depth" in wanted and not depth_done:  # (else written by the visibility pass)
-            K.interp_depth(tri_id, qplane, dest["depth"])
-        return True
-    d_parts, v_parts = [], []
-    for name in ["uv", "position", *sorted(attrs)]:
-        if {f"d{name}_dx", f"d{name}_dy"} & wanted or (name == "uv" and _SCALES & wanted):
-            d_parts.append(name)
-        elif name in wanted:
-            v_parts.append(name)
-
-    def values(name):
-        if name == "uv":
-            return _concat(meshes, "uv", "uv")
-        if name == "position":
-            return frozen(np.ascontiguousarray(positions, dtype=np.float64))
-        return _concat(meshes, name, name)
-
-    def target(name, key, comps):
-        if name in wanted:
-            return dest[name].reshape(nh, nw, comps)  # a view: dest is C-contiguous
-        return scratch.get(key, (nh, nw, comps), dtype)
-
-    m_tris = faces.shape[0]
-    mark = scratch.get("mark", (m_tris,), np.uint8, zero=True)
-    K.mark_visible(tri_id, mark)
-    lam = scratch.get("lam", (m_tris, 3, 3), np.float64)
-    K.lam_for_marked(clip, faces, mark, n, width, height, lam)
-    if "bary" in wanted:
-        K.interp_bary(tri_id, lam, dest["bary"])
-    none = _NONE
-    dtab = vtab = none
-    dout = dxout = dyout = vout = np.empty((nh, nw, 0), dtype)
-
-    def d_family(name):
-        tab = values(name)
-        c = tab.shape[1]
-        outs = (target(name, f"dval:{name}", c),)
-        return tab, outs + tuple(target(f"d{name}_d{x}", f"d{x}:{name}", c) for x in "xy")
-
-    def v_family(name):
-        tab = values(name)
-        return tab, target(name, f"vval:{name}", tab.shape[1])
-
-    if d_parts:
-        dtab, (dout, dxout, dyout) = d_family(d_parts[0])
-    if v_parts:
-        vtab, vout = v_family(v_parts[0])
-    ntab, nout = none, np.empty((nh, nw, 0), dtype)
-    if "normal" in wanted:
-        ntab = _concat(meshes, "normals", "normal")
-        nout = dest["normal"].reshape(nh, nw, ntab.shape[1])
-    wout = dest["depth"].reshape(nh, nw, 1) if "depth" in wanted else np.empty((nh, nw, 0), dtype)
-    if dtab.shape[1] == 2 and vtab.shape[1] == 0 and ntab.shape[1] == 3 and wout.shape[2] == 1:
-        # the full G-buffer (uv + derivatives, normal, depth): the specialised kernel
-        K.interp_fused_full(tri_id, lam, faces, dtab, ntab, n, dout, dxout, dyout, nout, wout)
-    else:
-        K.interp_fused(
-            tri_id, lam, faces, dtab, vtab, ntab, n, dout, dxout, dyout, vout, nout, wout
-        )
-    zero = np.empty((nh, nw, 0), dtype)
-    for name in d_parts[1:]:  # each column is computed alone: the same values as one table
-        tab, (d, dx, dy) = d_family(name)
-        K.interp_fused(tri_id, lam, faces, tab, none, none, n, d, dx, dy, zero, zero, zero)
-    for name in v_parts[1:]:
-        tab, v = v_family(name)
-        K.interp_fused(tri_id, lam, faces, none, tab, none, n, zero, zero, zero, v, zero, zero)
-    if _SCALES & wanted:  # from the uv derivatives as stored (d_parts[0] is uv)
-        tw, th = texture_size if "lod" in wanted else (1, 1)
-        lod = dest["lod"] if "lod" in wanted else np.empty((nh, 0), dtype)
-        dyadic = dest["dyadic_scale"] if "dyadic_scale" in wanted else np.empty((nh, 0), dtype)
-        K.screen_scales(
-            tri_id,
-            dxout,
-            dyout,
-            float(tw),
-            float(th),
-            1 if dyadic_coord == "v" else 0,
-            math.log2(line_period),
-            LOD_FLOOR,
-            lod,
-            dyadic,
-        )
-    return True
 
 
 def rasterize(
@@ -463,7 +333,7 @@ def rasterize(
             "edge functions; keep n * max(width, height) below 1,000,000"
         )
 
-    # ---- vertex stage (numpy) -------------------------------------------------------------
+    # ---- vertex stage ----------------------------------------------------------------------
     if len(meshes) == 1:
         positions, faces = meshes[0].positions, meshes[0].faces
     else:
@@ -472,55 +342,49 @@ def rasterize(
         faces = np.concatenate([m.faces + o for m, o in zip(meshes, offsets[:-1], strict=True)])
     positions, faces = frozen(positions), frozen(faces)  # one kernel specialisation (see frozen)
     first_tri = np.cumsum([0] + [m.n_faces for m in meshes]).astype(np.int64)
-    vp = camera.projection_matrix(width, height) @ camera.view_matrix()
+    vp = camera.view_projection(width, height)
     n_verts = positions.shape[0]
-    clip = scratch.get("clip", (n_verts, 4), np.float64)
-    snapped = scratch.get("snapped", (n_verts, 2), np.int32)
-    outcode = scratch.get("outcode", (n_verts,), np.uint8)
-    K.transform_vertices(positions, vp, width, height, guard, clip, snapped, outcode)
-    timings: dict[str, float] = {"vertex": time.perf_counter() - t_start}
-
-    # ---- triangle setup (with the first binning pass), clipping -----------------------------
-    t0 = time.perf_counter()
     m_tris = faces.shape[0]
     shift = tile.bit_length() - 1
     tiles_x = -(-nw // tile)
     tiles_y = -(-nh // tile)
     n_tiles = tiles_x * tiles_y
-    chunk = max(1, -(-m_tris // _BIN_CHUNKS))
-    counts = scratch.get("counts", (_BIN_CHUNKS, n_tiles), np.int64, zero=True)
-    coords = scratch.get("coords", (m_tris, 6), np.int32)
-    bbox = scratch.get("bbox", (m_tris, 4), np.int32)
-    status = scratch.get("status", (m_tris,), np.int8)
-    qplane = scratch.get("qplane", (m_tris, 3), np.float64)
-    cull = int(cull_backfaces)
-    K.setup_triangles(
-        clip,
-        snapped,
-        outcode,
-        faces,
-        n,
-        width,
-        height,
-        cull,
-        chunk,
-        shift,
-        tiles_x,
-        coords,
-        bbox,
-        status,
-        qplane,
-        counts,
+    grid = K.Grid(width, height, n, nw, nh, tile, shift, tiles_x)
+    setup = K.Setup(float(guard), int(cull_backfaces), max(1, -(-m_tris // _BIN_CHUNKS)))
+    verts = K.Verts(
+        scratch.get("clip", (n_verts, 4), np.float64),
+        scratch.get("snapped", (n_verts, 2), np.int32),
+        scratch.get("outcode", (n_verts,), np.uint8),
     )
-    todo = np.flatnonzero(status == 2)
+    run(K.transform_vertices, positions, vp, grid, setup.guard, verts)
+    timings: dict[str, float] = {"vertex": time.perf_counter() - t_start}
+
+    # ---- triangle setup (with the first binning pass), clipping -----------------------------
+    t0 = time.perf_counter()
+    counts = scratch.get("counts", (_BIN_CHUNKS, n_tiles), np.int64, zero=True)
+    tris = K.Tris(
+        scratch.get("coords", (m_tris, 6), np.int32),
+        scratch.get("bbox", (m_tris, 4), np.int32),
+        scratch.get("status", (m_tris,), np.int8),
+        scratch.get("qplane", (m_tris, 3), np.float64),
+    )
+    run(K.setup_triangles, verts, faces, grid, setup, tris, counts)
+    todo = np.flatnonzero(tris.status == 2)
     if todo.size:
-        sub, sub_bbox, sub_parent, sub_first = K.clip_triangles(
-            clip, faces, todo, width, height, guard, cull, n, max(1, todo.size * (K.MAX_POLY - 2))
+        max_out = max(1, todo.size * (K.MAX_POLY - 2))
+        coords, bbox, parent, first = K.clip_triangles(
+            verts.clip, faces, todo, grid, setup, max_out
         )
-        K.bin_count_clipped(todo, sub_first, sub_bbox, chunk, shift, tiles_x, counts)
+        pieces = K.Pieces(todo, first, coords, bbox, parent)
+        K.bin_count_clipped(pieces, grid, setup.chunk, counts)
     else:  # nothing to clip: what clip_triangles returns for no triangles, without compiling it
-        sub, sub_bbox = np.empty((0, 6), np.int32), np.empty((0, 4), np.int32)
-        sub_parent, sub_first = np.empty(0, np.int64), np.zeros(1, np.int64)
+        pieces = K.Pieces(
+            todo,
+            np.zeros(1, np.int64),
+            np.empty((0, 6), np.int32),
+            np.empty((0, 4), np.int32),
+            np.empty(0, np.int64),
+        )
     timings["setup"] = time.perf_counter() - t0
 
     # ---- binning: per-tile primitive lists in triangle order ---------------------------------
@@ -529,16 +393,17 @@ def rasterize(
     starts = np.concatenate([[0], np.cumsum(counts.T.ravel())])
     offsets = np.ascontiguousarray(starts[:-1].reshape(n_tiles, _BIN_CHUNKS).T)
     tile_first = np.ascontiguousarray(starts[::_BIN_CHUNKS])  # (n_tiles + 1,)
-    lists = scratch.grow(
-        "lists", int(starts[-1]), np.int32 if m_tris + sub.shape[0] < 2**31 else np.int64
-    )
-    K.bin_fill(status, bbox, todo, sub_first, sub_bbox, chunk, shift, tiles_x, offsets, lists)
+    n_prims = m_tris + pieces.coords.shape[0]
+    lists = scratch.grow("lists", int(starts[-1]), np.int32 if n_prims < 2**31 else np.int64)
+    run(K.bin_fill, tris, pieces, grid, setup, offsets, lists)
+    bins = K.Bins(tile_first, lists)
     timings["bin"] = time.perf_counter() - t0
 
     # ---- visibility ------------------------------------------------------------------------
     t0 = time.perf_counter()
-    q_lo = (1.0 - _DEPTH_CLIP_SLACK) / camera.far  # per-sample near/far clip on Q = 1/w
-    q_hi = (1.0 + _DEPTH_CLIP_SLACK) / camera.near
+    depth_range = K.DepthRange(  # per-sample near/far clip on Q = 1/w
+        (1.0 - _DEPTH_CLIP_SLACK) / camera.far, (1.0 + _DEPTH_CLIP_SLACK) / camera.near
+    )
     if out is not None and "tri_id" in wanted:
         tri_id = out.channels["tri_id"]
     else:
@@ -550,31 +415,12 @@ def rasterize(
         "depth" in wanted
         and dtype == np.float32
         and not _memory.needs_interpolation(wanted, attribute_names(meshes))
-        and not wanted & _COPIED
     ):
         if out is not None:
             depth_here = out.channels["depth"]
         else:
             depth_here = np.empty((nh, nw), dtype=np.float32)
-    K.raster_visibility(
-        coords,
-        bbox,
-        sub,
-        sub_bbox,
-        sub_parent,
-        qplane,
-        q_lo,
-        q_hi,
-        tile_first,
-        lists,
-        n,
-        nw,
-        nh,
-        tile,
-        tiles_x,
-        tri_id,
-        depth_here,
-    )
+    run(K.raster_visibility, tris, pieces, bins, grid, depth_range, K.Visible(tri_id, depth_here))
     timings["visibility"] = time.perf_counter() - t0
 
     # ---- channels ----------------------------------------------------------------------------
@@ -592,59 +438,40 @@ def rasterize(
             cc.fill(0)
         else:
             cc = np.zeros((nh, nw), dtype=np.int32)
-        K.raster_count(
-            coords,
-            bbox,
-            sub,
-            sub_bbox,
-            sub_parent,
-            qplane,
-            q_lo,
-            q_hi,
-            tile_first,
-            lists,
-            n,
-            nw,
-            nh,
-            tile,
-            tiles_x,
-            cc,
-        )
+        run(K.raster_count, tris, pieces, bins, grid, depth_range, cc)
         res["coverage_count"] = cc
     if "mesh_id" in wanted:
         mesh_id = dest["mesh_id"] if "mesh_id" in dest else np.empty((nh, nw), dtype=np.int32)
-        K.mesh_ids(tri_id, frozen(first_tri), mesh_id)
+        run(K.mesh_ids, tri_id, frozen(first_tri), mesh_id)
         res["mesh_id"] = mesh_id
     if "coverage" in wanted:
         cov = dest["coverage"] if "coverage" in dest else np.empty((height, width), dtype=dtype)
-        K.resolve_coverage(tri_id, n, cov)
+        run(K.resolve_coverage, tri_id, n, cov)
         res["coverage"] = cov
-    interp = dict(
+    if out is None:  # fresh arrays, written in place all the same
+        layout = _layout(wanted, meshes, n, width, height, dtype)
+        dest = {k: np.empty(*layout[k]) for k in wanted - res.keys() - _NOT_INTERPOLATED}
+        dest.update(res)  # (depth from the visibility pass)
+    tw, th = texture_size if "lod" in wanted else (1, 1)
+    scales = K.Scales(float(tw), float(th), 1 if dyadic_coord == "v" else 0, math.log2(line_period))
+    interpolated_channels(
+        wanted,
+        dest,
+        scratch,
         meshes=meshes,
         positions=positions,
         faces=faces,
-        clip=clip,
-        qplane=qplane,
+        clip=verts.clip,
+        qplane=tris.qplane,
         tri_id=tri_id,
-        n=n,
-        width=width,
-        height=height,
+        grid=grid,
         dtype=dtype,
+        scales=scales,
+        depth_done=depth_done,
     )
-    scales = dict(texture_size=texture_size, line_period=line_period, dyadic_coord=dyadic_coord)
-    if out is None and not wanted & _COPIED:  # fresh arrays, written in place all the same
-        layout = _layout(wanted, meshes, n, width, height, dtype)
-        fresh = {k: np.empty(*layout[k]) for k in wanted - res.keys() - _NOT_INTERPOLATED}
-        fresh.update(res)  # (depth from the visibility pass)
-        _interp_into(wanted, fresh, scratch, **interp, **scales, depth_done=depth_done)
-        res.update(fresh)
-    elif out is not None and _interp_into(
-        wanted, dest, scratch, **interp, **scales, depth_done=depth_done
-    ):
-        pass
+    if out is None:
+        res.update(dest)
     else:
-        res.update(interpolated_channels(wanted, **interp, **scales))
-    if out is not None:
         for key, arr in res.items():
             if arr is not dest[key]:
                 np.copyto(dest[key], arr)
