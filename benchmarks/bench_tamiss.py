@@ -96,7 +96,6 @@ from refnpr.styles.tamiss import (  # noqa: E402
     run_pipeline,
     stroke_geometry,
 )
-from refnpr.styles.tamiss.strokes import take_fit  # noqa: E402
 
 #: The ``options`` section's variants: label -> parameters over the scene's tamiss style. The
 #: default averages 4 frames carried along the motion; each other remedy is measured on the
@@ -349,7 +348,7 @@ def bench_jitter(args) -> dict:
                 continue
             i0 = np.searchsorted(r0.stroke_ids, ids)
             i1 = np.searchsorted(r1.stroke_ids, ids)
-            f0, f1 = take_fit(r0.fit, i0), take_fit(r1.fit, i1)
+            f0, f1 = r0.fit.take(i0), r1.fit.take(i1)
             g = stroke_geometry(ids, params.field)
             for end in ("t_min", "t_max"):
                 te = np.asarray(getattr(f0, end), dtype=np.float64)

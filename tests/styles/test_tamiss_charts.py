@@ -20,7 +20,6 @@ from refnpr.styles.tamiss.charts import (
     SYMMETRIES,
     chart_adjacency,
     chart_layout,
-    chart_orientation,
     vertex_frames,
 )
 from refnpr.styles.tamiss.compose import field_channels
@@ -70,7 +69,7 @@ def test_orientation_undoes_a_swapped_or_flipped_chart(k):
     mesh = _two_charts(SYMMETRIES[k])
     labels = np.array([0, 0, 1, 1])
     np.testing.assert_array_equal(chart_adjacency(mesh, labels), [[0, 1]])
-    orient = chart_orientation(mesh, labels)
+    orient = chart_layout(mesh, labels).symmetry
     assert orient[0] == 0  # the root keeps its mapping
     # oriented, both charts run u along x and v along y: their frames agree
     frames = vertex_frames(mesh)
@@ -124,7 +123,7 @@ def test_orientation_skips_collapsed_edges_and_unshared_charts():
     from refnpr.styles.tamiss.gather import _mesh_charts
 
     labels = _mesh_charts(mesh)
-    orient = chart_orientation(mesh, labels)
+    orient = chart_layout(mesh, labels).symmetry
     assert orient.shape == (32,)
     # the lid and the body keep u around the axis on every patch: at most flips, never a swap
     body_and_lid = [c for c in range(32) if c not in range(12, 20)]
@@ -165,7 +164,7 @@ def test_hatching_direction_is_continuous_across_the_teapots_patch_borders():
     _, gb = render(sc, st, 384, 288, return_gbuffer=True)
     mesh = sc.world_meshes()[0]
     labels = scene_charts(sc)
-    orient = chart_orientation(mesh, labels)
+    orient = chart_layout(mesh, labels).symmetry
     adj = chart_adjacency(mesh, labels)
     flipped = adj[orient[adj[:, 0]] != orient[adj[:, 1]]]
     assert len(flipped) >= 4

@@ -1,4 +1,4 @@
-"""The tam and tamiss defaults give a readable drawing at common sizes (issue 13, defect 7a).
+"""The tam and tamiss defaults give a readable drawing at common sizes.
 
 Measured on the teapot-on-a-floor scene at 256 x 192 and 768 x 576, per covered sample, against
 the darkness the strokes reproduce (1 - diffuse luminance, the styles' tone): ink on the shadowed

@@ -23,7 +23,6 @@ from refnpr.styles.tamiss import (
     run_pipeline,
     stroke_geometry,
 )
-from refnpr.styles.tamiss.strokes import take_fit
 
 CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal", "bary", "position",
             "dposition_dx", "dposition_dy"]  # fmt: skip
@@ -172,12 +171,12 @@ def test_stroke_cut_by_the_silhouette_is_extended_with_overdraw():
     od = runs["overdraw"]
     ends = od.segments[cut, 0, 1]
     ex_edge, _ = proj(np.full(cut.sum(), 0.65), g.q[cut])
-    cx, cy, _, _ = centreline(take_fit(od.fit, np.flatnonzero(cut)), ends[:, None])
+    cx, cy, _, _ = centreline(od.fit.take(np.flatnonzero(cut)), ends[:, None])
     assert np.all(cx[:, 0] > ex_edge + 5.0) and np.all(cx[:, 0] < ex_edge + 7.0)
     # whole stroke: the drawn end is the projection of t = 1 (a straight line on this plane)
     st = runs["stroke"]
     np.testing.assert_array_equal(st.segments[cut, 0], np.tile([0.0, 1.0], (cut.sum(), 1)))
-    cx, cy, _, _ = centreline(take_fit(st.fit, np.flatnonzero(cut)), np.ones((cut.sum(), 1)))
+    cx, cy, _, _ = centreline(st.fit.take(np.flatnonzero(cut)), np.ones((cut.sum(), 1)))
     ex, ey = proj(g.p_end[cut], g.q[cut])
     assert np.hypot(cx[:, 0] - ex, cy[:, 0] - ey).max() < 1.0
     # ink outside the object where the strokes run past it

@@ -25,6 +25,7 @@ from refnpr.styles.tamiss.gather import Fragments, field_inputs, gather_fragment
 from refnpr.styles.tamiss.raster import rasterize_strips
 from refnpr.styles.tamiss.strokes import Strips
 
+from ._oracles import light_dirs
 from ._threads import outputs_per_thread_count
 
 CHANNELS = ["uv", "duv_dx", "duv_dy", "tri_id", "mesh_id", "normal", "bary", "position",
@@ -101,7 +102,7 @@ def _reference_inputs(gb, scene, *, constant_tone=None, derivatives="smooth", or
         m_a = np.array([o.material.ambient for o in objs], dtype=np.float64)[mesh_id]
         m_d = np.array([o.material.diffuse for o in objs], dtype=np.float64)[mesh_id]
         rgb = m_a * np.asarray(scene.ambient, dtype=np.float64)
-        for light_dir, color in ctx.light_dirs(sel):
+        for light_dir, color in light_dirs(ctx, sel):
             rgb = rgb + m_d * lighting.diffuse(n, light_dir)[..., None] * color
         lum = (rgb[:, 0] * 0.2126 + rgb[:, 1] * 0.7152) + rgb[:, 2] * 0.0722  # r, g, then b
         dark = 1.0 - np.clip(lum, 0.0, 1.0)

@@ -1,4 +1,4 @@
-"""TAMISS state across frames (issue 12, part 2) and the jitter remedies' parameters (part 5).
+"""TAMISS state across frames and the parameters of the jitter remedies.
 
 Oracles: the pipeline's pre-existing explicit API (``run_pipeline(table=..., history=...)`` with
 objects kept by hand), naive per-point evaluation of cubics, and the default style's frame 0.

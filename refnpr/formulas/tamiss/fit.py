@@ -5,7 +5,7 @@ Private helper of :mod:`refnpr.formulas.tamiss` (which re-exports the public nam
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -50,6 +50,10 @@ class StrokeFit:
     @property
     def batch_shape(self) -> tuple:
         return self.c_x.shape[:-1]
+
+    def take(self, idx) -> StrokeFit:
+        """The strokes ``idx`` (an index or an index array) of a batch."""
+        return replace(self, **{k: np.asarray(np.asarray(getattr(self, k))[idx]) for k in _ARRAYS})
 
     def _expand(self, a: np.ndarray) -> np.ndarray:
         return a if self.batch_shape == () else a[..., None]
@@ -113,6 +117,7 @@ class StrokeFit:
         return (lo + half + seg * half).astype(self.c_x.dtype), count
 
 
+_ARRAYS = ("c_x", "c_y", "c_v", "t_min", "t_max", "count")
 _BASES = ("legendre", "monomial", "raw")
 
 #: Row i holds the Legendre polynomial P_i(s) in monomials (1, s, s^2, s^3).
@@ -329,13 +334,4 @@ def fit_stroke(
         centre_xy=centre_xy,
         prior_weight=prior_weight,
     )
-    return StrokeFit(
-        c_x=fit.c_x[0],
-        c_y=fit.c_y[0],
-        c_v=fit.c_v[0],
-        t_min=np.asarray(fit.t_min[0]),
-        t_max=np.asarray(fit.t_max[0]),
-        count=np.asarray(fit.count[0]),
-        basis=fit.basis,
-        prior_weight=fit.prior_weight,
-    )
+    return fit.take(0)

@@ -103,40 +103,24 @@ def _hex(v: int | np.integer) -> str:
 
 
 def _vertex_attributes(scene: Any, orient: bool) -> dict[int, dict[str, np.ndarray]]:
-    from refnpr.styles.tamiss.charts import SYMMETRIES, chart_layout, vertex_frames
-    from refnpr.styles.tamiss.gather import _mesh_charts, scene_charts
+    from refnpr.styles.tamiss.charts import SYMMETRIES
+    from refnpr.styles.tamiss.gather import scene_charts
+
+    from .tamiss import chart_vertices
 
     scene_charts(scene)  # validates the chart count (ids hold MAX_CHARTS charts)
     out: dict[int, dict[str, np.ndarray]] = {}
-    c_off = 0
-    for k, mesh in enumerate(scene.world_meshes()):
-        if mesh.uv is None:
-            raise ValueError(
-                f"scene: object {k} ({mesh.name!r}) has no uv; the tam stroke field needs uv"
-            )
-        labels = _mesh_charts(mesh)
-        faces = np.asarray(mesh.faces, dtype=np.int64)
-        n_v = mesh.positions.shape[0]
-        v_chart = np.zeros(n_v, dtype=np.int64)
-        v_chart[faces.ravel()] = np.repeat(labels, 3)
-        frames = vertex_frames(mesh)
-        if orient:
-            layout = chart_layout(mesh, labels)
-            chart = layout.group[v_chart] + c_off
-            sym = SYMMETRIES[layout.symmetry[v_chart]].reshape(n_v, 4)
-            offset = layout.offset[v_chart]
-        else:
-            chart = v_chart + c_off
-            sym = np.tile(np.array([1.0, 0.0, 0.0, 1.0]), (n_v, 1))
-            offset = np.zeros((n_v, 2))
-        out[k] = {
-            "tam_frame_u": frames[:, :, 0].astype(np.float32),
-            "tam_frame_v": frames[:, :, 1].astype(np.float32),
-            "tam_chart": chart.astype(np.float32),
-            "tam_symmetry": sym.astype(np.float32),
-            "tam_offset": offset.astype(np.float32),
+    for k, frames, v_chart, layout, c_off in chart_vertices(scene, "tam"):
+        n_v = v_chart.shape[0]
+        sym = layout.symmetry[v_chart] if orient else np.zeros(n_v, dtype=np.int64)  # identity
+        attrs = {
+            "tam_frame_u": frames[:, :, 0],
+            "tam_frame_v": frames[:, :, 1],
+            "tam_chart": (layout.group[v_chart] if orient else v_chart) + c_off,
+            "tam_symmetry": SYMMETRIES[sym].reshape(n_v, 4),
+            "tam_offset": layout.offset[v_chart] if orient else np.zeros((n_v, 2)),
         }
-        c_off += int(labels.max()) + 1 if labels.size else 0
+        out[k] = {name: a.astype(np.float32) for name, a in attrs.items()}
     return out
 
 

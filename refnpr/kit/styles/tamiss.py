@@ -29,6 +29,7 @@ stroke ids use when ``orient_charts``).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -37,9 +38,10 @@ import numpy as np
 from refnpr.styles.tamiss import field as F
 from refnpr.styles.tamiss import strokes as ST
 from refnpr.styles.tamiss.charts import SYMMETRIES, chart_layout, vertex_frames
-from refnpr.styles.tamiss.gather import _mesh_charts
+from refnpr.styles.tamiss.gather import chart_meshes
 from refnpr.styles.tamiss.params import PARAMS
 from refnpr.styles.tamiss.raster import brush_texture
+from refnpr.styles.tamiss.show import LEVEL_COLORS
 
 from .._json import jsonable
 from ..textures import ORIENTATION_ROW0_TOP, write_texture_levels
@@ -107,6 +109,21 @@ DERIVED = {
 }
 
 
+def chart_vertices(scene: Any, style: str) -> Iterator[tuple]:
+    """Per object of ``scene``: its index, vertex tangent frames (V, 3, 2) float64, chart per
+    vertex (V,) int64, :class:`~refnpr.styles.tamiss.charts.ChartLayout` and the number of its
+    first chart over the scene; an object without uv is an error naming ``style``."""
+    for k, mesh, labels, c_off in chart_meshes(scene):
+        if mesh.uv is None:
+            raise ValueError(
+                f"scene: object {k} ({mesh.name!r}) has no uv; the {style} style needs uv (the "
+                "hatching direction)"
+            )
+        v_chart = np.zeros(mesh.positions.shape[0], dtype=np.int64)
+        v_chart[np.asarray(mesh.faces, dtype=np.int64).ravel()] = np.repeat(labels, 3)
+        yield k, vertex_frames(mesh), v_chart, chart_layout(mesh, labels), c_off
+
+
 def vertex_data(scene: Any) -> dict[int, dict[str, np.ndarray]]:
     """Per object index: the per-vertex TAMISS attributes (see the module docstring).
 
@@ -122,19 +139,7 @@ def vertex_data(scene: Any) -> dict[int, dict[str, np.ndarray]]:
         tamiss_chart_offset, tamiss_chart_group.
     """
     out: dict[int, dict[str, np.ndarray]] = {}
-    c_off = 0
-    for k, mesh in enumerate(scene.world_meshes()):
-        if mesh.uv is None:
-            raise ValueError(
-                f"scene: object {k} has no uv; the tamiss style needs uv (the hatching direction)"
-            )
-        labels = _mesh_charts(mesh)
-        layout = chart_layout(mesh, labels)
-        frames = vertex_frames(mesh)
-        faces = np.asarray(mesh.faces, dtype=np.int64)
-        n_v = mesh.positions.shape[0]
-        v_chart = np.zeros(n_v, dtype=np.int64)
-        v_chart[faces.ravel()] = np.repeat(labels, 3)  # one chart per vertex (components)
+    for k, frames, v_chart, layout, c_off in chart_vertices(scene, "tamiss"):
         hi_u = frames[:, :, 0].astype(np.float32)
         hi_v = frames[:, :, 1].astype(np.float32)
         out[k] = {
@@ -144,7 +149,7 @@ def vertex_data(scene: Any) -> dict[int, dict[str, np.ndarray]]:
             "tamiss_frame_v_lo": (frames[:, :, 1] - hi_v).astype(np.float32),
             "tamiss_chart": (v_chart + c_off).astype(np.float32),
             "tamiss_chart_map": SYMMETRIES[layout.symmetry[v_chart]]
-            .reshape(n_v, 4)
+            .reshape(-1, 4)
             .astype(np.float32),
             "tamiss_chart_offset": layout.offset[v_chart].astype(np.float32),
             "tamiss_chart_group": (layout.group[v_chart] + c_off).astype(np.float32),
@@ -153,7 +158,6 @@ def vertex_data(scene: Any) -> dict[int, dict[str, np.ndarray]]:
             raise ValueError(
                 f"scene: object {k}: chart offsets {layout.offset} are not exact in float32"
             )
-        c_off += int(labels.max()) + 1 if labels.size else 0
     return out
 
 
@@ -172,15 +176,7 @@ def _constants() -> dict[str, Any]:
         "salt_end_b": ST.SALT_END_B,
         "salt_rgb": [11, 12, 13],
         "splitmix64": ["0x9E3779B97F4A7C15", "0xBF58476D1CE4E5B9", "0x94D049BB133111EB"],
-        "level_colors": [
-            [0.0, 0.0, 0.0],
-            [0.75, 0.02, 0.02],
-            [0.0, 0.2, 0.85],
-            [0.0, 0.45, 0.05],
-            [0.85, 0.35, 0.0],
-            [0.45, 0.0, 0.6],
-            [0.0, 0.45, 0.45],
-        ],
+        "level_colors": LEVEL_COLORS.tolist(),
     }
 
 
@@ -211,21 +207,17 @@ def export(
             f"(got base={style.base.name!r})"
         )
     p = style.pipeline_params
-    from refnpr.styles.tamiss.show import LEVEL_COLORS
-
     threshold = (
         p.visibility_threshold
         if p.visibility_threshold is not None
         else 0.5 / (1.0 + p.prior_weight)
     )
     tex, wrap = brush_texture(p.brush)
-    consts = _constants()
-    consts["level_colors"] = LEVEL_COLORS.tolist()
     resolved = PARAMS.resolved(
         p.values,
         visibility_threshold=float(threshold),
         brush={"name": p.brush or "solid", "role": "brush", "wrap_t": bool(wrap)},
-        constants=consts,
+        constants=_constants(),
     )
     params = jsonable(resolved, where="style 'tamiss' params")
     textures = {

@@ -4,15 +4,14 @@ The per-sample formulas are the scalar functions of :mod:`refnpr.formulas.tamiss
 field, the fit's regressors and cubic) and :mod:`refnpr.formulas.lighting` (the darkness's
 diffuse colour); the kernels compose them. Kernels take records: the frame record
 (:class:`refnpr.styles._frame.Frame`) where they read the G-buffer, the style record
-(``params.PARAMS.record`` / ``TAM_PARAMS.record``) for the parameters, and named tuples of
-arrays for the rest; they take the records' arrays into locals before their loops.
+(``params.PARAMS.record`` / ``TAM_PARAMS.record``) for the parameters, and tuples of arrays for
+the rest, unpacked into locals before their loops.
 
 * ``chart_labels``: connected components of a mesh's faces through shared vertex indices.
 * ``sample_inputs``: the per-sample field inputs straight from the G-buffer (compaction, smooth
   derivatives, chart orientation, darkness) in one pass.
 * ``tam_pass``: per sample, the anti-aliased TAM/RPTAM ink of the strokes over it
-  (``_tam_layer``: the strokes enumerated and accumulated in one loop; ``_enumerate`` where more
-  than ``_CAP`` strokes could be candidates).
+  (``_enumerate``: the strokes enumerated and accumulated in one loop).
 * ``field_gather`` / ``finish_fragments``: TAMISS fragments in one pass over sample chunks, then
   copied to their places in chunk order.
 * ``group_keys`` / ``group_sums``: grouping of fragments by stroke id (a stable argsort by
@@ -33,7 +32,7 @@ import numpy as np
 
 from refnpr._jit import banded, njit, specialised
 from refnpr.device.lights import LIGHT_POINT, light_dir
-from refnpr.device.vectors import unit_scaled
+from refnpr.device.vectors import dot, unit_scaled
 from refnpr.formulas import lighting
 from refnpr.formulas.tamiss import curve, moments
 from refnpr.formulas.tamiss import field as rptam
@@ -52,6 +51,7 @@ def _inline(scalar):
 
 _diffuse = _inline(lighting.diffuse.scalar)
 _term = _inline(lighting.illumination_term.scalar)
+_dot = _inline(dot)
 _unit_scaled = _inline(unit_scaled)
 _light_dir = _inline(light_dir)
 _darkness = _inline(rptam.darkness.scalar)
@@ -115,18 +115,6 @@ class InputTables(NamedTuple):
     smooth: bool
     orient: bool
     shade: bool
-
-
-class InputArrays(NamedTuple):
-    """The field inputs of the N covered samples (outputs of ``sample_inputs``, inputs of the
-    field kernels): uv, duv_dx, duv_dy, uv_scale (N, 2), darkness (N,), chart (N,) int64."""
-
-    uv: np.ndarray
-    duv_dx: np.ndarray
-    duv_dy: np.ndarray
-    uv_scale: np.ndarray
-    darkness: np.ndarray
-    chart: np.ndarray
 
 
 class Layers(NamedTuple):
@@ -207,16 +195,15 @@ def _smooth_duv(g, n, d, dps, flat):
     interpolated frame ``g = (dP/du, dP/dv)``: duv = (F^T F)^-1 F^T dP_n. Where the frame is
     degenerate or the view grazes (|n . D| < 0.05 |D| |n|): the rasterizer's ``flat`` values."""
     gu, gv = g
-    a00 = gu[0] * gu[0] + gu[1] * gu[1] + gu[2] * gu[2]
-    a01 = gu[0] * gv[0] + gu[1] * gv[1] + gu[2] * gv[2]
-    a11 = gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]
+    a00 = _dot(gu, gu)
+    a01 = _dot(gu, gv)
+    a11 = _dot(gv, gv)
     det = a00 * a11 - a01 * a01
     if not (det > 1e-12 * (a00 * a11) and det > 0.0):
         return flat
-    nd = n[0] * d[0] + n[1] * d[1] + n[2] * d[2]
-    dlen = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-    nlen = math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
-    if not (abs(nd) >= 0.05 * dlen * nlen and dlen > 0.0):
+    nd = _dot(n, d)
+    dlen = math.sqrt(_dot(d, d))
+    if not (abs(nd) >= 0.05 * dlen * math.sqrt(_dot(n, n)) and dlen > 0.0):
         return flat
     du_x, dv_x = _footprint_uv(gu, gv, (a00, a01, a11, det), n, d, nd, dps[0])
     du_y, dv_y = _footprint_uv(gu, gv, (a00, a01, a11, det), n, d, nd, dps[1])
@@ -227,12 +214,10 @@ def _smooth_duv(g, n, d, dps, flat):
 def _footprint_uv(gu, gv, a, n, d, nd, dp):
     """One footprint of :func:`_smooth_duv` (``a = (a00, a01, a11, det)`` of F^T F)."""
     a00, a01, a11, det = a
-    lam = (n[0] * dp[0] + n[1] * dp[1] + n[2] * dp[2]) / nd
-    p0 = dp[0] - lam * d[0]
-    p1 = dp[1] - lam * d[1]
-    p2 = dp[2] - lam * d[2]
-    r0 = gu[0] * p0 + gu[1] * p1 + gu[2] * p2
-    r1 = gv[0] * p0 + gv[1] * p1 + gv[2] * p2
+    lam = _dot(n, dp) / nd
+    pn = (dp[0] - lam * d[0], dp[1] - lam * d[1], dp[2] - lam * d[2])
+    r0 = _dot(gu, pn)
+    r1 = _dot(gv, pn)
     return (a11 * r0 - a01 * r1) / det, (a00 * r1 - a01 * r0) / det
 
 
@@ -265,12 +250,13 @@ def _frame_at(faces, frames, bary, tri, sp):
 @banded(lambda frame, tables, out, chunk_max: chunk_max.shape[0])
 def sample_inputs(lo, hi, frame, tables, out, chunk_max):
     """Per-sample field inputs of the covered samples ``tables.sample`` (flat indices of the
-    frame's grid) into ``out`` (:class:`InputArrays`): uv, flat duv_dx / duv_dy and the uv_scale
-    of the sample's object, chart ``charts[tri]``; with ``smooth`` the derivatives of
-    :func:`_smooth_duv`; with ``orient`` u' = M u + offset with M = ``sym_m[sym[tri]]`` (signed
-    permutations) on uv, the derivatives and (|M|) the scale, and chart ``group[tri]``; with
-    ``shade`` the darkness of the diffuse colour. ``chunk_max`` (chunks,) receives max |u' s|
-    over each chunk of ``_CHUNK`` samples (NaN uv: inf)."""
+    frame's grid) into ``out = (uv, duv_dx, duv_dy, uv_scale, darkness, chart)`` ((N, 2) x 4,
+    (N,), (N,) int64): uv, flat duv_dx / duv_dy and the uv_scale of the sample's object, chart
+    ``charts[tri]``; with ``smooth`` the derivatives of :func:`_smooth_duv`; with ``orient``
+    u' = M u + offset with M = ``sym_m[sym[tri]]`` (signed permutations) on uv, the derivatives
+    and (|M|) the scale, and chart ``group[tri]``; with ``shade`` the darkness of the diffuse
+    colour. ``chunk_max`` (chunks,) receives max |u' s| over each chunk of ``_CHUNK`` samples
+    (NaN uv: inf)."""
     n_all = frame.cover.size
     tri_id = frame.cover.reshape(n_all)
     mesh_id = frame.mesh_id.reshape(n_all)
@@ -289,28 +275,11 @@ def sample_inputs(lo, hi, frame, tables, out, chunk_max):
     units = frame.lights.unit
     colors = frame.lights.color
     eye = (frame.eye[0], frame.eye[1], frame.eye[2])
-    sample = tables.sample
-    bary = tables.bary
-    charts = tables.charts
-    faces = tables.faces
-    frames = tables.frames
-    sym_m = tables.sym_m
-    sym = tables.sym
-    offset = tables.offset
-    group = tables.group
-    smooth = tables.smooth
-    orient = tables.orient
-    shade = tables.shade
-    out_uv = out.uv
-    out_dx = out.duv_dx
-    out_dy = out.duv_dy
-    out_scale = out.uv_scale
-    out_dark = out.darkness
-    out_chart = out.chart
-    n_samples = sample.shape[0]
+    sample, bary, charts, faces, frames, sym_m, sym, offset, group, smooth, orient, shade = tables
+    out_uv, out_dx, out_dy, out_scale, out_dark, out_chart = out
     for ci in range(lo, hi):
         cmax = 0.0
-        for i in range(ci * _CHUNK, min(n_samples, (ci + 1) * _CHUNK)):
+        for i in range(ci * _CHUNK, min(sample.shape[0], (ci + 1) * _CHUNK)):
             sp = sample[i]
             tri = tri_id[sp]
             mi = max(mesh_id[sp], 0)
@@ -388,85 +357,51 @@ def sample_inputs(lo, hi, frame, tables, out, chunk_max):
 
 
 @njit(inline="always")
-def _enumerate(style, frame, at, band, cand):
-    """Strokes within ``band = (hw_px, end_px)`` of the sample (``frame = (p, q, d_p, d_q, s)``
-    of the layer, ``at = (rho, chart, layer)``) across and beyond their ends.
-
-    Fills the candidate arrays ``cand`` (id, t, distance across in px, signed distance past the
-    nearest end in px (negative inside the stroke), density gain, birth level) and returns their
-    number (at most the arrays' length). The gain multiplies rho in the density test: 1 for
-    levels <= L, 2^f - 1 for level L + 1, and 2^s below level 0 (s < 0: rows denser than the
-    period are thinned to keep the ink).
-    """
-    p, q, d_p, d_q, s = frame
-    rho, chart, layer = at
-    hw_px, end_px = band
-    c_id, c_t, c_dist, c_end, c_gain, c_level = cand
-    cap = c_id.shape[0]
-    if not (s == s):  # NaN scale
-        return 0
-    big_l, f, thin = _level_rule(s, style.max_level)
-    top = big_l + 1 if f > 0.0 else big_l
-    alpha = _fade_in(f)  # ink-preserving fade-in of level L + 1
-    lam = style.length
-    len_jit = style.length_jitter
-    salt_len = style.salt_length
-    n = 0
-    # divisions hoisted or made exact products (double division is slow): the same values
-    hw_q = hw_px / d_q
-    end_cells = end_px / d_p
-    for lev in range(top + 1):
-        gain = thin if lev <= big_l else alpha
-        if gain * rho <= 0.0:
-            continue
-        scale = float(1 << lev)
-        inv_scale = 1.0 / scale  # a power of two: x * inv_scale == x / scale, bit for bit
-        rows = 7.0 * scale
-        ry0 = int(math.floor((q - hw_q) * rows))
-        ry1 = int(math.floor((q + hw_q) * rows)) + 1
-        half_cells = 0.5 * lam * (1.0 + len_jit) + end_cells * scale
-        for ry in range(ry0, ry1 + 1):
-            dist = _row_distance(q, ry, rows, d_q)
-            if dist > hw_px:
-                continue
-            gy = ry // 7
-            r = ry - 7 * gy
-            kx = _KX[r]  # the base seed set's column of row r, and kx / 7
-            kx7 = _KX7[r]
-            ps = p * scale - kx7
-            gx0 = int(math.floor(ps - half_cells))
-            gx1 = int(math.floor(ps + half_cells)) + 1
-            for gx in range(gx0, gx1 + 1):
-                if not _born_at(lev, gx, gy, r, kx):
-                    continue  # inherited: enumerated at its birth level
-                sid = _pack_id(chart, layer, lev, gx, gy, r)
-                length = _stroke_length(_hash01(sid, salt_len), lam, len_jit, inv_scale)
-                t, beyond = _stroke_param(p, _stroke_start(gx, kx7, inv_scale, length), length, d_p)
-                if beyond > end_px:
-                    continue
-                if n < cap:
-                    c_id[n] = sid
-                    c_t[n] = t
-                    c_dist[n] = dist
-                    c_end[n] = beyond
-                    c_gain[n] = gain
-                    c_level[n] = lev
-                    n += 1
-    return n
+def _levels(s, max_level):
+    """L, the top level enumerated (L + 1 while it fades in), the gain of levels <= L and of
+    level L + 1 (``level_rule``, ``fade_in``) of a dyadic scale s."""
+    big_l, f, thin = _level_rule(s, max_level)
+    return big_l, big_l + 1 if f > 0.0 else big_l, thin, _fade_in(f)
 
 
 @njit(inline="always")
-def _tam_layer(style, frame, at, ink):
-    """``ink`` over the TAM strokes of one sample and layer (``frame``, ``at`` as
-    :func:`_enumerate`'s, hw_px = width (1 + width_jitter) / 2 + 0.5, end_px = 0.5), the
-    enumeration fused with the accumulation, cheapest test first. Returns the new ink, or -1.0
-    when more than ``_CAP`` strokes could have been candidates: then ``_enumerate``'s cap may
-    drop some, and the caller takes that path instead.
+def _level_rows(lev, levels, rho, q, hw_q):
+    """Level ``lev`` of ``levels`` (:func:`_levels`): the density limit rho gain of its
+    strokes, 2^lev, 2^-lev (a power of two: x * 2^-lev == x / 2^lev, bit for bit), the rows per
+    unit of q and the first and last row within ``hw_q`` of q."""
+    big_l, top, thin, alpha = levels
+    gain = thin if lev <= big_l else alpha
+    scale = float(1 << lev)
+    rows = 7.0 * scale
+    ry0 = int(math.floor((q - hw_q) * rows))
+    return gain * rho, scale, 1.0 / scale, rows, ry0, int(math.floor((q + hw_q) * rows)) + 1
 
-    Same strokes in the same order, each tested on the same values as there: a stroke is passed
-    over before its length is hashed when its cell centre is farther from p than any length
-    reaches (half the longest length plus end_px, with a margin far above rounding) or when its
-    density test fails (tau < rho gain is both modes' opacity > 0), so the ink is the same bits.
+
+@njit(inline="always")
+def _cells(ry, p, scale, half_cells):
+    """Row ``ry``'s cell row gy and row r, the base seed set's column kx = KX[r] and kx / 7, p in
+    cells of the row's seeds, and the first and last cell within ``half_cells`` of it."""
+    gy = ry // 7
+    r = ry - 7 * gy
+    kx7 = _KX7[r]
+    ps = p * scale - kx7
+    gx0 = int(math.floor(ps - half_cells))
+    return gy, r, _KX[r], kx7, ps, gx0, int(math.floor(ps + half_cells)) + 1
+
+
+@njit(inline="always")
+def _enumerate(style, frame, at, ink, capped):
+    """``ink`` over the TAM strokes of one sample and layer (``frame = (p, q, d_p, d_q, s)`` of
+    the layer, ``at = (rho, chart, layer)``): the strokes within hw_px = width (1 + width_jitter)
+    / 2 + 0.5 across and end_px = 0.5 past their ends, in the order level, row, cell.
+
+    ``capped`` False, the fast path, cheapest test first: a stroke is passed over before its
+    length is hashed when its cell centre is farther from p than any length reaches (half the
+    longest length plus end_px, with a margin far above rounding) or when its density test
+    fails (tau < rho gain is both modes' opacity > 0). Returns -1.0 when more than ``_CAP``
+    strokes could be candidates. ``capped`` True: only the first ``_CAP`` candidates (strokes
+    within the band, before the density test) ink the sample, as docs/kit.md's ``tam-field``
+    spells it. Where both return an ink it is the same bits.
     """
     p, q, d_p, d_q, s = frame
     rho, chart, layer = at
@@ -476,65 +411,52 @@ def _tam_layer(style, frame, at, ink):
     len_jit = style.length_jitter
     wid_jit = style.width_jitter
     width_px = style.width
-    fade = style.fade
     clip = style.density_mode == CLIP
-    salt_len = style.salt_length
-    salt_tone = style.salt_tone
-    salt_wid = style.salt_width
     hw_px = 0.5 * width_px * (1.0 + wid_jit) + 0.5
     end_px = 0.5
-    big_l, f, thin = _level_rule(s, style.max_level)
-    top = big_l + 1 if f > 0.0 else big_l
-    alpha = _fade_in(f)
-    seen = 0  # strokes that _enumerate could have kept (an upper bound of its count)
+    levels = _levels(s, style.max_level)
+    n = 0  # fast: strokes that could be candidates (an upper bound); capped: candidates
+    # divisions hoisted or made exact products (double division is slow): the same values
     hw_q = hw_px / d_q
     end_cells = end_px / d_p
-    for lev in range(top + 1):
-        gain = thin if lev <= big_l else alpha
-        if gain * rho <= 0.0:
+    for lev in range(levels[1] + 1):
+        limit, scale, inv_scale, rows, ry0, ry1 = _level_rows(lev, levels, rho, q, hw_q)
+        if limit <= 0.0:
             continue
-        limit = rho * gain
-        scale = float(1 << lev)
-        inv_scale = 1.0 / scale
-        rows = 7.0 * scale
-        ry0 = int(math.floor((q - hw_q) * rows))
-        ry1 = int(math.floor((q + hw_q) * rows)) + 1
         half_cells = 0.5 * lam * (1.0 + len_jit) + end_cells * scale
+        reach = 0.5 * lam * (1.0 + abs(len_jit)) + end_cells * scale
         for ry in range(ry0, ry1 + 1):
             dist = _row_distance(q, ry, rows, d_q)
             if dist > hw_px:
                 continue
-            gy = ry // 7
-            r = ry - 7 * gy
-            kx = _KX[r]  # the base seed set's column of row r, and kx / 7
-            kx7 = _KX7[r]
-            ps = p * scale - kx7
-            gx0 = int(math.floor(ps - half_cells))
-            gx1 = int(math.floor(ps + half_cells)) + 1
-            reach = 0.5 * lam * (1.0 + abs(len_jit)) + end_cells * scale
-            reach = reach + 1e-6 + 1e-9 * (abs(ps) + reach)
+            gy, r, kx, kx7, ps, gx0, gx1 = _cells(ry, p, scale, half_cells)
+            margin = reach + 1e-6 + 1e-9 * (abs(ps) + reach)
             for gx in range(gx0, gx1 + 1):
                 if not _born_at(lev, gx, gy, r, kx):
                     continue  # inherited: enumerated at its birth level
-                seen += 1
-                if seen > _CAP:
-                    return -1.0
-                if abs(ps - gx) > reach:
-                    continue  # beyond > end_px for every length
+                if not capped:
+                    n += 1
+                    if n > _CAP:
+                        return -1.0
+                    if abs(ps - gx) > margin:
+                        continue  # beyond > end_px for every length
                 sid = _pack_id(chart, layer, lev, gx, gy, r)
-                tau = _hash01(sid, salt_tone)
-                if not (tau < limit):
+                tau = _hash01(sid, style.salt_tone)
+                if not (capped or tau < limit):
                     continue  # opacity 0 in both modes
-                length = _stroke_length(_hash01(sid, salt_len), lam, len_jit, inv_scale)
+                length = _stroke_length(_hash01(sid, style.salt_length), lam, len_jit, inv_scale)
                 t, beyond = _stroke_param(p, _stroke_start(gx, kx7, inv_scale, length), length, d_p)
                 if beyond > end_px:
                     continue
-                opacity = _tam_opacity(limit, tau, fade, clip)
+                if capped:
+                    n += 1
+                    if n > _CAP:
+                        return ink
+                opacity = _tam_opacity(limit, tau, style.fade, clip)
                 if opacity <= 0.0:
                     continue
-                wf = _width_factor(_hash01(sid, salt_wid), wid_jit)
-                a = _tam_coverage(width_px, wf, dist, beyond) * opacity
-                ink = _ink_over(ink, a)
+                wf = _width_factor(_hash01(sid, style.salt_width), wid_jit)
+                ink = _ink_over(ink, _tam_coverage(width_px, wf, dist, beyond) * opacity)
     return ink
 
 
@@ -549,61 +471,28 @@ def _sample_args(uv, duv_dx, duv_dy, uv_scale, i):
     )
 
 
-@banded(lambda samples, layers, style, ink: (samples.uv.shape[0] + _CHUNK - 1) // _CHUNK)
+@banded(lambda samples, layers, style, ink: (samples[0].shape[0] + _CHUNK - 1) // _CHUNK)
 def tam_pass(lo, hi, samples, layers, style, ink):
     """``ink[i]`` = anti-aliased ink coverage 1 - prod(1 - a) of the TAM strokes over each of
-    the N samples (:class:`InputArrays`), ``layers`` (:class:`Layers`), ``style`` the ``tam``
-    record: a binary (clip) or smooth (fade) density decision per sample."""
-    uv = samples.uv
-    duv_dx = samples.duv_dx
-    duv_dy = samples.duv_dy
-    uv_scale = samples.uv_scale
-    darkness = samples.darkness
-    chart = samples.chart
-    cos_a = layers.cos_a
-    sin_a = layers.sin_a
-    tone_lo = layers.tone_lo
-    n_samples = uv.shape[0]
-    n_layers = cos_a.shape[0]
-    density = style.density
-    period = style.period
-    band = (0.5 * style.width * (1.0 + style.width_jitter) + 0.5, 0.5)
-    cand = (
-        np.empty(_CAP, dtype=np.int64),  # candidates of one sample and layer (scratch)
-        np.empty(_CAP),
-        np.empty(_CAP),
-        np.empty(_CAP),
-        np.empty(_CAP),
-        np.empty(_CAP, dtype=np.int64),
-    )
-    c_id, c_t, c_dist, c_end, c_gain, c_level = cand
-    clip = style.density_mode == CLIP
+    the N samples (``samples``: :func:`sample_inputs`' arrays), ``layers`` (:class:`Layers`),
+    ``style`` the ``tam`` record: a binary (clip) or smooth (fade) density decision per sample."""
+    uv, duv_dx, duv_dy, uv_scale, darkness, chart = samples
+    cos_a, sin_a, tone_lo = layers
     for ci in range(lo, hi):
-        for i in range(ci * _CHUNK, min(n_samples, (ci + 1) * _CHUNK)):
+        for i in range(ci * _CHUNK, min(uv.shape[0], (ci + 1) * _CHUNK)):
             a_uv, a_dx, a_dy, a_scale = _sample_args(uv, duv_dx, duv_dy, uv_scale, i)
             total = 0.0
-            for lay in range(n_layers):
-                rho = _layer_density(darkness[i], tone_lo[lay], density)
+            for lay in range(cos_a.shape[0]):
+                rho = _layer_density(darkness[i], tone_lo[lay], style.density)
                 if rho <= 0.0:
                     continue
                 p, q, d_p, d_q = _layer_frame(a_uv, a_dx, a_dy, a_scale, cos_a[lay], sin_a[lay])
                 if not (d_q == d_q):
                     continue
-                frame = (p, q, d_p, d_q, _dyadic_scale(d_q, period))
+                frame = (p, q, d_p, d_q, _dyadic_scale(d_q, style.period))
                 at = (rho, chart[i], lay)
-                fused = _tam_layer(style, frame, at, total)
-                if fused >= 0.0:
-                    total = fused
-                    continue
-                n = _enumerate(style, frame, at, band, cand)  # more than _CAP candidates
-                for j in range(n):
-                    tau = _hash01(c_id[j], style.salt_tone)
-                    opacity = _tam_opacity(rho * c_gain[j], tau, style.fade, clip)
-                    if opacity <= 0.0:
-                        continue
-                    wf = _width_factor(_hash01(c_id[j], style.salt_width), style.width_jitter)
-                    a = _tam_coverage(style.width, wf, c_dist[j], c_end[j]) * opacity
-                    total = _ink_over(total, a)
+                fast = _enumerate(style, frame, at, total, False)
+                total = fast if fast >= 0.0 else _enumerate(style, frame, at, total, True)
             ink[i] = total
 
 
@@ -620,91 +509,61 @@ def field_gather(lo, hi, chunks, samples, layers, style, out):
     ``chunks.dst_cap[j]`` of them; ``chunks.count[j]`` receives their number (which may exceed
     the room: then run the chunk again with room for all).
     """
-    index = chunks.index
-    dst_off = chunks.dst_off
-    dst_cap = chunks.dst_cap
-    count = chunks.count
-    uv = samples.uv
-    duv_dx = samples.duv_dx
-    duv_dy = samples.duv_dy
-    uv_scale = samples.uv_scale
-    darkness = samples.darkness
-    chart = samples.chart
-    cos_a = layers.cos_a
-    sin_a = layers.sin_a
-    tone_lo = layers.tone_lo
+    index, dst_off, dst_cap, count = chunks
+    uv, duv_dx, duv_dy, uv_scale, darkness, chart = samples
+    cos_a, sin_a, tone_lo = layers
     out_id, out_t, out_layer, out_level, out_src = out
-    n_samples = uv.shape[0]
-    n_layers = cos_a.shape[0]
-    density = style.density
-    period = style.period
-    max_level = style.max_level
     lam = style.length
     len_jit = style.length_jitter
-    salt_len = style.salt_length
-    salt_tone = style.salt_tone
     hw_px = 0.5 * style.gather_width
     for j in range(lo, hi):
         ci = index[j]
         base = dst_off[j]
         cap = dst_cap[j]
         k = 0
-        for i in range(ci * _CHUNK, min(n_samples, (ci + 1) * _CHUNK)):
+        for i in range(ci * _CHUNK, min(uv.shape[0], (ci + 1) * _CHUNK)):
             a_uv, a_dx, a_dy, a_scale = _sample_args(uv, duv_dx, duv_dy, uv_scale, i)
             dark = darkness[i]
             ch = chart[i]
-            for lay in range(n_layers):
-                rho = _layer_density(dark, tone_lo[lay], density)
+            for lay in range(cos_a.shape[0]):
+                rho = _layer_density(dark, tone_lo[lay], style.density)
                 if rho <= 0.0:
                     continue
                 p, q, d_p, d_q = _layer_frame(a_uv, a_dx, a_dy, a_scale, cos_a[lay], sin_a[lay])
                 if not (d_q == d_q):
                     continue
-                s = _dyadic_scale(d_q, period)
+                s = _dyadic_scale(d_q, style.period)
                 if not (s == s):  # NaN scale
                     continue
-                big_l, f, thin = _level_rule(s, max_level)
-                top = big_l + 1 if f > 0.0 else big_l
-                alpha = _fade_in(f)
+                levels = _levels(s, style.max_level)
                 n = 0
-                # divisions hoisted or made exact products (double division is slow)
-                hw_q = hw_px / d_q
-                for lev in range(top + 1):
-                    gain = thin if lev <= big_l else alpha
-                    if gain * rho <= 0.0:
+                hw_q = hw_px / d_q  # hoisted (double division is slow)
+                for lev in range(levels[1] + 1):
+                    limit, scale, inv_scale, rows, ry0, ry1 = _level_rows(lev, levels, rho, q, hw_q)
+                    if limit <= 0.0:
                         continue
-                    limit = rho * gain
-                    scale = float(1 << lev)
-                    inv_scale = 1.0 / scale  # a power of two: x * inv_scale == x / scale
-                    rows = 7.0 * scale
-                    ry0 = int(math.floor((q - hw_q) * rows))
-                    ry1 = int(math.floor((q + hw_q) * rows)) + 1
                     half_cells = 0.5 * lam * (1.0 + len_jit) + 0.0 / d_p * scale
+                    reach = 0.5 * lam * (1.0 + abs(len_jit)) + 1e-6
                     for ry in range(ry0, ry1 + 1):
                         dist = _row_distance(q, ry, rows, d_q)
                         if dist > hw_px:
                             continue
-                        gy = ry // 7
-                        r = ry - 7 * gy
-                        kx = _KX[r]  # the base seed set's column of row r, and kx / 7
-                        kx7 = _KX7[r]
-                        ps = p * scale - kx7
-                        gx0 = int(math.floor(ps - half_cells))
-                        gx1 = int(math.floor(ps + half_cells)) + 1
-                        reach = 0.5 * lam * (1.0 + abs(len_jit)) + 1e-6 + 1e-9 * abs(ps)
+                        gy, r, kx, kx7, ps, gx0, gx1 = _cells(ry, p, scale, half_cells)
+                        margin = reach + 1e-9 * abs(ps)
                         for gx in range(gx0, gx1 + 1):
-                            if abs(ps - gx) > reach:
+                            if abs(ps - gx) > margin:
                                 continue  # every length puts t outside [0, 1]: rejected below
                             if not _born_at(lev, gx, gy, r, kx):
                                 continue  # inherited: enumerated at its birth level
                             sid = _pack_id(ch, lay, lev, gx, gy, r)
-                            length = _stroke_length(_hash01(sid, salt_len), lam, len_jit, inv_scale)
+                            h_len = _hash01(sid, style.salt_length)
+                            length = _stroke_length(h_len, lam, len_jit, inv_scale)
                             p_start = _stroke_start(gx, kx7, inv_scale, length)
                             t, beyond = _stroke_param(p, p_start, length, d_p)
                             if beyond > 0.0:
                                 continue
                             if n < _CAP:
-                                tau = _hash01(sid, salt_tone)
+                                tau = _hash01(sid, style.salt_tone)
                                 if tau < limit and t >= 0.0 and t <= 1.0:
                                     if k < cap:
                                         o = base + k
@@ -845,38 +704,45 @@ def _group_perm(grp, first, order):
 
 
 @njit
-def _pairwise(a, lo, n, c, zero):
-    """numpy's pairwise summation (``add.reduce``) of ``a[lo:lo + n, c]`` in a's dtype."""
+def _pairwise_block(a, lo, n, c, zero):
+    """numpy's pairwise summation (``add.reduce``) of ``a[lo:lo + n, c]`` in a's dtype for n <=
+    128: one block, eight accumulators (no recursion, which numba's cache does not reload)."""
     if n < 8:
         res = zero
         for i in range(lo, lo + n):
             res += a[i, c]
         return res
+    r0 = a[lo, c]
+    r1 = a[lo + 1, c]
+    r2 = a[lo + 2, c]
+    r3 = a[lo + 3, c]
+    r4 = a[lo + 4, c]
+    r5 = a[lo + 5, c]
+    r6 = a[lo + 6, c]
+    r7 = a[lo + 7, c]
+    i = 8
+    while i < n - (n % 8):
+        r0 += a[lo + i, c]
+        r1 += a[lo + i + 1, c]
+        r2 += a[lo + i + 2, c]
+        r3 += a[lo + i + 3, c]
+        r4 += a[lo + i + 4, c]
+        r5 += a[lo + i + 5, c]
+        r6 += a[lo + i + 6, c]
+        r7 += a[lo + i + 7, c]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i, c]
+        i += 1
+    return res
+
+
+@njit
+def _pairwise(a, lo, n, c, zero):
+    """numpy's pairwise summation (``add.reduce``) of ``a[lo:lo + n, c]`` in a's dtype."""
     if n <= 128:
-        r0 = a[lo, c]
-        r1 = a[lo + 1, c]
-        r2 = a[lo + 2, c]
-        r3 = a[lo + 3, c]
-        r4 = a[lo + 4, c]
-        r5 = a[lo + 5, c]
-        r6 = a[lo + 6, c]
-        r7 = a[lo + 7, c]
-        i = 8
-        while i < n - (n % 8):
-            r0 += a[lo + i, c]
-            r1 += a[lo + i + 1, c]
-            r2 += a[lo + i + 2, c]
-            r3 += a[lo + i + 3, c]
-            r4 += a[lo + i + 4, c]
-            r5 += a[lo + i + 5, c]
-            r6 += a[lo + i + 6, c]
-            r7 += a[lo + i + 7, c]
-            i += 8
-        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-        while i < n:
-            res += a[lo + i, c]
-            i += 1
-        return res
+        return _pairwise_block(a, lo, n, c, zero)
     n2 = n // 2
     n2 -= n2 % 8
     return _pairwise(a, lo, n2, c, zero) + _pairwise(a, lo + n2, n - n2, c, zero)
@@ -951,41 +817,6 @@ def group_sums(i_lo, i_hi, groups, frags, half_c, out, rows):
 
 
 @njit
-def _pairwise_row(a, i, n):
-    """numpy's pairwise summation (``add.reduce`` along a contiguous axis) of ``a[i, :n]``
-    (float64), n <= 128 (one block: no recursion, which numba's cache does not reload)."""
-    if n < 8:
-        res = 0.0
-        for j in range(n):
-            res += a[i, j]
-        return res
-    r0 = a[i, 0]
-    r1 = a[i, 1]
-    r2 = a[i, 2]
-    r3 = a[i, 3]
-    r4 = a[i, 4]
-    r5 = a[i, 5]
-    r6 = a[i, 6]
-    r7 = a[i, 7]
-    j = 8
-    while j < n - (n % 8):
-        r0 += a[i, j]
-        r1 += a[i, j + 1]
-        r2 += a[i, j + 2]
-        r3 += a[i, j + 3]
-        r4 += a[i, j + 4]
-        r5 += a[i, j + 5]
-        r6 += a[i, j + 6]
-        r7 += a[i, j + 7]
-        j += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while j < n:
-        res += a[i, j]
-        j += 1
-    return res
-
-
-@njit
 def _row4(c, i):
     return (c[i, 0], c[i, 1], c[i, 2], c[i, 3])
 
@@ -1002,6 +833,7 @@ def mean_speeds(i_lo, i_hi, t, fit, half_c, span, seg, out):
     c_x, c_y, t_min, t_max = fit
     hc = half_c[0]
     m = t.shape[1]
+    seg_t = seg.T  # (M - 1, S): the rows of seg as _pairwise_block's columns
     for i in range(i_lo, i_hi):
         cx = _row4(c_x, i)
         cy = _row4(c_y, i)
@@ -1017,7 +849,7 @@ def mean_speeds(i_lo, i_hi, t, fit, half_c, span, seg, out):
                 seg[i, k - 1] = math.hypot(x64 - xp, y64 - yp)
             xp = x64
             yp = y64
-        arc = _pairwise_row(seg, i, m - 1)
+        arc = _pairwise_block(seg_t, 0, m - 1, i, 0.0)
         out[i] = arc / span[i] if span[i] > 0.0 else 0.0
 
 

@@ -111,26 +111,14 @@ class Aggregates:
 
     def take(self, idx) -> Aggregates:
         """The strokes at ``idx`` (index or bool array)."""
-        return replace(
-            self,
-            stroke_ids=self.stroke_ids[idx],
-            count=self.count[idx],
-            t_min=self.t_min[idx],
-            t_max=self.t_max[idx],
-            origin=self.origin[idx],
-            moments=self.moments[idx],
-        )
+        return replace(self, **{k: getattr(self, k)[idx] for k in ("stroke_ids", "count", *_SUMS)})
 
     def astype(self, dtype) -> Aggregates:
         """The same sums in another float dtype."""
-        dt = np.dtype(dtype)
-        return replace(
-            self,
-            t_min=self.t_min.astype(dt),
-            t_max=self.t_max.astype(dt),
-            origin=self.origin.astype(dt),
-            moments=self.moments.astype(dt),
-        )
+        return replace(self, **{k: getattr(self, k).astype(np.dtype(dtype)) for k in _SUMS})
+
+
+_SUMS = ("t_min", "t_max", "origin", "moments")
 
 
 def _sums(keys, t, x, y, dtype):
@@ -154,9 +142,7 @@ def _sums(keys, t, x, y, dtype):
 
 def aggregate_exact(frags: Fragments, *, dtype=np.float32) -> Aggregates:
     """Exact per-stroke aggregates of a frame's fragments (group by id)."""
-    dtype = np.dtype(dtype)
-    uid, count, lo, hi, origin, M = _sums(frags.id, frags.t, frags.x, frags.y, dtype)
-    return Aggregates(uid, count, lo, hi, origin, M)
+    return Aggregates(*_sums(frags.id, frags.t, frags.x, frags.y, np.dtype(dtype)))
 
 
 def aggregate_hashed(frags: Fragments, table: StrokeHashTable, *, dtype=np.float32) -> Aggregates:
@@ -203,17 +189,8 @@ def aggregate_hashed(frags: Fragments, table: StrokeHashTable, *, dtype=np.float
         occupancy=table.occupancy,
     )
     sel = np.flatnonzero(valid)
-    ids_out = first[sel]
-    order_out = sel[np.argsort(ids_out, kind="stable")]
-    return Aggregates(
-        stroke_ids=first[order_out],
-        count=count[order_out],
-        t_min=lo[order_out],
-        t_max=hi[order_out],
-        origin=origin[order_out],
-        moments=M[order_out],
-        hash_stats=stats,
-    )
+    order_out = sel[np.argsort(first[sel], kind="stable")]
+    return Aggregates(first, count, lo, hi, origin, M, stats).take(order_out)
 
 
 def recentre(moments, t_min, t_max, origin, new_t_min, new_t_max, new_origin) -> np.ndarray:

@@ -7,7 +7,7 @@ patches break it, and this module repairs both without touching the mesh:
 
 * **Orientation.** Neighbouring patches may have u and v swapped or reversed (the teapot's spout
   runs u around the tube on its base patches and along it at the tip), so strokes "along u"
-  turn by 90 degrees at the border. :func:`chart_orientation` gives every chart a signed
+  turn by 90 degrees at the border. :func:`chart_layout` gives every chart a signed
   permutation M of (u, v) (u' = M u) chosen so that the oriented tangent frames agree across
   shared borders: the direction field of each layer is continuous wherever the surface is.
 * **Flat derivatives.** A triangle's uv is affine, so the rasterizer's analytic d(uv)/d(x, y) is
@@ -33,7 +33,6 @@ __all__ = [
     "vertex_frames",
     "chart_adjacency",
     "chart_layout",
-    "chart_orientation",
 ]
 
 #: The 8 signed permutations of (u, v): u' = M u.
@@ -123,7 +122,7 @@ def _shared_vertices(mesh, labels: np.ndarray, unit: np.ndarray):
 
 def chart_adjacency(mesh, labels: np.ndarray) -> np.ndarray:
     """(E, 2) int64 pairs of charts (a < b) of ``mesh`` that share a border (vertex positions
-    bitwise equal, as :func:`chart_orientation` uses them), sorted."""
+    bitwise equal, as :func:`chart_layout` uses them), sorted."""
     labels = np.asarray(labels, dtype=np.int64)
     pa, pb, v_chart = _shared_vertices(mesh, labels, _unit_columns(vertex_frames(mesh)))
     if pa.size == 0:
@@ -276,8 +275,3 @@ def chart_layout(mesh, labels: np.ndarray) -> ChartLayout:
     out = ChartLayout(sym, offset, group)
     _ORIENT_CACHE[mesh] = out
     return out
-
-
-def chart_orientation(mesh, labels: np.ndarray) -> np.ndarray:
-    """(C,) int64 index into :data:`SYMMETRIES` per chart (:func:`chart_layout`'s symmetry)."""
-    return chart_layout(mesh, labels).symmetry

@@ -6,10 +6,11 @@ from typing import Any
 
 import numpy as np
 
-from .._common import rgba_out, short_repr
+from .._common import rgba_out
+from .._declare import short_repr
 from ..base import ShadeContext, Style, nested_style
 
-__all__ = ["check_color", "field_channels", "base_style", "composite_ink"]
+__all__ = ["check_color", "field_channels", "base_style", "composite_ink", "FieldStyle"]
 
 
 def check_color(
@@ -96,3 +97,31 @@ def composite_ink(
     ink_rgb = np.ascontiguousarray(colors.reshape(-1, 3))
     ink_composite(base_of, (np.ascontiguousarray(ink), ink_rgb), out)
     return out
+
+
+class FieldStyle(Style):
+    """Base of the ``tam`` and ``tamiss`` styles: the G-buffer channels and raster options of
+    the stroke field (:meth:`stroke_channels`) and of the ``base`` style under the strokes, and
+    their ink composited over it."""
+
+    base: Style | None = None
+    paper: tuple[float, float, float] | None = None
+
+    def stroke_channels(self, scene: Any) -> set[str]:
+        """The channels the style reads for its strokes (:func:`field_channels` and more)."""
+        raise NotImplementedError
+
+    def requires(self, scene: Any) -> frozenset[str]:
+        req = self.stroke_channels(scene)
+        if self.base is not None:
+            req |= set(self.base.requires(scene))
+        return frozenset(req)
+
+    def raster_options(self, scene: Any) -> dict[str, Any]:
+        opts = dict(self.base.raster_options(scene)) if self.base is not None else {}
+        opts["dtype"] = np.float64  # uv to ~1e-12: cells of level 12 stay exact
+        return opts
+
+    def composite(self, ctx: ShadeContext, ink: np.ndarray, color: Any) -> np.ndarray:
+        """:func:`composite_ink` of ``ink`` in ``color`` over this style's base or paper."""
+        return composite_ink(ctx, ink, color, base=self.base, paper=self.paper)

@@ -101,7 +101,6 @@ __all__ = [
     "StrokeGeometry",
     "stroke_geometry",
     "fade_in",
-    "layer_angles",
 ]
 
 #: Charts (objects x uv charts) an id can hold (10 bits).
@@ -110,38 +109,14 @@ MAX_CHARTS = 1024
 TILE_LIMIT = 512
 #: Salts of the per-stroke hashes.
 SALT_TONE, SALT_LENGTH, SALT_WIDTH = SALTS["tone"], SALTS["length"], SALTS["width"]
-_FIELD = {p.name: p for p in FIELD}
-
-
-def layer_angles(directions) -> tuple[float, ...]:
-    """Angles in degrees (0 = along u, 90 = along v) of ``directions`` ('u', 'v' or numbers)."""
-    return _FIELD["directions"].check(directions)
+_FIELD = [p.name for p in FIELD]
 
 
 @dataclass(frozen=True)
 class StrokeField:
-    """Parameters of the RPTAM stroke field shared by the ``tam`` and ``tamiss`` styles
-    (declared in :data:`refnpr.styles.tamiss.params.FIELD`).
-
-    Attributes
-    ----------
-    directions : tuple of float
-        Hatching layers: angle in degrees from u towards v (0 = along u, 90 = along v).
-    layer_tones : tuple of float
-        Darkness in [0, 1) at which each layer starts (cross-hatching appears in darker tones).
-    period : float
-        Target spacing of stroke rows in pixels (w of the dyadic scale), > 0.
-    length : float
-        Stroke length in cells of the birth level (lam), > 0.
-    length_jitter : float
-        Relative texture-space length jitter in [0, 0.9].
-    width_jitter : float
-        Relative width jitter in [0, 0.9].
-    density : float
-        Multiplies the fraction of strokes drawn, rho = clip(density (d - d_k) / (1 - d_k), 0, 1).
-    max_level : int
-        Deepest level, 0..12.
-    """
+    """Parameters of the RPTAM stroke field shared by the ``tam`` and ``tamiss`` styles: the
+    parameters declared in :data:`refnpr.styles.tamiss.params.FIELD` (their docs), with
+    ``directions`` as angles in degrees from u towards v and ``layer_tones`` resolved."""
 
     directions: tuple[float, ...] = (0.0, 90.0)
     layer_tones: tuple[float, ...] = (0.0, 0.5)
@@ -169,16 +144,7 @@ class StrokeField:
         return len(self.directions)
 
     def as_dict(self) -> dict:
-        return {
-            "directions": list(self.directions),
-            "layer_tones": list(self.layer_tones),
-            "period": self.period,
-            "length": self.length,
-            "length_jitter": self.length_jitter,
-            "width_jitter": self.width_jitter,
-            "density": self.density,
-            "max_level": self.max_level,
-        }
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in vars(self).items()}
 
 
 @dataclass(frozen=True)
@@ -204,13 +170,6 @@ class StrokeGeometry:
     length: np.ndarray
     tau: np.ndarray
     width_factor: np.ndarray
-
-    def point(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """(p, q) of stroke parameter t (broadcast against (S,))."""
-        t = np.asarray(t, dtype=np.float64)
-        return self.p_start + t * self.length, np.broadcast_to(
-            self.q, np.broadcast(t, self.q).shape
-        )
 
 
 def stroke_geometry(ids, field: StrokeField) -> StrokeGeometry:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import warnings
 import weakref
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -61,22 +62,28 @@ def _mesh_charts(mesh) -> np.ndarray:
     return labels
 
 
+def chart_meshes(scene) -> Iterator[tuple[int, Any, np.ndarray, int]]:
+    """Per object of ``scene``: its index, world mesh, chart per face (labels 0..C-1) and the
+    number of its first chart over the scene (charts are numbered over objects in order)."""
+    offset = 0
+    for k, mesh in enumerate(scene.world_meshes()):
+        labels = _mesh_charts(mesh)
+        yield k, mesh, labels, offset
+        offset += int(labels.max()) + 1 if labels.size else 0
+
+
 def scene_charts(scene, gb=None) -> np.ndarray:
     """(total triangles,) int64 chart per triangle, over the scene's meshes concatenated.
 
     A chart is a connected component of a mesh's faces through shared vertices (the teapot's 32
     patches, each with its own uv square, are 32 charts); numbering runs over objects in order.
     """
-    out = []
-    offset = 0
-    for mesh in scene.world_meshes():
-        labels = _mesh_charts(mesh)
-        out.append(labels + offset)
-        offset += int(labels.max()) + 1 if labels.size else 0
+    out = [labels + offset for _, _, labels, offset in chart_meshes(scene)]
     charts = np.concatenate(out) if out else np.zeros(0, dtype=np.int64)
-    if offset > MAX_CHARTS:
+    n_charts = int(charts.max()) + 1 if charts.size else 0
+    if n_charts > MAX_CHARTS:
         raise ValueError(
-            f"scene: {offset} uv charts (connected components of the meshes), but stroke ids "
+            f"scene: {n_charts} uv charts (connected components of the meshes), but stroke ids "
             f"hold at most {MAX_CHARTS}; weld the meshes or split the scene"
         )
     if gb is not None and charts.size != int(gb.mesh_first_tri[-1]):
@@ -110,12 +117,6 @@ class FieldInputs:
     shape: tuple[int, int]
     n: int
 
-    def pixel_xy(self, sample: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Pixel coordinates of sample centres ((sx + 0.5) / n, (sy + 0.5) / n)."""
-        idx = self.sample if sample is None else sample
-        sy, sx = np.divmod(idx, self.shape[1])
-        return (sx + 0.5) / self.n, (sy + 0.5) / self.n
-
 
 def _scene_frames(scene) -> tuple[np.ndarray, ...]:
     """Faces (T, 3) into the scene's concatenated vertices, their frames (V, 3, 2), and per
@@ -123,9 +124,7 @@ def _scene_frames(scene) -> tuple[np.ndarray, ...]:
     (T,) (numbered over the scene like :func:`scene_charts`)."""
     faces, frames, sym, offset, group = [], [], [], [], []
     v_off = 0
-    c_off = 0
-    for mesh in scene.world_meshes():
-        labels = _mesh_charts(mesh)
+    for _, mesh, labels, c_off in chart_meshes(scene):
         layout = chart_layout(mesh, labels)
         faces.append(np.asarray(mesh.faces, dtype=np.int64) + v_off)
         frames.append(vertex_frames(mesh))
@@ -133,7 +132,6 @@ def _scene_frames(scene) -> tuple[np.ndarray, ...]:
         offset.append(layout.offset[labels])
         group.append(layout.group[labels] + c_off)
         v_off += mesh.positions.shape[0]
-        c_off += int(labels.max()) + 1 if labels.size else 0
     return tuple(np.concatenate(a) for a in (faces, frames, sym, offset, group))
 
 
@@ -195,16 +193,10 @@ def field_inputs(
     tables = K.InputTables(
         sample, bary, charts, faces, frames, SYMMETRIES, sym, offset, group, smooth, orient, shade
     )
-    out = K.InputArrays(
-        uv=np.empty((n_sel, 2)),
-        duv_dx=np.empty((n_sel, 2)),
-        duv_dy=np.empty((n_sel, 2)),
-        uv_scale=np.empty((n_sel, 2)),
-        darkness=np.empty(n_sel if shade else 0),
-        chart=np.empty(n_sel, dtype=np.int64),
-    )
+    uv, duv_dx, duv_dy, uv_scale = (np.empty((n_sel, 2)) for _ in range(4))
+    darkness, chart = np.empty(n_sel if shade else 0), np.empty(n_sel, dtype=np.int64)
     chunk_max = np.zeros((n_sel + K._CHUNK - 1) // K._CHUNK)
-    K.sample_inputs(frame, tables, out, chunk_max)
+    K.sample_inputs(frame, tables, (uv, duv_dx, duv_dy, uv_scale, darkness, chart), chunk_max)
     if n_sel:
         extent = float(np.max(chunk_max)) * np.sqrt(2.0)
         if not extent < TILE_LIMIT:
@@ -212,20 +204,9 @@ def field_inputs(
                 f"uv: scaled texture coordinates reach {extent:.4g} tiles, but stroke ids hold "
                 f"tiles within +-{TILE_LIMIT}; lower the material's uv_scale"
             )
-    dark = out.darkness
     if constant_tone is not None:
-        dark = np.full(n_sel, float(constant_tone))
-    return FieldInputs(
-        sample=sample,
-        uv=out.uv,
-        duv_dx=out.duv_dx,
-        duv_dy=out.duv_dy,
-        uv_scale=out.uv_scale,
-        darkness=np.ascontiguousarray(dark),
-        chart=out.chart,
-        shape=shape,
-        n=gb.n,
-    )
+        darkness = np.full(n_sel, float(constant_tone))
+    return FieldInputs(sample, uv, duv_dx, duv_dy, uv_scale, darkness, chart, shape, gb.n)
 
 
 def layer_scale(inp: FieldInputs, field: StrokeField) -> np.ndarray:
@@ -249,8 +230,9 @@ def _layers(field: StrokeField) -> K.Layers:
     return K.Layers(np.cos(a), np.sin(a), np.asarray(field.layer_tones, dtype=np.float64))
 
 
-def _samples(inp: FieldInputs) -> K.InputArrays:
-    return K.InputArrays(inp.uv, inp.duv_dx, inp.duv_dy, inp.uv_scale, inp.darkness, inp.chart)
+def _samples(inp: FieldInputs) -> tuple[np.ndarray, ...]:
+    """The arrays the field kernels read (:func:`~._kernels.sample_inputs`' outputs)."""
+    return inp.uv, inp.duv_dx, inp.duv_dy, inp.uv_scale, inp.darkness, inp.chart
 
 
 def field_record(decl: Params, field: StrokeField, **values: Any) -> Any:
@@ -292,20 +274,6 @@ class Fragments:
         """(nH, nW) int64 fragments per sample."""
         return np.bincount(self.sample, minlength=self.shape[0] * self.shape[1]).reshape(self.shape)
 
-    def subset(self, keep: np.ndarray) -> Fragments:
-        """The fragments where ``keep`` (bool or index array)."""
-        return Fragments(
-            self.sample[keep],
-            self.x[keep],
-            self.y[keep],
-            self.t[keep],
-            self.id[keep],
-            self.layer[keep],
-            self.level[keep],
-            self.shape,
-            self.n_axis,
-        )
-
 
 def gather_fragments(
     inp: FieldInputs, field: StrokeField, *, gather_width: float = 1.0
@@ -328,24 +296,19 @@ def gather_fragments(
     sample, x, y = np.empty(total, dtype=np.int64), np.empty(total), np.empty(total)
     fits = count <= room
     grid = (inp.shape[1], inp.n)
-    run_src = np.empty(n_chunks, dtype=np.int64)
-    run_src[fits] = chunks[fits] * _ROOM
-    run_len = np.where(fits, count, 0)
     over = chunks[~fits]
     if over.size:  # write the overflowing chunks straight to their place
         src = np.zeros(total, dtype=np.int32)
         count_over = np.zeros(over.size, dtype=np.int64)
         dst = (*out[:4], src)
         _gather(inp, field, gather_width, over, offsets[over], count[over], count_over, dst)
-        run_src[over] = offsets[over]
-        run_len[over] = count[over]
         K.finish_fragments(
             K.Runs(offsets[over], count[over], offsets[over]), (src, inp.sample), out[:4],
             (*out[:4], sample, x, y), grid,
         )  # fmt: skip
-    sel = np.flatnonzero(fits)
+    sel = chunks[fits]
     K.finish_fragments(
-        K.Runs(run_src[sel], run_len[sel], offsets[sel]), (buf[4], inp.sample), buf[:4],
+        K.Runs(sel * _ROOM, count[sel], offsets[sel]), (buf[4], inp.sample), buf[:4],
         (*out[:4], sample, x, y), grid,
     )  # fmt: skip
     ids, t, layer, level = out[:4]

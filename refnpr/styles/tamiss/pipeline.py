@@ -34,7 +34,6 @@ from .strokes import (
     fit_aggregates,
     keep_mask,
     mean_speed,
-    take_fit,
 )
 
 __all__ = ["AVERAGE_MOTIONS", "SHOW", "TamissParams", "PipelineResult", "run_pipeline"]
@@ -227,7 +226,7 @@ def run_pipeline(
     kept = np.flatnonzero(keep)
     if kept.size:
         seg_k, n_k = drawn_segments(
-            take_fit(fit, kept),
+            fit.take(kept),
             p.extent,
             threshold=p.visibility_threshold,
             overdraw=p.overdraw,

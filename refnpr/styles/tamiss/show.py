@@ -20,7 +20,7 @@ import numpy as np
 from .field import hash01, unpack_id
 from .pipeline import PipelineResult
 from .raster import rasterize_strips
-from .strokes import drawn_segments, extrude, take_fit
+from .strokes import drawn_segments, extrude
 
 __all__ = ["LEVEL_COLORS", "id_colors", "level_colors", "show_layers"]
 
@@ -98,7 +98,7 @@ def show_layers(result: PipelineResult) -> tuple[np.ndarray, np.ndarray]:
         segments = np.full((S, 2, 2), np.nan)
         kept = np.flatnonzero(result.keep)
         if kept.size:
-            seg_k, _ = drawn_segments(take_fit(result.fit, kept), "range")
+            seg_k, _ = drawn_segments(result.fit.take(kept), "range")
             segments[kept] = seg_k
         strips = extrude(
             result.fit, result.stroke_ids, segments, p.field, width=1.0, taper=0.0,

@@ -52,7 +52,6 @@ __all__ = [
     "centreline",
     "Strips",
     "extrude",
-    "take_fit",
 ]
 
 SALT_WOBBLE_AMP, SALT_WOBBLE_PHASE, SALT_END_A, SALT_END_B = 11, 12, 13, 14
@@ -289,7 +288,7 @@ def extrude(
     t0 = seg[stroke, slot, 0][:, None]
     t1 = seg[stroke, slot, 1][:, None]
     t = t0 + (t1 - t0) * u  # (P, K)
-    sub = take_fit(fit, stroke)
+    sub = fit.take(stroke)
     sub_speed = None if speed is None else np.asarray(speed)[stroke]
     x, y, tx, ty = centreline(sub, t, speed=sub_speed) if P else (np.zeros((0, K)),) * 4
     nx, ny = -ty, tx  # left normal
@@ -317,18 +316,4 @@ def extrude(
         stroke=stroke.astype(np.int64),
         ids=ids[stroke],
         width=w,
-    )
-
-
-def take_fit(fit: StrokeFit, idx: np.ndarray) -> StrokeFit:
-    """The strokes ``idx`` of a batched fit."""
-    return StrokeFit(
-        c_x=fit.c_x[idx],
-        c_y=fit.c_y[idx],
-        c_v=fit.c_v[idx],
-        t_min=np.asarray(fit.t_min)[idx],
-        t_max=np.asarray(fit.t_max)[idx],
-        count=np.asarray(fit.count)[idx],
-        basis=fit.basis,
-        prior_weight=fit.prior_weight,
     )

@@ -12,9 +12,9 @@ import numpy as np
 from refnpr.formulas.tamiss import StrokeHashTable
 from refnpr.raster import rasterize
 
-from ..base import ShadeContext, Style, register
+from ..base import ShadeContext, register
 from .aggregate import AggregateHistory, aggregate_exact
-from .compose import composite_ink, field_channels
+from .compose import FieldStyle, field_channels
 from .motion import MOTION_CHANNELS, stroke_anchors
 from .params import PARAMS
 from .pipeline import PipelineResult, TamissParams, run_pipeline
@@ -25,7 +25,7 @@ __all__ = ["TamissStyle"]
 
 
 @register
-class TamissStyle(Style):
+class TamissStyle(FieldStyle):
     """Hatching with image-space strokes fitted to stroke-ID TAM fragments (TAMISS).
 
     Parameters are declared once in :data:`refnpr.styles.tamiss.params.PARAMS` (their table is
@@ -48,24 +48,12 @@ class TamissStyle(Style):
         self.ink, self.paper, self.base = p.ink, p.paper, p.base
         self._params = p.as_dict()
 
-    def requires(self, scene: Any) -> frozenset[str]:
+    def stroke_channels(self, scene: Any) -> set[str]:
         p = self.pipeline_params
-        req = field_channels(scene, p.constant_tone, p.derivatives) | self._motion_channels()
-        if self.base is not None:
-            req |= set(self.base.requires(scene))
-        return frozenset(req)
-
-    def _motion_channels(self) -> frozenset[str]:
-        """What motion-compensated averaging reads (none for a still or plain averaging)."""
-        p = self.pipeline_params
+        req = field_channels(scene, p.constant_tone, p.derivatives)
         if p.average_frames > 1 and p.average_motion == "exact":
-            return MOTION_CHANNELS
-        return frozenset()
-
-    def raster_options(self, scene: Any) -> dict[str, Any]:
-        opts = dict(self.base.raster_options(scene)) if self.base is not None else {}
-        opts["dtype"] = np.float64  # uv to ~1e-12: cells of level 12 stay exact
-        return opts
+            req |= MOTION_CHANNELS  # what motion-compensated averaging reads
+        return req
 
     def gather_gbuffer(self, ctx: ShadeContext) -> Any:
         """The G-buffer fragments are gathered from: ``ctx.gb``, or with ``gather_scale`` g (and
@@ -75,10 +63,7 @@ class TamissStyle(Style):
         gb = ctx.gb
         if g is None or g == gb.n:
             return gb
-        p = self.pipeline_params
-        channels = sorted(
-            field_channels(ctx.scene, p.constant_tone, p.derivatives) | self._motion_channels()
-        )
+        channels = sorted(self.stroke_channels(ctx.scene))
         return rasterize(
             ctx.scene, gb.camera, gb.width, gb.height, channels, g * g, dtype=np.float64
         )
@@ -189,6 +174,5 @@ class TamissStyle(Style):
 
     def _composite(self, ctx: ShadeContext, result: PipelineResult) -> np.ndarray:
         if self.pipeline_params.show == "color":
-            return composite_ink(ctx, result.ink, self.ink, base=self.base, paper=self.paper)
-        cover, rgb = show_layers(result)
-        return composite_ink(ctx, cover, rgb, base=self.base, paper=self.paper)
+            return self.composite(ctx, result.ink, self.ink)
+        return self.composite(ctx, *show_layers(result))

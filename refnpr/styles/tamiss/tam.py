@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ..base import ShadeContext, Style, register
-from .compose import composite_ink, field_channels
+from ..base import ShadeContext, register
+from .compose import FieldStyle, field_channels
 from .field import StrokeField
 from .gather import field_inputs, tam_ink
 from .params import TAM_PARAMS, resolve_field
@@ -25,7 +25,7 @@ __all__ = ["TamStyle"]
 
 
 @register
-class TamStyle(Style):
+class TamStyle(FieldStyle):
     """Texture-space hatching with the RPTAM stroke field (the TAMISS paper's baseline).
 
     Parameters are declared once in :data:`refnpr.styles.tamiss.params.TAM_PARAMS` (their table
@@ -49,16 +49,8 @@ class TamStyle(Style):
         self.ink, self.paper, self.base = p.ink, p.paper, p.base
         self._params = p.as_dict(keep_none=True)
 
-    def requires(self, scene: Any) -> frozenset[str]:
-        req = field_channels(scene, self.constant_tone, self.derivatives)
-        if self.base is not None:
-            req |= set(self.base.requires(scene))
-        return frozenset(req)
-
-    def raster_options(self, scene: Any) -> dict[str, Any]:
-        opts = dict(self.base.raster_options(scene)) if self.base is not None else {}
-        opts["dtype"] = np.float64
-        return opts
+    def stroke_channels(self, scene: Any) -> set[str]:
+        return field_channels(scene, self.constant_tone, self.derivatives)
 
     def ink_coverage(self, ctx: ShadeContext) -> np.ndarray:
         """(nH, nW) float64 ink coverage of the texture-space strokes."""
@@ -74,6 +66,4 @@ class TamStyle(Style):
         )
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        return composite_ink(
-            ctx, self.ink_coverage(ctx), self.ink, base=self.base, paper=self.paper
-        )
+        return self.composite(ctx, self.ink_coverage(ctx), self.ink)
