@@ -8,37 +8,25 @@
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
-
-__all__ = [
-    "export_kit",
-    "check_kit",
-    "CaseCheck",
-    "StyleExport",
-    "write_texture_levels",
-    "KIT_FORMAT",
-    "KIT_VERSION",
-]
 
 KIT_FORMAT = "refnpr-kit"
 KIT_VERSION = 1
 
+#: The module of each lazily imported name (importing refnpr.kit stays cheap).
+_LAZY = {
+    "export_kit": ".export",
+    "check_kit": ".check",
+    "CaseCheck": ".check",
+    "StyleExport": ".styles",
+    "write_texture_levels": ".textures",
+}
 
-def __getattr__(name: str) -> Any:  # lazy: importing refnpr.kit stays cheap
-    if name == "export_kit":
-        from .export import export_kit
+__all__ = [*_LAZY, "KIT_FORMAT", "KIT_VERSION"]
 
-        return export_kit
-    if name in ("check_kit", "CaseCheck"):
-        from . import check
 
-        return getattr(check, name)
-    if name == "StyleExport":
-        from .styles import StyleExport
-
-        return StyleExport
-    if name == "write_texture_levels":
-        from .textures import write_texture_levels
-
-        return write_texture_levels
-    raise AttributeError(name)
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(name)
+    return getattr(importlib.import_module(_LAZY[name], __name__), name)

@@ -2,18 +2,29 @@
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping
 from dataclasses import fields, is_dataclass
-from pathlib import PurePath
+from pathlib import Path, PurePath
 from typing import Any
 
 import numpy as np
 
-__all__ = ["jsonable", "find_strings"]
+from ..image import atomic_file
+
+__all__ = ["jsonable", "find_strings", "write_json"]
 
 
-def jsonable(value: Any, *, where: str = "params") -> Any:
+def write_json(path: str | Path, data: Any) -> Path:
+    """Write JSON (2-space indent, UTF-8, newline at the end) atomically."""
+    path = Path(path)
+    with atomic_file(path, suffix=".json") as tmp:
+        tmp.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    return path
+
+
+def jsonable(value: Any, *, where: str = "params", nonfinite_as_none: bool = False) -> Any:
     """``value`` as JSON data: tuples and arrays become lists, numpy scalars Python numbers,
     dataclasses and styles dicts (a style: ``{"name": ..., **params}``), paths strings.
 
@@ -22,8 +33,13 @@ def jsonable(value: Any, *, where: str = "params") -> Any:
     TypeError
         Naming ``where`` (the key path) for a value with no JSON form.
     ValueError
-        For NaN or infinite floats (JSON has none), naming ``where``.
+        For NaN or infinite floats (JSON has none), naming ``where``; unless
+        ``nonfinite_as_none``, which writes them as null.
     """
+
+    def conv(v: Any, w: str) -> Any:
+        return jsonable(v, where=w, nonfinite_as_none=nonfinite_as_none)
+
     if value is None or isinstance(value, (bool, str)):
         return value
     if isinstance(value, (np.bool_,)):
@@ -32,26 +48,23 @@ def jsonable(value: Any, *, where: str = "params") -> Any:
         return int(value)
     if isinstance(value, (float, np.floating)):
         v = float(value)
-        if not math.isfinite(v):
-            raise ValueError(f"{where}: {v!r} has no JSON form; resolve it to a finite number")
-        return v
+        if math.isfinite(v) or nonfinite_as_none:
+            return v if math.isfinite(v) else None
+        raise ValueError(f"{where}: {v!r} has no JSON form; resolve it to a finite number")
     if isinstance(value, np.ndarray):
-        return [jsonable(v, where=f"{where}[{i}]") for i, v in enumerate(value.tolist())]
+        return conv(value.tolist(), where)
     if isinstance(value, (list, tuple)):
-        return [jsonable(v, where=f"{where}[{i}]") for i, v in enumerate(value)]
+        return [conv(v, f"{where}[{i}]") for i, v in enumerate(value)]
     if isinstance(value, Mapping):
-        return {str(k): jsonable(v, where=f"{where}.{k}") for k, v in value.items()}
+        return {str(k): conv(v, f"{where}.{k}") for k, v in value.items()}
     if isinstance(value, np.dtype) or (isinstance(value, type) and issubclass(value, np.generic)):
         return np.dtype(value).name  # e.g. rasterize's dtype=np.float64 -> "float64"
     if isinstance(value, PurePath):
         return str(value)
     if hasattr(value, "params") and hasattr(value, "name") and callable(value.params):
-        return {"name": value.name, **jsonable(value.params(), where=where)}
+        return {"name": value.name, **conv(value.params(), where)}
     if is_dataclass(value) and not isinstance(value, type):
-        return {
-            f.name: jsonable(getattr(value, f.name), where=f"{where}.{f.name}")
-            for f in fields(value)
-        }
+        return {f.name: conv(getattr(value, f.name), f"{where}.{f.name}") for f in fields(value)}
     raise TypeError(
         f"{where}: {type(value).__name__} {value!r} has no JSON form; the style's kit exporter "
         "must export it (a texture file, a number or a list)"

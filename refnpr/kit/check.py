@@ -1,52 +1,23 @@
 """``refnpr kit check``: compare a backend's renders with an exported conformance kit.
 
 For every case of ``KIT_DIR/index.json`` the checker reads the case's ``case.json`` (its
-``expected`` files and its own ``tolerance``) and the backend's output in ``RENDERS_DIR``:
+``expected`` files and its own ``tolerance``) and the backend's output in ``RENDERS_DIR``: image
+cases ``<name>.png`` (8-bit sRGB RGBA) and optionally ``<name>.exr`` (float32 linear
+straight-alpha RGBA); G-buffer cases ``<name>/<channel>.npy`` for every channel of ``expected``.
 
-* image cases: ``RENDERS_DIR/<name>.png`` (8-bit sRGB RGBA), optionally ``RENDERS_DIR/<name>.exr``
-  (float32 linear straight-alpha RGBA);
-* G-buffer cases: ``RENDERS_DIR/<name>/<channel>.npy`` for every channel of ``expected``.
-
-What decides pass (image cases)
--------------------------------
-Both images are compared as :mod:`refnpr.compare` does: sRGB values in [0, 1], colour composited
-over black by alpha, alpha kept as a fourth channel. A pixel *differs* when its largest channel
-difference exceeds ``tolerance.threshold``. The **position-tolerant** test (the Vulkan CTS fuzzy
-compare, ``intThresholdPositionDeviationCompare``) also accepts a pixel when a pixel of the other
-image within ``N = tolerance.position_deviation`` pixels (Chebyshev distance, out-of-bounds
-neighbours do not count) matches it within the threshold. It is applied in **both directions**: a
-pixel fails when the result pixel has no matching reference pixel within N *or* the reference
-pixel has no matching result pixel within N. The CTS checks only the first direction, which lets a
-missing one-pixel line pass (every background pixel of the result finds background next to the
-line in the reference); the second direction catches that. A case **passes** when
-
-    frac_over_position <= tolerance.max_frac_over   and   ssim >= tolerance.min_ssim
-
-where ``frac_over_position`` is the fraction of pixels failing the two-sided position-tolerant
-test and ``ssim`` is the mean SSIM of luminance (scikit-image, ``data_range=1``, as
-:func:`refnpr.compare.compare_images`). Also reported, not deciding: ``max_abs``, ``rmse``,
-``frac_over`` (per-pixel, no position tolerance), ``frac_over_position_cts`` (the one-sided CTS
-fraction) and, when the backend wrote an EXR, ``linear_max_abs`` and ``linear_rmse`` (linear RGBA
-composited over black) and ``linear_frac_over`` (the threshold applied to the sRGB encoding of
-the float images: free of 8-bit rounding). A missing, unreadable or wrongly sized PNG fails; so
-does an EXR that is present but unreadable or of the wrong size.
-
-What decides pass (G-buffer cases)
-----------------------------------
-Every channel listed in ``expected.channels`` must be present with the expected shape. Discrete
-channels (those in ``tolerance.discrete``, and any integer channel) are compared exactly: at most
-``tolerance.discrete[channel].max_pixels`` pixels (0 when unlisted) may differ in any component.
-Float channels: the non-finite pattern must be identical, and an element (one component of one
-sample) finite in both is bad when ``|got - expected| > atol + rtol * |expected|``
-(``numpy.isclose``); at most ``tolerance.max_frac_over`` (0 when absent) of those elements may be
-bad: the fraction :func:`refnpr.golden.check_suite` uses for G-buffer cases. ``bad_pixels``
-counts the samples with any bad element (the mask's red).
+An image case passes when the fraction of pixels failing the two-sided position-tolerant compare
+(:func:`position_tolerant_mismatch`) is at most ``tolerance.max_frac_over`` and the mean SSIM of
+luminance at least ``tolerance.min_ssim``; a G-buffer case when every channel is within
+``rtol``/``atol`` (discrete channels: exact but ``max_pixels``). docs/kit.md ("How ``refnpr kit
+check`` decides") states every rule and reported metric.
 """
 
 from __future__ import annotations
 
 import json
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -54,31 +25,11 @@ from typing import Any
 import numpy as np
 
 from ..compare import compare_images, load_image
-from ..image import atomic_file, linear_to_srgb
+from ..image import linear_to_srgb
+from . import KIT_FORMAT, KIT_VERSION
+from ._json import jsonable, write_json
 
-__all__ = [
-    "CaseCheck",
-    "check_kit",
-    "format_table",
-    "position_tolerant_mismatch",
-    "read_exr_rgba",
-    "run",
-    "Visual",
-    "write_json",
-]
-
-#: Image metrics in the order tables and the report show them.
-IMAGE_METRICS = (
-    "max_abs",
-    "rmse",
-    "frac_over",
-    "frac_over_position",
-    "frac_over_position_cts",
-    "ssim",
-    "linear_max_abs",
-    "linear_rmse",
-    "linear_frac_over",
-)
+__all__ = ["CaseCheck", "Visual", "check_kit", "format_table", "position_tolerant_mismatch", "run"]
 
 
 @dataclass(frozen=True)
@@ -99,8 +50,9 @@ class CaseCheck:
     message : str
         Why it failed, or the deciding numbers against their limits when it was compared.
     metrics : dict of str to float
-        Image cases: the keys of ``IMAGE_METRICS`` that were computed. G-buffer cases: the worst
-        channel's ``frac_bad``.
+        Image cases: ``max_abs``, ``rmse``, ``frac_over``, ``frac_over_position``,
+        ``frac_over_position_cts``, ``ssim`` and, with an EXR render, ``linear_max_abs``,
+        ``linear_rmse``, ``linear_frac_over``. G-buffer cases: the worst channel's ``frac_bad``.
     channels : dict of str to dict
         G-buffer cases: per channel ``{"kind": "float"|"discrete", "max_abs", "bad_pixels",
         "frac_bad" (float: fraction of bad elements; discrete: of bad pixels),
@@ -135,21 +87,7 @@ class CaseCheck:
         """A JSON-able dict (non-finite numbers as ``None``)."""
         d = asdict(self)
         d["error"] = self.error
-        return _json_clean(d)
-
-
-def _json_clean(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _json_clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_json_clean(v) for v in x]
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
+        return jsonable(d, where=self.name, nonfinite_as_none=True)
 
 
 # -- the position-tolerant compare -------------------------------------------------------------
@@ -254,16 +192,18 @@ class _CaseError(Exception):
         self.message = message
 
 
-def read_exr_rgba(path: str | Path, *, what: str = "EXR image") -> np.ndarray:
-    """An OpenEXR image as (H, W, 4) float32 RGBA (alpha 1 when the file has none).
+@contextmanager
+def _failing(status: str) -> Iterator[None]:
+    """A ValueError inside (a file that cannot be read) fails the case with ``status``."""
+    try:
+        yield
+    except ValueError as exc:
+        raise _CaseError(status, str(exc)) from None
 
-    Reads one packed ``RGBA``/``RGB`` channel or separate ``R``, ``G``, ``B`` (``A``) channels.
 
-    Raises
-    ------
-    ValueError
-        Naming ``what`` and the file: missing, not an OpenEXR file, or without RGB channels.
-    """
+def _read_exr_rgba(path: str | Path, *, what: str) -> np.ndarray:
+    """(H, W, 4) float32 RGBA of an OpenEXR file with R, G, B (A: 1 when absent) channels;
+    ValueError naming ``what`` and the file when it is missing, unreadable or lacks them."""
     p = Path(path)
     if not p.is_file():
         why = "is a directory" if p.is_dir() else "does not exist"
@@ -302,11 +242,11 @@ def _read_index(kit_dir: Path) -> list[dict[str, Any]]:
         data = json.loads(index.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"{str(index)!r}: not valid JSON ({exc})") from None
-    if not isinstance(data, dict) or data.get("format") != "refnpr-kit":
-        raise ValueError(f'{str(index)!r}: expected {{"format": "refnpr-kit", ...}}')
-    if data.get("version") != 1:
+    if not isinstance(data, dict) or data.get("format") != KIT_FORMAT:
+        raise ValueError(f'{str(index)!r}: expected {{"format": "{KIT_FORMAT}", ...}}')
+    if data.get("version") != KIT_VERSION:
         raise ValueError(
-            f"{str(index)!r}: kit format version {data.get('version')!r}; this refnpr reads version 1"
+            f"{str(index)!r}: kit format version {data.get('version')!r}; this refnpr reads version {KIT_VERSION}"
         )
     cases = data.get("cases")
     if not isinstance(cases, list) or not cases:
@@ -340,6 +280,19 @@ def _number(tol: dict[str, Any], key: str, where: str, lo: float, hi: float, def
     return float(v)
 
 
+def _count(v: Any, key: str, where: str) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+        raise _CaseError("kit", f"{where}: tolerance.{key}: expected an integer >= 0, got {v!r}")
+    return v
+
+
+def _size_error(path: Path, got: tuple, want: tuple, extra: str = "") -> _CaseError:
+    return _CaseError(
+        "size",
+        f"render {str(path)!r} is {got[1]}x{got[0]}, the case is {want[1]}x{want[0]}{extra}",
+    )
+
+
 # -- image cases -------------------------------------------------------------------------------
 
 
@@ -368,42 +321,27 @@ class Visual:
 
 
 def _check_image(
-    name: str, case_path: Path, case: dict[str, Any], renders_dir: Path, data: Visual
+    name: str, case_path: Path, case: dict[str, Any], tol: dict, renders_dir: Path, data: Visual
 ) -> CaseCheck:
-    tol = case.get("tolerance")
     where = str(case_path)
-    if not isinstance(tol, dict):
-        raise _CaseError("kit", f"{where}: 'tolerance' must be an object, got {tol!r}")
     threshold = _number(tol, "threshold", where, 0.0, 1.0)
     max_frac = _number(tol, "max_frac_over", where, 0.0, 1.0)
     min_ssim = _number(tol, "min_ssim", where, -1.0, 1.0)
-    dev = tol.get("position_deviation", 0)
-    if isinstance(dev, bool) or not isinstance(dev, int) or dev < 0:
-        raise _CaseError(
-            "kit", f"{where}: tolerance.position_deviation: expected an integer >= 0, got {dev!r}"
-        )
+    dev = _count(tol.get("position_deviation", 0), "position_deviation", where)
     expected = case.get("expected")
     if not isinstance(expected, dict) or not isinstance(expected.get("png"), str):
         raise _CaseError("kit", f"{where}: 'expected.png' must name the expected PNG")
     ref_path = case_path.parent / expected["png"]
-    try:
+    with _failing("kit"):
         ref = load_image(ref_path, what="expected image (kit)")
-    except ValueError as exc:
-        raise _CaseError("kit", str(exc)) from None
     data.reference = composite_over_black(ref)
     res_path = renders_dir / f"{name}.png"
     if not res_path.exists():
         raise _CaseError("missing", f"no render {str(res_path)!r}")
-    try:
+    with _failing("unreadable"):
         res = load_image(res_path, what="render")
-    except ValueError as exc:
-        raise _CaseError("unreadable", str(exc)) from None
     if res.shape != ref.shape:
-        raise _CaseError(
-            "size",
-            f"render {str(res_path)!r} is {res.shape[1]}x{res.shape[0]}, the case is "
-            f"{ref.shape[1]}x{ref.shape[0]} ({str(ref_path)!r})",
-        )
+        raise _size_error(res_path, res.shape, ref.shape, f" ({str(ref_path)!r})")
     data.result = composite_over_black(res)
     m = compare_images(ref, res, name=name, tolerance=threshold)
     result_ok, reference_ok = _matches(data.result, data.reference, threshold, dev)
@@ -459,20 +397,12 @@ def _linear_metrics(
     lin = expected.get("linear")
     if not isinstance(lin, str):
         raise _CaseError("kit", f"{case_path}: 'expected.linear' must name the expected EXR")
-    try:
-        ref = read_exr_rgba(case_path.parent / lin, what="expected linear image (kit)")
-    except ValueError as exc:
-        raise _CaseError("kit", str(exc)) from None
-    try:
-        res = read_exr_rgba(exr_path, what="render (EXR)")
-    except ValueError as exc:
-        raise _CaseError("unreadable", str(exc)) from None
+    with _failing("kit"):
+        ref = _read_exr_rgba(case_path.parent / lin, what="expected linear image (kit)")
+    with _failing("unreadable"):
+        res = _read_exr_rgba(exr_path, what="render (EXR)")
     if res.shape != ref.shape or ref.shape[:2] != shape[:2]:
-        raise _CaseError(
-            "size",
-            f"render {str(exr_path)!r} is {res.shape[1]}x{res.shape[0]}, the case is "
-            f"{ref.shape[1]}x{ref.shape[0]}",
-        )
+        raise _size_error(exr_path, res.shape, ref.shape)
     if not np.all(np.isfinite(res)):
         raise _CaseError("unreadable", f"render {str(exr_path)!r} holds NaN or inf")
     a, b = composite_over_black(ref), composite_over_black(res)
@@ -492,12 +422,9 @@ def _linear_metrics(
 
 
 def _check_gbuffer(
-    name: str, case_path: Path, case: dict[str, Any], renders_dir: Path, data: Visual
+    name: str, case_path: Path, case: dict[str, Any], tol: dict, renders_dir: Path, data: Visual
 ) -> CaseCheck:
     where = str(case_path)
-    tol = case.get("tolerance")
-    if not isinstance(tol, dict):
-        raise _CaseError("kit", f"{where}: 'tolerance' must be an object, got {tol!r}")
     rtol = _number(tol, "rtol", where, 0.0, 1.0)
     atol = _number(tol, "atol", where, 0.0, math.inf)
     max_frac = _number(tol, "max_frac_over", where, 0.0, 1.0, default=0.0)
@@ -533,43 +460,35 @@ def _check_gbuffer(
         if is_discrete:
             spec = discrete.get(ch, {})
             allowed = spec.get("max_pixels", 0) if isinstance(spec, dict) else spec
-            if isinstance(allowed, bool) or not isinstance(allowed, int) or allowed < 0:
-                raise _CaseError(
-                    "kit",
-                    f"{where}: tolerance.discrete.{ch}.max_pixels: expected an integer >= 0, "
-                    f"got {allowed!r}",
-                )
-            bad_px = exp != got
-            if bad_px.ndim == 3:
-                bad_px = bad_px.any(axis=-1)
+            allowed = _count(allowed, f"discrete.{ch}.max_pixels", where)
+            bad = exp != got
             diff = np.abs(exp.astype(np.float64) - got.astype(np.float64))
-            n_bad = int(bad_px.sum())
-            passed = n_bad <= allowed
             rec = {"kind": "discrete", "allowed_pixels": allowed}
         else:
             fa, fb = np.isfinite(exp), np.isfinite(got)
-            pattern = fa != fb
-            both = fa & fb
+            pattern, both = fa != fb, fa & fb
             close = np.isclose(got[both], exp[both], rtol=rtol, atol=atol)
             frac = float(np.mean(~close)) if close.size else 0.0  # as refnpr.golden counts
-            bad_px = pattern.copy()
-            bad_px[both] = ~close
-            if bad_px.ndim == 3:
-                bad_px = bad_px.any(axis=-1)
+            bad = pattern.copy()
+            bad[both] = ~close
             diff = np.zeros(exp.shape)
             np.subtract(exp, got, out=diff, where=both, dtype=np.float64)
             diff = np.abs(diff)
-            n_bad = int(bad_px.sum())
-            passed = frac <= max_frac and not pattern.any()
             rec = {
                 "kind": "float",
                 "allowed_frac": max_frac,
                 "nonfinite_mismatch": int(pattern.sum()),
             }
+        bad_px = bad.any(axis=-1) if bad.ndim == 3 else bad
+        n_bad = int(bad_px.sum())
+        if is_discrete:
+            frac, passed = n_bad / max(bad_px.size, 1), n_bad <= allowed
+        else:
+            passed = frac <= max_frac and not pattern.any()
         rec.update(
             max_abs=float(diff.max()) if diff.size else 0.0,
             bad_pixels=n_bad,
-            frac_bad=frac if not is_discrete else n_bad / max(bad_px.size, 1),
+            frac_bad=frac,
             passed=bool(passed),
         )
         per[ch] = rec
@@ -666,7 +585,8 @@ def check_kit(
     report_dir : str or path, optional
         Writes ``index.html`` and, per case, ``cases/<case>/{reference,result,diff16,mask}.png``.
     json_path : str or path, optional
-        Writes every case's metrics as JSON.
+        Writes ``{"kit", "renders", "summary": {cases, passed, failed}, "cases": [...]}``, each
+        case as :meth:`CaseCheck.to_json`.
 
     Returns
     -------
@@ -701,14 +621,15 @@ def check_kit(
         try:
             case_path, case = _read_case(kit_dir, entry)
             kind = case.get("kind", kind)
-            if kind == "gbuffer":
-                r = _check_gbuffer(name, case_path, case, renders_dir, data)
-            elif kind == "image":
-                r = _check_image(name, case_path, case, renders_dir, data)
-            else:
+            check = {"image": _check_image, "gbuffer": _check_gbuffer}.get(kind)
+            if check is None:
                 raise _CaseError(
                     "kit", f"{case_path}: kind must be 'image' or 'gbuffer', got {kind!r}"
                 )
+            tol = case.get("tolerance")
+            if not isinstance(tol, dict):
+                raise _CaseError("kit", f"{case_path}: 'tolerance' must be an object, got {tol!r}")
+            r = check(name, case_path, case, tol, renders_dir, data)
         except _CaseError as exc:
             r = CaseCheck(name, str(kind), False, exc.status, exc.message)
         results.append(r)
@@ -720,25 +641,12 @@ def check_kit(
             Path(report_dir), report_cases, kit_dir=kit_dir, renders_dir=renders_dir
         )
     if json_path is not None:
-        write_json(json_path, results, kit_dir=kit_dir, renders_dir=renders_dir)
+        passed = sum(r.passed for r in results)
+        summary = {"cases": len(results), "passed": passed, "failed": len(results) - passed}
+        cases = [r.to_json() for r in results]
+        doc = {"kit": str(kit_dir), "renders": str(renders_dir), "summary": summary, "cases": cases}
+        write_json(json_path, doc)
     return results
-
-
-def write_json(
-    path: str | Path, results: list[CaseCheck], *, kit_dir: Path, renders_dir: Path
-) -> Path:
-    """Write ``{"kit", "renders", "summary": {cases, passed, failed}, "cases": [...]}``."""
-    passed = sum(r.passed for r in results)
-    doc = {
-        "kit": str(kit_dir),
-        "renders": str(renders_dir),
-        "summary": {"cases": len(results), "passed": passed, "failed": len(results) - passed},
-        "cases": [r.to_json() for r in results],
-    }
-    path = Path(path)
-    with atomic_file(path, suffix=".json") as tmp:
-        tmp.write_text(json.dumps(doc, indent=2, allow_nan=False))
-    return path
 
 
 def format_table(results: list[CaseCheck]) -> str:

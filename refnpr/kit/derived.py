@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..raster.gbuffer import BUILTIN_CHANNELS
 
-__all__ = ["generic_derived", "channel_derived", "CONTOURS_DERIVED"]
+__all__ = ["generic_derived", "channel_derived"]
 
 _CHANNEL_HOW = {
     "depth": "w_clip of the visible fragment (= -z_eye), per sample; +inf where empty.",
@@ -30,21 +30,6 @@ _CHANNEL_HOW = {
     "dposition_dx": "d(position)/dx per image pixel by the quotient rule, like duv_dx.",
     "dposition_dy": "d(position)/dy per image pixel (y down).",
 }
-
-CONTOURS_DERIVED = (
-    "Contours (params.contours; Veryovka 2002 sec. 5; refnpr/styles/contours.py): per object, "
-    "weld the mesh's vertices by exact position, build the edge -> adjacent faces table; per "
-    "frame a face is front-facing when dot(geometric normal, eye - face centroid) > 0; draw "
-    "silhouette edges (one front-, one back-facing face) if silhouettes, boundary edges (one "
-    "face) if boundaries, crease edges (dihedral angle between face normals > crease_angle "
-    "degrees) if crease_angle is not null. Each edge is projected with view_projection and drawn "
-    "on the sample grid as an anti-aliased capsule of radius 0.5 * width * n sample pixels "
-    "(coverage = max over edges), stepping along it every 0.5 sample pixel; a point is visible "
-    "when its eye depth is not behind the farthest depth among the 3x3 samples around it by more "
-    "than depth_tolerance (relative). The lines are composited straight-alpha OVER the style's "
-    "per-sample colour with the ink colour: a = c + a_s (1 - c), rgb = (ink c + rgb_s a_s (1 - c)) "
-    "/ a, before the background composite and the resolve."
-)
 
 
 def generic_derived() -> dict[str, str]:

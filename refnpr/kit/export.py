@@ -1,13 +1,5 @@
-"""``refnpr kit export``: write every input of the golden cases as a conformance kit.
-
-Layout (``docs/kit.md`` documents every key)::
-
-    DIR/index.json, DIR/case.schema.json, DIR/index.schema.json
-    DIR/<case>/case.json
-    DIR/<case>/meshes/<k>_<object>.glb
-    DIR/<case>/textures/<role>/level_<L>.exr | .png
-    DIR/<case>/expected.png, expected.exr               (image cases)
-    DIR/<case>/expected/<channel>.npy                   (gbuffer cases)
+"""``refnpr kit export``: write every input of the golden cases as a conformance kit (the
+layout and every key: ``docs/kit.md``).
 
 Each case is built in a temporary directory beside its target and renamed into place, so a case
 directory is never partial; ``index.json`` is written last (atomically).
@@ -30,7 +22,7 @@ from ..golden import GoldenCase, load_suite
 from ..image import atomic_file, read_image_file
 from ..raster import rasterize
 from . import KIT_FORMAT, KIT_VERSION
-from ._json import jsonable
+from ._json import jsonable, write_json
 from .camera import camera_entry, sample_positions
 from .derived import channel_derived, generic_derived
 from .exr import write_exr
@@ -49,14 +41,6 @@ RESOLVE = {
     "composite": "per sample: premultiplied over the background, then the n x n box mean, "
     "then unpremultiply (rgb / alpha where alpha > 0)",
 }
-
-
-def write_json(path: Path, data: Any) -> Path:
-    """Write JSON (2-space indent, UTF-8, newline at the end) atomically."""
-    text = json.dumps(data, indent=2, allow_nan=False) + "\n"
-    with atomic_file(path, suffix=".json") as tmp:
-        tmp.write_text(text, encoding="utf-8")
-    return path
 
 
 def _check_dir(directory: str | os.PathLike) -> Path:
@@ -112,8 +96,6 @@ def raster_options(options: dict[str, Any], channels: list[str]) -> dict[str, An
     ``texture_size`` as ``[W, H]``)."""
     import inspect
 
-    from ..raster import rasterize
-
     defaults = {
         k: p.default
         for k, p in inspect.signature(rasterize).parameters.items()
@@ -150,12 +132,11 @@ def _export_image(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) ->
     from ..render import render
 
     style = _style_of(case, scene)
-    size = {"width": case.width, "height": case.height, "spp": case.spp}
-    sx = export_style(style, scene, tmp, **size)
+    sx = export_style(style, scene, tmp, width=case.width, height=case.height, spp=case.spp)
     data = _base(case, scene)
     data["resolve"] = dict(RESOLVE)
     data["objects"] = objects_entry(scene, tmp, sx.vertex_attributes)
-    if getattr(sx, "frames", None):
+    if sx.frames:
         data["frames"] = sx.frames
     data["style"] = {"name": style_name(style), "params": sx.params}
     channels = sorted(style.requires(scene))
@@ -211,8 +192,7 @@ def _export_gbuffer(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) 
         if set(ref) == set(arrays):
             golden_frac = {k: _frac_off(arrays[k], ref[k], case) for k in sorted(arrays)}
     entries = {}
-    for ch in sorted(arrays):
-        arr = np.asarray(arrays[ch])
+    for ch, arr in sorted(arrays.items()):
         rel = f"expected/{ch}.npy"
         with atomic_file(tmp / rel, suffix=".npy") as t:
             np.save(t, arr, allow_pickle=False)

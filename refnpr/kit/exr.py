@@ -14,7 +14,7 @@ import numpy as np
 
 from ..image import atomic_file
 
-__all__ = ["EXR_CHANNELS", "write_exr", "read_exr"]
+__all__ = ["EXR_CHANNELS", "write_exr"]
 
 #: Channel names by component count.
 EXR_CHANNELS: dict[int, tuple[str, ...]] = {
@@ -26,26 +26,18 @@ EXR_CHANNELS: dict[int, tuple[str, ...]] = {
 
 
 def write_exr(path: str | os.PathLike, array: np.ndarray) -> Path:
-    """Write a float array as a 32-bit float OpenEXR file (atomic rename).
+    """Write a float array as a 32-bit float OpenEXR file (atomic rename; its directory is
+    created) with the channel naming of the module docstring.
 
     Parameters
     ----------
     path : str or path
-        Target file (``.exr``); its directory is created.
     array : (H, W) or (H, W, C) float, C in 1-4
-        Converted to float32 (exact for float32 input).
+        Written as float32 (exact for float32 input); no NaN.
 
     Returns
     -------
     Path
-        ``path``.
-
-    Raises
-    ------
-    ValueError
-        If ``array`` is not (H, W) / (H, W, 1-4), is empty, or holds NaN.
-    TypeError
-        If ``array`` is not a floating-point array.
     """
     import OpenEXR
 
@@ -70,33 +62,3 @@ def write_exr(path: str | os.PathLike, array: np.ndarray) -> Path:
         with OpenEXR.File(header, channels) as f:
             f.write(str(tmp))
     return path
-
-
-def read_exr(path: str | os.PathLike) -> np.ndarray:
-    """Read an EXR written by :func:`write_exr`.
-
-    Returns
-    -------
-    (H, W) float32 for a ``Y`` file, else (H, W, C) float32 in R, G, B, A order.
-
-    Raises
-    ------
-    ValueError
-        Naming the file: missing, unreadable, or with channels other than the naming above.
-    """
-    import OpenEXR
-
-    p = Path(path)
-    if not p.is_file():
-        raise ValueError(f"exr: file {str(path)!r} does not exist")
-    try:
-        with OpenEXR.File(str(p), separate_channels=True) as f:
-            ch = {k: np.asarray(v.pixels) for k, v in f.channels().items()}
-    except Exception as exc:  # noqa: BLE001 -- OpenEXR raises many types
-        raise ValueError(f"exr: cannot read {str(path)!r}: {exc}") from None
-    for names in EXR_CHANNELS.values():
-        if set(ch) == set(names):
-            if names == ("Y",):
-                return ch["Y"].astype(np.float32)
-            return np.stack([ch[n] for n in names], axis=-1).astype(np.float32)
-    raise ValueError(f"exr: {str(path)!r} has channels {sorted(ch)}; expected Y, RG, RGB or RGBA")

@@ -1,16 +1,10 @@
 """glTF 2.0 binary (.glb) writer for one world-space triangle mesh, with numpy only.
 
 One mesh, one primitive (mode TRIANGLES), one node without a transform, one default material
-(so that loaders such as trimesh keep ``TEXCOORD_0``). Vertex data as float32 (``POSITION``
-VEC3 with min/max, ``NORMAL`` VEC3, ``TEXCOORD_0`` VEC2), extra per-vertex attributes as
-application-specific attributes ``"_" + NAME.upper()`` (SCALAR / VEC2 / VEC3 / VEC4 float32),
-indices UNSIGNED_INT in refnpr's face order. Values are stored as they are in refnpr (rounded to
-float32): normals are NOT renormalized, uv is NOT flipped (glTF's uv origin is the top-left
-texel, refnpr's texel row 0 is v = 0: the same convention).
-
-Because trimesh flips v when it loads ``TEXCOORD_0`` (``1 - v``, which is not exact in float),
-the same uv values are also written as ``_UV`` when ``exact_uv`` is set (the default): loaders
-return custom attributes verbatim.
+(so that loaders such as trimesh keep ``TEXCOORD_0``); vertex data float32 as refnpr has it (no
+renormalized normals, no flipped uv), extra attributes as ``"_" + NAME.upper()``, indices
+UNSIGNED_INT in refnpr's face order. ``_UV`` repeats ``TEXCOORD_0``, which trimesh flips on load
+(``1 - v``, not exact in float): loaders return custom attributes verbatim (docs/kit.md).
 """
 
 from __future__ import annotations
@@ -28,7 +22,7 @@ from ..image import atomic_file
 
 __all__ = ["write_glb", "glb_attribute_name", "GLB_UV_EXACT"]
 
-#: The custom attribute holding refnpr's uv exactly (see the module docstring).
+#: The custom attribute holding refnpr's uv exactly.
 GLB_UV_EXACT = "_UV"
 _FLOAT, _UINT = 5126, 5125
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
@@ -53,7 +47,6 @@ def write_glb(
     attributes: dict[str, np.ndarray] | None = None,
     name: str = "mesh",
     extras: dict[str, Any] | None = None,
-    exact_uv: bool = True,
 ) -> Path:
     """Write a triangle mesh as a glTF 2.0 binary file (atomic rename).
 
@@ -67,14 +60,13 @@ def write_glb(
         Zero-based vertex indices (stored as UNSIGNED_INT in this order).
     normals : (N, 3) float, optional
     uv : (N, 2) float, optional
+        Stored as ``TEXCOORD_0`` and as ``_UV`` (the same accessor).
     attributes : {name: (N,) or (N, C) float}, optional
         C in 1-4; stored as ``glb_attribute_name(name)``.
     name : str
         Mesh and node name.
     extras : dict, optional
         JSON data stored as the mesh's ``extras``.
-    exact_uv : bool
-        Also store uv as ``_UV`` (see the module docstring).
 
     Returns
     -------
@@ -132,9 +124,7 @@ def write_glb(
         attrs["NORMAL"] = add(vertex_array("normals", normals, (3,)), _FLOAT, _ARRAY_BUFFER)
     if uv is not None:
         uv32 = vertex_array("uv", uv, (2,))
-        attrs["TEXCOORD_0"] = add(uv32, _FLOAT, _ARRAY_BUFFER)
-        if exact_uv:
-            attrs[GLB_UV_EXACT] = attrs["TEXCOORD_0"]  # same accessor, read verbatim
+        attrs["TEXCOORD_0"] = attrs[GLB_UV_EXACT] = add(uv32, _FLOAT, _ARRAY_BUFFER)
     for key, value in (attributes or {}).items():
         gl_name = glb_attribute_name(key)
         if gl_name in attrs:

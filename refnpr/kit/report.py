@@ -31,7 +31,7 @@ from urllib.parse import quote
 import numpy as np
 
 from ..image import atomic_file, write_png_atomic
-from .check import IMAGE_METRICS, CaseCheck, Visual
+from .check import CaseCheck, Visual
 
 __all__ = ["diff16_image", "error_mask", "render_html", "write_report"]
 
@@ -78,8 +78,7 @@ def diff16_image(reference: np.ndarray, result: np.ndarray, *, gain: float = 16.
     d = np.abs(np.asarray(result, dtype=np.float64) - np.asarray(reference, dtype=np.float64))
     if d.ndim != 3 or d.shape[2] != 4:
         raise ValueError(f"reference, result: expected (H, W, 4) arrays, got {d.shape}")
-    rgb = np.maximum(d[..., :3], d[..., 3:4])
-    return np.rint(np.clip(rgb * gain, 0.0, 1.0) * 255.0).astype(np.uint8)
+    return _rgb8(np.maximum(d[..., :3], d[..., 3:4]) * gain)
 
 
 def _rgb8(a: np.ndarray) -> np.ndarray:
@@ -109,21 +108,17 @@ def write_report(
         raise ValueError(f"report_dir: {str(report_dir)!r} is a file; expected a directory")
     out = []
     for check, vis in cases:
-        rel = f"cases/{check.name}"
-        images: dict[str, str] = {}
+        pictures = {}
         if vis.reference is not None:
-            write_png_atomic(report_dir / rel / "reference.png", _rgb8(vis.reference))
-            images["reference"] = f"{rel}/reference.png"
+            pictures["reference"] = _rgb8(vis.reference)
         if vis.result is not None:
-            write_png_atomic(report_dir / rel / "result.png", _rgb8(vis.result))
-            images["result"] = f"{rel}/result.png"
-            write_png_atomic(
-                report_dir / rel / "diff16.png", diff16_image(vis.reference, vis.result)
-            )
-            images["diff16"] = f"{rel}/diff16.png"
+            pictures["result"] = _rgb8(vis.result)
+            pictures["diff16"] = diff16_image(vis.reference, vis.result)
         if vis.bad is not None:
-            write_png_atomic(report_dir / rel / "mask.png", error_mask(vis.bad, vis.empty))
-            images["mask"] = f"{rel}/mask.png"
+            pictures["mask"] = error_mask(vis.bad, vis.empty)
+        images = {key: f"cases/{check.name}/{key}.png" for key in pictures}
+        for key, pixels in pictures.items():
+            write_png_atomic(report_dir / images[key], pixels)
         out.append((replace(check, images=images), vis))
     page = render_html(out, kit_dir=kit_dir, renders_dir=renders_dir)
     with atomic_file(report_dir / "index.html", suffix=".html") as tmp:
@@ -218,18 +213,14 @@ def _short(v: object) -> str:
     return f"{v:.6g}" if isinstance(v, float) else str(v)
 
 
-_STRIP = (
-    ("reference", "reference"),
-    ("result", "result"),
-    ("diff16", "|diff| x 16"),
-    ("mask", "mask"),
-)
+#: The report images of a case (``CaseCheck.images`` keys) and their captions, in order.
+_STRIP = {"reference": "reference", "result": "result", "diff16": "|diff| x 16", "mask": "mask"}
 
 
 def _strip(name: str, images: dict[str, str]) -> str:
     """One cell: reference | result | |diff| x 16 | mask side by side (a placeholder if absent)."""
     figs = []
-    for key, caption in _STRIP:
+    for key, caption in _STRIP.items():
         if key in images:
             src = html.escape(quote(images[key]))
             alt = html.escape(f"{name}: {caption}")
@@ -250,12 +241,10 @@ def render_html(cases: list[tuple[CaseCheck, Visual]], *, kit_dir: Path, renders
     )
     rows = []
     for c, vis in cases:
-        values = {k: c.metrics.get(k) for k in IMAGE_METRICS}
-        values["error"] = c.error
-        attrs = " ".join(f'data-{k}="{_attr(values.get(k))}"' for k, _, _ in _COLUMNS)
+        values = {k: c.error if k == "error" else c.metrics.get(k) for k, _, _ in _COLUMNS}
+        attrs = " ".join(f'data-{k}="{_attr(v)}"' for k, v in values.items())
         cells = []
-        for k, _, fmt in _COLUMNS:
-            v = values.get(k)
+        for (_, _, fmt), v in zip(_COLUMNS, values.values(), strict=True):
             text = "" if v is None else ("inf" if not math.isfinite(v) else fmt.format(v))
             cells.append(f'<td class="num">{text}</td>')
         detail = ""

@@ -12,14 +12,7 @@ import numpy as np
 from ._json import jsonable
 from .gltf import glb_attribute_name, write_glb
 
-__all__ = [
-    "kit_meshes",
-    "lights_entry",
-    "material_entry",
-    "mesh_file_name",
-    "write_object_mesh",
-    "objects_entry",
-]
+__all__ = ["kit_meshes", "lights_entry", "material_entry", "objects_entry"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9_\-]+")
 
@@ -71,73 +64,15 @@ def material_entry(material: Any) -> dict[str, Any]:
     }
 
 
-def mesh_file_name(k: int, name: str) -> str:
-    """``meshes/<k>_<name>.glb`` with the name reduced to ``[A-Za-z0-9_-]``."""
-    safe = _UNSAFE.sub("-", name).strip("-") or "object"
-    return f"meshes/{k}_{safe}.glb"
-
-
-def write_object_mesh(
-    case_dir: Path,
-    rel: str,
-    mesh: Any,
-    *,
-    extra: dict[str, np.ndarray] | None = None,
-    extras: dict[str, Any] | None = None,
-) -> dict[str, Any]:
-    """Write a world-space refnpr Mesh to ``case_dir / rel`` as .glb.
-
-    Parameters
-    ----------
-    case_dir : Path
-    rel : str
-        Path relative to ``case_dir`` (``mesh_file_name``).
-    mesh : refnpr.raster.Mesh
-        World space; its own ``attributes`` are written as ``_NAME`` attributes.
-    extra : {name: (N, C) float}, optional
-        More per-vertex attributes (a style's, e.g. abstracted normals).
-    extras : dict, optional
-        JSON stored in the glTF mesh's ``extras``.
-
-    Returns
-    -------
-    dict
-        ``vertices``, ``triangles``, ``attributes``: {glTF name: refnpr name} of the extra
-        attributes, ``has_normals``, ``has_uv``.
-    """
-    attrs = dict(mesh.attributes)
-    for key, value in (extra or {}).items():
-        if key in attrs:
-            raise ValueError(
-                f"vertex_attributes: {key!r} is already a vertex attribute of mesh {mesh.name!r}"
-            )
-        attrs[key] = value
-    write_glb(
-        case_dir / rel,
-        mesh.positions,
-        mesh.faces,
-        normals=mesh.normals,
-        uv=mesh.uv,
-        attributes=attrs,
-        name=mesh.name,
-        extras=extras,
-    )
-    return {
-        "vertices": int(mesh.positions.shape[0]),
-        "triangles": int(mesh.faces.shape[0]),
-        "has_normals": mesh.normals is not None,
-        "has_uv": mesh.uv is not None,
-        "attributes": {glb_attribute_name(k): k for k in attrs},
-    }
-
-
 def objects_entry(
     scene: Any, case_dir: Path, vertex_attributes: dict[int, dict[str, np.ndarray]] | None = None
 ) -> list[dict[str, Any]]:
-    """Write every object's world mesh and describe the objects (``objects`` of case.json).
+    """Write every object's world mesh to ``case_dir/meshes/<k>_<name>.glb`` (the name reduced
+    to ``[A-Za-z0-9_-]``) and describe the objects (``objects`` of case.json).
 
-    ``first_tri_id`` is the global triangle index of the object's first face: refnpr's
-    ``tri_id`` concatenates the meshes in object order.
+    ``vertex_attributes`` (``{object index: {name: (N, C) float}}``, a style's) are written
+    with the mesh's own attributes as ``_NAME``. ``first_tri_id`` is the global triangle index
+    of the object's first face: refnpr's ``tri_id`` concatenates the meshes in object order.
     """
     vertex_attributes = vertex_attributes or {}
     unknown = sorted(set(vertex_attributes) - set(range(len(scene.objects))))
@@ -148,12 +83,23 @@ def objects_entry(
         )
     out, t0 = [], 0
     for k, (obj, mesh) in enumerate(zip(scene.objects, scene.world_meshes(), strict=True)):
-        rel = mesh_file_name(k, obj.name)
-        info = write_object_mesh(
-            case_dir,
-            rel,
-            mesh,
-            extra=vertex_attributes.get(k),
+        rel = f"meshes/{k}_{_UNSAFE.sub('-', obj.name).strip('-') or 'object'}.glb"
+        attrs = dict(mesh.attributes)
+        for key, value in vertex_attributes.get(k, {}).items():
+            if key in attrs:
+                raise ValueError(
+                    f"vertex_attributes: {key!r} is already a vertex attribute of mesh "
+                    f"{mesh.name!r}"
+                )
+            attrs[key] = value
+        write_glb(
+            case_dir / rel,
+            mesh.positions,
+            mesh.faces,
+            normals=mesh.normals,
+            uv=mesh.uv,
+            attributes=attrs,
+            name=mesh.name,
             extras={"refnpr_object": obj.name, "mesh_id": k, "first_tri_id": t0},
         )
         out.append(
@@ -162,9 +108,13 @@ def objects_entry(
                 "mesh": rel,
                 "mesh_id": k,
                 "first_tri_id": t0,
-                **info,
+                "vertices": int(mesh.positions.shape[0]),
+                "triangles": int(mesh.faces.shape[0]),
+                "has_normals": mesh.normals is not None,
+                "has_uv": mesh.uv is not None,
+                "attributes": {glb_attribute_name(a): a for a in attrs},
                 "material": material_entry(obj.material),
             }
         )
-        t0 += info["triangles"]
+        t0 += int(mesh.faces.shape[0])
     return out

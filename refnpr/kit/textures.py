@@ -22,6 +22,8 @@ __all__ = [
     "ORIENTATION_ROW0_V0",
     "ORIENTATION_ROW0_TOP",
     "write_texture_levels",
+    "write_pyramid",
+    "write_table",
 ]
 
 ENCODINGS = ("linear", "srgb")
@@ -138,3 +140,43 @@ def write_texture_levels(
         "orientation": orientation,
         "used_for": used_for,
     }
+
+
+def write_pyramid(
+    case_dir: str | Path, role: str, levels: Any, *, filter: str, used_for: str
+) -> dict[str, Any]:
+    """A float texture's mip levels (each as float32), GL_REPEAT in refnpr's orientation
+    (``ORIENTATION_ROW0_V0``): :func:`write_texture_levels` with those options."""
+    return write_texture_levels(
+        case_dir,
+        role,
+        [np.asarray(lv, dtype=np.float32) for lv in levels],
+        encoding="linear",
+        wrap="repeat",
+        filter=filter,
+        orientation=ORIENTATION_ROW0_V0,
+        used_for=used_for,
+    )
+
+
+def write_table(
+    case_dir: str | Path,
+    role: str,
+    table: np.ndarray,
+    *,
+    orientation: str,
+    used_for: str,
+    filter: str = "nearest",
+) -> dict[str, Any]:
+    """One float32 level clamped to edge (a lookup table or a per-pixel map):
+    :func:`write_texture_levels` with those options."""
+    return write_texture_levels(
+        case_dir,
+        role,
+        [np.asarray(table, dtype=np.float32)],
+        encoding="linear",
+        wrap="clamp",
+        filter=filter,
+        orientation=orientation,
+        used_for=used_for,
+    )

@@ -15,6 +15,7 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
@@ -35,6 +36,19 @@ def export_cases(directory: Path, names: list[str] | None = None) -> dict[str, s
         except Exception as exc:  # noqa: BLE001 -- recorded and asserted by a test
             errors[case.name] = f"{type(exc).__name__}: {exc}"
     return errors
+
+
+def read_exr(path: Path) -> np.ndarray:
+    """A kit EXR with OpenEXR alone: (H, W) float32 for a ``Y`` file, else (H, W, C) in R, G, B,
+    A order; the channel naming of docs/kit.md is asserted."""
+    import OpenEXR
+
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        ch = {k: np.asarray(v.pixels) for k, v in f.channels().items()}
+    assert sorted(ch) in (["Y"], ["G", "R"], ["B", "G", "R"], ["A", "B", "G", "R"]), sorted(ch)
+    if "Y" in ch:
+        return ch["Y"]
+    return np.stack([ch[n] for n in "RGBA" if n in ch], axis=-1)
 
 
 @pytest.fixture(scope="session")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import imageio.v3 as iio
 import jsonschema
@@ -13,11 +12,10 @@ import pytest
 from refnpr.cli import main
 from refnpr.golden import load_suite
 from refnpr.kit import export_kit
-from refnpr.kit.exr import read_exr
 from refnpr.kit.schema import load_schema
 from refnpr.kit.styles import unresolved
 
-from .conftest import REPO, SUITE
+from .conftest import REPO, SUITE, read_exr
 
 GOLDEN = REPO / "golden"
 
@@ -434,8 +432,3 @@ def test_unresolved_detects_auto():
     # the contour layer is checked whatever the style module's own check says
     found = unresolved("toon", {"contours": {"width": "auto"}})
     assert "params.contours.width = 'auto'" in found
-
-
-def test_read_exr_rejects_missing(tmp_path: Path):
-    with pytest.raises(ValueError, match="does not exist"):
-        read_exr(tmp_path / "nope.exr")

@@ -7,10 +7,9 @@ paths of exported params that still hold something only refnpr could resolve (th
 it; the generic check looks for "auto" strings).
 
 The ``contoured`` wrapper (a style with ``contours = {...}``) is unwrapped here: its base style is
-exported by the base's module, then the contour layer by ``refnpr.kit.styles.contours
-.export_contours(layer, scene, case_dir, *, width, height, spp) -> StyleExport`` (its params go
-to ``params["contours"]``, its derived texts and textures are merged). The case's style name is
-the base style's name.
+exported by the base's module, then the contour layer by :func:`.contours.export_contours` (same
+arguments, the layer instead of the style; its params go to ``params["contours"]``, its derived
+texts and textures are merged). The case's style name is the base style's name.
 """
 
 from __future__ import annotations
@@ -20,9 +19,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from .._json import jsonable
-from ..derived import CONTOURS_DERIVED
-from . import _generic
+from . import _generic, contours
 from ._export import StyleExport
 
 __all__ = ["StyleExport", "export_style", "exporter_module", "unresolved", "style_name"]
@@ -45,24 +42,6 @@ def style_name(style: Any) -> str:
     return style.base.name if style.name == "contoured" else style.name
 
 
-def _contours_module() -> ModuleType | None:
-    """``refnpr.kit.styles.contours`` (the contour layer's exporter), None if absent."""
-    try:
-        return importlib.import_module(f"{__name__}.contours")
-    except ModuleNotFoundError as exc:
-        if exc.name != f"{__name__}.contours":
-            raise
-        return None
-
-
-def _export_contours(layer: Any, scene: Any, case_dir: Path, **size: int) -> StyleExport:
-    mod = _contours_module()
-    if mod is not None and hasattr(mod, "export_contours"):
-        return mod.export_contours(layer, scene, case_dir, **size)
-    params = {k: jsonable(v, where=f"contours.{k}") for k, v in layer.params().items()}
-    return StyleExport(params=params)
-
-
 def export_style(
     style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
@@ -71,8 +50,7 @@ def export_style(
     Parameters
     ----------
     style : refnpr.styles.Style
-        The style instance the case renders with (``contoured`` is unwrapped, see the module
-        docstring).
+        The style the case renders with (``contoured`` is unwrapped, see the module docstring).
     scene : refnpr.scenes.Scene
     case_dir : Path
         ``DIR/<case>``; texture files go under ``case_dir/textures/<role>/``.
@@ -82,28 +60,20 @@ def export_style(
     Returns
     -------
     StyleExport
-        ``params`` JSON data (with ``params["contours"]`` for a contoured style).
-
-    Raises
-    ------
-    TypeError
-        If the module returns something other than a StyleExport (naming the module).
+        With ``params["contours"]`` for a contoured style. A module that returns anything else
+        is a TypeError naming it.
     """
     size = {"width": width, "height": height, "spp": spp}
     case_dir = Path(case_dir)
     if style.name == "contoured":
         out = export_style(style.base, scene, case_dir, **size)
-        layer = _export_contours(style.layer, scene, case_dir, **size)
-        if not isinstance(layer, StyleExport):
-            raise TypeError(
-                f"export_contours returned {type(layer).__name__}, expected StyleExport"
-            )
+        layer = contours.export_contours(style.layer, scene, case_dir, **size)
         out.params = {**out.params, "contours": layer.params}
         clash = set(out.textures) & set(layer.textures)
         if clash:
             raise ValueError(f"contours: texture roles {sorted(clash)} clash with the base style's")
         out.textures.update(layer.textures)
-        out.derived.update(layer.derived or {"contours": CONTOURS_DERIVED})
+        out.derived.update(layer.derived)
         for k, attrs in layer.vertex_attributes.items():
             out.vertex_attributes.setdefault(k, {}).update(attrs)
         return out
@@ -120,15 +90,15 @@ def unresolved(name: str, params: dict[str, Any]) -> list[str]:
     """Key paths of an exported style's params that only refnpr could resolve.
 
     Uses the style module's own ``unresolved(params)`` when it has one, else the generic check
-    ("auto"/"default"/"preset" strings). The contour layer's params are checked generically.
+    ("auto"/"default"/"preset" strings). The contour layer's params are checked generically and
+    for missing keys.
     """
-    mod = exporter_module(name)
-    check = getattr(mod, "unresolved", _generic.unresolved)
-    base = {k: v for k, v in params.items() if k != "contours"}
-    out = list(check(base))
+    check = getattr(exporter_module(name), "unresolved", _generic.unresolved)
+    out = list(check({k: v for k, v in params.items() if k != "contours"}))
     if "contours" in params:
         out += _generic.unresolved({"contours": params["contours"]})
-        layer_check = getattr(_contours_module(), "unresolved", None)
-        if layer_check is not None and isinstance(params["contours"], dict):
-            out += [f"params.contours: {k} missing" for k in layer_check(params["contours"])]
+        if isinstance(params["contours"], dict):
+            out += [
+                f"params.contours: {k} missing" for k in contours.unresolved(params["contours"])
+            ]
     return out

@@ -21,21 +21,7 @@ UNRESOLVED_WORDS = {"auto", "default", "preset"}
 def export(
     style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
-    """Export ``style.params()`` converted to JSON, with no textures and no derived texts.
-
-    Parameters
-    ----------
-    style : refnpr.styles.Style
-    scene : refnpr.scenes.Scene
-    case_dir : Path
-        The case directory (unused: no texture files).
-    width, height, spp : int
-        The case's image size and samples per pixel (unused).
-
-    Returns
-    -------
-    StyleExport
-    """
+    """``style.params()`` converted to JSON; no textures, no derived texts."""
     return StyleExport(params=jsonable(style.params(), where=f"style {style.name!r} params"))
 
 

@@ -15,6 +15,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from refnpr.styles.contours import CONTOURS
+
 from .._json import jsonable
 from ._export import StyleExport
 
@@ -58,32 +60,14 @@ DERIVED = {
 def export_contours(
     layer: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
-    """Export a ``ContourLayer`` as used for a case of ``spp`` samples per pixel.
-
-    Parameters
-    ----------
-    layer : refnpr.styles.contours.ContourLayer
-    scene : refnpr.scenes.Scene
-    case_dir : Path
-        Unused (no textures).
-    width, height : int
-        Unused.
-    spp : int
-        Samples per pixel (a square n * n): ``radius_samples`` = width * n / 2.
-
-    Returns
-    -------
-    StyleExport
-        ``params``: every layer field plus ``radius_samples`` and ``piece_samples``.
-    """
-    n = math.isqrt(int(spp))
-    params = layer.p._params.resolved(layer.p)  # every parameter of the layer's declaration
-    params["radius_samples"] = 0.5 * float(layer.width) * n
+    """Every field of a ``ContourLayer`` as used, plus ``radius_samples`` (width * n / 2 for
+    spp = n * n) and ``piece_samples``; no textures."""
+    params = CONTOURS.resolved(layer.p)
+    params["radius_samples"] = 0.5 * float(layer.width) * math.isqrt(int(spp))
     params["piece_samples"] = PIECE_SAMPLES
     return StyleExport(params=jsonable(params, where="contours params"), derived=dict(DERIVED))
 
 
 def unresolved(params: dict[str, Any]) -> list[str]:
-    """Missing layer keys under ``params`` (the contour layer's own dict)."""
-    need = ["width", "ink", "silhouettes", "boundaries", "crease_angle", "depth_tolerance"]
-    return [k for k in need if k not in params]
+    """Declared layer parameters missing from ``params`` (the contour layer's own dict)."""
+    return [k for k in CONTOURS.names if k not in params]

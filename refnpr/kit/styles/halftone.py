@@ -31,12 +31,10 @@ import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from refnpr.formulas.lighting import LUMA_709
 
 from .._json import jsonable
-from ..textures import ORIENTATION_ROW0_V0, write_texture_levels
+from ..textures import ORIENTATION_ROW0_V0, write_pyramid, write_table
 from ._export import StyleExport
 
 __all__ = ["export"]
@@ -82,28 +80,9 @@ _DERIVED = {
 }
 
 
-def _spec_key(spec: dict[str, Any], material_texture: str | None) -> str:
-    return json.dumps(spec, sort_keys=True) + "|" + str(material_texture)
-
-
 def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int):
-    """Resolved params and texture files of a ``halftone`` style for ``scene``.
-
-    Parameters
-    ----------
-    style : HalftoneStyle
-        (a ``contoured`` wrapper is unwrapped by :func:`refnpr.kit.styles.export_style`, which
-        adds ``params["contours"]``)
-    scene : refnpr.scenes.Scene
-    case_dir : Path
-        The case directory; textures go to ``case_dir/textures/<role>/``.
-    width, height, spp : int
-        The case's image size and samples per pixel (spp = n * n).
-
-    Returns
-    -------
-    StyleExport
-    """
+    """Resolved params and texture files of a ``halftone`` style for ``scene`` (the layout in
+    the module docstring)."""
     if getattr(style, "name", None) != "halftone":
         raise TypeError(f"style: expected a halftone style, got {type(style).__name__}")
     n_axis = int(round(math.sqrt(spp)))
@@ -120,41 +99,31 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
     per_level = p.mip == "per_level"
     for k, obj in enumerate(scene.objects):
         spec = specs[k]
-        key = _spec_key(spec, obj.material.texture)
+        key = json.dumps(spec, sort_keys=True) + "|" + str(obj.material.texture)
         screen = style.screen_for(spec, obj.material.texture)
         equalize = bool(p.tone_correct and screen.kind != "strokes")
         if key not in roles:
             i = roles[key] = len(roles)
-            textures[f"screen-{i}"] = write_texture_levels(
+            textures[f"screen-{i}"] = write_pyramid(
                 case_dir,
                 f"screen-{i}",
-                [np.asarray(lv, dtype=np.float32) for lv in screen.pyramid.levels],
-                encoding="linear",
-                wrap="repeat",
+                screen.pyramid.levels,
                 filter="per_level" if (per_level or equalize) else "linear_mipmap_linear",
-                orientation=ORIENTATION_ROW0_V0,
                 used_for=f"halftone screen ({screen.kind}) of object(s) using spec {spec}",
             )
             if screen.normals is not None:
-                textures[f"normals-{i}"] = write_texture_levels(
+                textures[f"normals-{i}"] = write_pyramid(
                     case_dir,
                     f"normals-{i}",
-                    [np.asarray(lv, dtype=np.float32) for lv in screen.normals.levels],
-                    encoding="linear",
-                    wrap="repeat",
+                    screen.normals.levels,
                     filter="linear_mipmap_linear",
-                    orientation=ORIENTATION_ROW0_V0,
                     used_for="RGB-encoded stroke normal map (sec. 5.2 DOT3 stroke lighting)",
                 )
             if equalize:
-                luts = style._luts(screen)
-                textures[f"tone-lut-{i}"] = write_texture_levels(
+                textures[f"tone-lut-{i}"] = write_table(
                     case_dir,
                     f"tone-lut-{i}",
-                    [np.asarray(luts, dtype=np.float32)],
-                    encoding="linear",
-                    wrap="clamp",
-                    filter="nearest",
+                    style._luts(screen),
                     orientation=(
                         "row k = mip level k; column j = CDF at x = j / (cols - 1); apply by "
                         "linear interpolation (numpy.interp)"
@@ -168,12 +137,10 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
         ind_role = None
         if imap is not None:
             ind_role = f"indication-{k}"
-            textures[ind_role] = write_texture_levels(
+            textures[ind_role] = write_table(
                 case_dir,
                 ind_role,
-                [np.asarray(imap, dtype=np.float32)],
-                encoding="linear",
-                wrap="clamp",
+                imap,
                 filter="linear",
                 orientation=ORIENTATION_ROW0_V0,
                 used_for=f"signed indication map of object {obj.name!r} (sec. 5.1), added to I",

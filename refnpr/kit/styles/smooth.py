@@ -10,6 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from refnpr.styles.lit.params import SMOOTH
+
 from .._json import jsonable
 from ._export import StyleExport
 
@@ -35,25 +37,11 @@ DERIVED = {
 def export(
     style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
-    """Export a ``SmoothStyle``: ``{"specular": bool, "model": "blinn-phong" | "phong"}``.
-
-    Parameters
-    ----------
-    style : refnpr.styles.smooth.SmoothStyle
-    scene : refnpr.scenes.Scene
-    case_dir : Path
-        Unused (no textures).
-    width, height, spp : int
-        Unused (nothing depends on the image size).
-
-    Returns
-    -------
-    StyleExport
-    """
-    params = style.PARAMS.resolved(style.p)  # every parameter of the declaration, as used
-    return StyleExport(params=jsonable(params, where="smooth params"), derived=dict(DERIVED))
+    """Every parameter of the declaration as used (``specular``, ``model``); no textures."""
+    params = jsonable(SMOOTH.resolved(style.p), where="smooth params")
+    return StyleExport(params=params, derived=dict(DERIVED))
 
 
 def unresolved(params: dict[str, Any]) -> list[str]:
-    """Key paths still unresolved: none can be (both keys are plain values); missing keys."""
-    return [k for k in ("specular", "model") if k not in params]
+    """Declared parameters missing from ``params`` (none can hold "auto")."""
+    return [k for k in SMOOTH.names if k not in params]

@@ -30,8 +30,10 @@ from typing import Any
 import numpy as np
 
 from refnpr.formulas import threshold as thr
-from refnpr.kit.textures import ORIENTATION_ROW0_V0, write_texture_levels
+from refnpr.kit.textures import write_pyramid, write_table
 from refnpr.styles.threshold.shading import uv_scale_table
+
+from ._export import StyleExport
 
 __all__ = ["export", "unresolved", "DERIVED"]
 
@@ -72,12 +74,11 @@ DERIVED = {
 
 def _params(style: Any) -> dict[str, Any]:
     """Every declared parameter (None as null) but the Python-only ``pyramid``, the deprecated
-    ``scale`` where ``uv_scale`` is declared (both shown, as params() shows them)."""
+    ``scale`` after ``uv_scale`` (both shown, as params() shows them)."""
     out = {}
     for name, value in style.p.as_dict(keep_none=True).items():
-        if name == "pyramid":
-            continue
-        out[name] = value
+        if name != "pyramid":
+            out[name] = value
         if name == "uv_scale":
             out["scale"] = style.scale
     return out
@@ -92,51 +93,40 @@ def _image_textures(style: Any, scene: Any, case_dir: Path, params: dict, textur
     for obj in scene.objects:
         tex = p.texture if p.texture is not None else obj.material.texture
         key = "<prebuilt>" if style.pyramid is not None else tex
-        if key not in roles:
-            if key is None:
-                roles[key] = None
-            else:
-                pyr = (
-                    style.pyramid
-                    if style.pyramid is not None
-                    else style.pyramids.get(tex, p, tiling=p.tiling)
-                )
-                g = sum(r is not None for r in roles.values())
-                role = f"threshold_{g}"
-                textures[role] = write_texture_levels(
+        if key not in roles and key is None:
+            roles[key] = None
+        elif key not in roles:
+            pyr = style.pyramid
+            if pyr is None:
+                pyr = style.pyramids.get(tex, p, tiling=p.tiling)
+            g = sum(r is not None for r in roles.values())
+            role = roles[key] = f"threshold_{g}"
+            textures[role] = write_pyramid(
+                case_dir,
+                role,
+                pyr.levels,
+                filter=(
+                    "per_level"
+                    if (p.filter == "pcf" and p.mip == "per_level") or p.tone_correct
+                    else "linear_mipmap_linear"
+                ),
+                used_for=(
+                    f"threshold pyramid of {key!r} (clahe_levels={p.clahe_levels!r}), "
+                    "sampled bilinearly at levels floor/ceil of the GL LOD"
+                ),
+            )
+            if p.tone_correct:
+                textures[f"tone_map_{g}"] = write_table(
                     case_dir,
-                    role,
-                    [np.asarray(lv, dtype=np.float32) for lv in pyr.levels],
-                    encoding="linear",
-                    wrap="repeat",
-                    filter=(
-                        "per_level"
-                        if (p.filter == "pcf" and p.mip == "per_level") or p.tone_correct
-                        else "linear_mipmap_linear"
-                    ),
-                    orientation=ORIENTATION_ROW0_V0,
+                    f"tone_map_{g}",
+                    np.stack(style.pyramids.tone_maps(pyr).quantiles),
+                    orientation="row k = mip level k; column i = quantile i / 1024",
                     used_for=(
-                        f"threshold pyramid of {key!r} (clahe_levels={p.clahe_levels!r}), "
-                        "sampled bilinearly at levels floor/ceil of the GL LOD"
+                        "tone_correct: per level, bilinear threshold t -> "
+                        "interp(t, row k, linspace(0, 1, 1025)); a row with "
+                        "q[-1] <= q[0] maps to 0.5"
                     ),
                 )
-                if p.tone_correct:
-                    q = np.stack(style.pyramids.tone_maps(pyr).quantiles).astype(np.float32)
-                    textures[f"tone_map_{g}"] = write_texture_levels(
-                        case_dir,
-                        f"tone_map_{g}",
-                        [q],
-                        encoding="linear",
-                        wrap="clamp",
-                        filter="nearest",
-                        orientation="row k = mip level k; column i = quantile i / 1024",
-                        used_for=(
-                            "tone_correct: per level, bilinear threshold t -> "
-                            "interp(t, row k, linspace(0, 1, 1025)); a row with "
-                            "q[-1] <= q[0] maps to 0.5"
-                        ),
-                    )
-                roles[key] = role
         per_object.append(roles[key])
     params["object_textures"] = per_object
     params["tone_maps"] = [
@@ -146,50 +136,32 @@ def _image_textures(style: Any, scene: Any, case_dir: Path, params: dict, textur
 
 
 def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int):
-    """Resolved parameters, textures and derivation notes of a ``threshold`` style for ``scene``
-    (a ``contoured`` wrapper is unwrapped by :func:`refnpr.kit.styles.export_style`).
-
-    Parameters
-    ----------
-    style : ThresholdStyle
-    scene : refnpr.scenes.Scene
-    case_dir : Path
-        ``DIR/<case>``; textures go under ``case_dir/textures/<role>/``.
-    width, height, spp : int
-        The case's image size and samples per pixel (n * n).
-
-    Returns
-    -------
-    refnpr.kit.styles.StyleExport
-    """
-    from . import StyleExport
-
+    """Resolved parameters, textures and derivation notes of a ``threshold`` style for
+    ``scene`` (what the module docstring lists)."""
+    if getattr(style, "name", "") != "threshold":
+        raise TypeError(
+            f"style: expected a 'threshold' style, got {getattr(style, 'name', style)!r}"
+        )
     case_dir = Path(case_dir)
-    base = style
-    if getattr(base, "name", "") != "threshold":
-        raise TypeError(f"style: expected a 'threshold' style, got {getattr(base, 'name', base)!r}")
-    p = base.p
-    params = _params(base)
-    params["uv_scales"] = uv_scale_table(base, scene).tolist()  # as the kernel reads them
-    params["channel_scale"] = bool(base._channel_scale())
+    p = style.p
+    params = _params(style)
+    params["uv_scales"] = uv_scale_table(style, scene).tolist()  # as the kernel reads them
+    params["channel_scale"] = bool(style._channel_scale())
     params["spp_n"] = int(round(math.sqrt(spp)))
     textures: dict[str, Any] = {}
     if p.source == "image":
-        _image_textures(base, scene, case_dir, params, textures)
+        _image_textures(style, scene, case_dir, params, textures)
     if p.source == "lines":
         onsets = p.onsets if p.onsets is not None else (1.0,) * len(p.directions)
         params["onsets_resolved"] = [float(o) for o in onsets]
         lam, levels = thr.layer_schedule(onsets)
         params["layer_schedule"] = {"lam": lam.tolist(), "levels": levels.tolist()}
     if p.source == "stipple" and p.uniform:
-        c = base.stipple_tone_table().cdf  # the style's own table
-        textures["stipple_tone"] = write_texture_levels(
+        c = style.stipple_tone_table().cdf  # the style's own table
+        textures["stipple_tone"] = write_table(
             case_dir,
             "stipple_tone",
-            [c.reshape(c.shape[0] * c.shape[1], c.shape[2]).astype(np.float32)],
-            encoding="linear",
-            wrap="clamp",
-            filter="nearest",
+            c.reshape(c.shape[0] * c.shape[1], c.shape[2]),
             orientation=(
                 f"row a * {c.shape[0]} + b = (t_u, t_v) = (a, b) / {c.shape[0] - 1}; column i = "
                 f"y = i / {c.shape[2] - 1}"
@@ -198,25 +170,20 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
         )
         params["stipple_tone_shape"] = [int(s) for s in c.shape]
         params["stipple_tone"] = "stipple_tone"  # the texture role of the table
-    if base._bump is not None:
+    if style._bump is not None:
         params["bump_source"] = params["bump"]  # the texture refnpr built the pyramid from
         params["bump"] = "bump"  # the texture role of the height pyramid
-        textures["bump"] = write_texture_levels(
+        textures["bump"] = write_pyramid(
             case_dir,
             "bump",
-            [np.asarray(lv, dtype=np.float32) for lv in base._bump.pyramid.levels],
-            encoding="linear",
-            wrap="repeat",
+            style._bump.pyramid.levels,
             filter="linear_mipmap_linear",
-            orientation=ORIENTATION_ROW0_V0,
             used_for=(
                 "bump height pyramid (times bump_height), trilinear at the footprint's GL LOD, "
                 "central differences over the pixel (refnpr/styles/threshold/bump.py)"
             ),
         )
-    return StyleExport(
-        params=params, textures=textures, derived=dict(DERIVED), vertex_attributes={}
-    )
+    return StyleExport(params=params, textures=textures, derived=dict(DERIVED))
 
 
 def unresolved(params: dict[str, Any]) -> list[str]:

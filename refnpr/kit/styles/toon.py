@@ -12,16 +12,14 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from refnpr.styles.lit.params import TOON
+from refnpr.styles.lit.shading import lake_ramp
 
 from .._json import jsonable
-from ..textures import write_texture_levels
+from ..textures import write_table
 from ._export import StyleExport
 
-__all__ = ["export", "unresolved", "DERIVED", "RAMP_SIZE", "ramp_texture"]
-
-#: Texels of the lake-mode ramp (refnpr/styles/toon.py builds it with size=1024).
-RAMP_SIZE = 1024
+__all__ = ["export", "unresolved", "DERIVED"]
 
 DERIVED = {
     "toon_shading": (
@@ -39,48 +37,24 @@ DERIVED = {
 }
 
 
-def ramp_texture(n: int, t: float, size: int = RAMP_SIZE) -> np.ndarray:
-    """The lake-mode ramp the toon style samples (``refnpr.styles.lit.shading.lake_ramp``)."""
-    from refnpr.styles.lit.shading import lake_ramp
-
-    return lake_ramp(n, t, size)
-
-
 def export(
     style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
-    """Export a ``ToonStyle``: n, t, mode, specular; in lake mode also the ramp texture.
-
-    Parameters
-    ----------
-    style : refnpr.styles.toon.ToonStyle
-    scene : refnpr.scenes.Scene
-    case_dir : Path
-        ``DIR/<case>``: the lake ramp goes to ``textures/ramp/level_0.exr``.
-    width, height, spp : int
-        Unused.
-
-    Returns
-    -------
-    StyleExport
-    """
+    """n, t, mode, specular; in lake mode also the ramp texture ``textures/ramp/level_0.exr``."""
     # every parameter as the style holds it (specular false in lake mode, as the style forces)
-    params = {**style.PARAMS.resolved(style.p), "specular": bool(style.specular)}
+    params = {**TOON.resolved(style.p), "specular": bool(style.specular)}
     textures = {}
     if style.mode == "lake":
-        ramp = ramp_texture(style.n, style.t).astype(np.float32).reshape(1, RAMP_SIZE)
-        textures["ramp"] = write_texture_levels(
+        ramp = lake_ramp(style.n, style.t)  # the ramp the style samples
+        textures["ramp"] = write_table(
             case_dir,
             "ramp",
-            [ramp],
-            encoding="linear",
-            wrap="clamp",
-            filter="nearest",
+            ramp.reshape(1, -1),
             orientation="row 0 only; texel i (column) covers N.L in [i / K, (i + 1) / K)",
             used_for="Lake et al. 2000 toon ramp: tone indexed by clamp(N.L, 0, 1)",
         )
         params["ramp"] = "ramp"
-        params["ramp_size"] = RAMP_SIZE
+        params["ramp_size"] = ramp.shape[-1]
     return StyleExport(
         params=jsonable(params, where="toon params"), textures=textures, derived=dict(DERIVED)
     )
@@ -88,7 +62,5 @@ def export(
 
 def unresolved(params: dict[str, Any]) -> list[str]:
     """Missing keys (lake mode needs the ramp role and its size)."""
-    need = ["n", "t", "mode", "specular"]
-    if params.get("mode") == "lake":
-        need += ["ramp", "ramp_size"]
+    need = TOON.names + (("ramp", "ramp_size") if params.get("mode") == "lake" else ())
     return [k for k in need if k not in params]

@@ -26,7 +26,8 @@ import numpy as np
 
 from .._json import jsonable
 from ..camera import camera_entry
-from ..textures import ORIENTATION_ROW0_TOP, ORIENTATION_ROW0_V0, write_texture_levels
+from ..textures import ORIENTATION_ROW0_TOP, write_pyramid, write_table
+from . import _generic
 from ._export import StyleExport
 
 __all__ = ["export", "unresolved", "DERIVED"]
@@ -90,30 +91,12 @@ DERIVED = {
 }
 
 
-def _camera_table(cam: Any, width: int, height: int) -> dict[str, Any]:
-    return {
-        "eye": cam.eye.tolist(),
-        "target": cam.target.tolist(),
-        "up": cam.up.tolist(),
-        "fov_y": float(cam.fov_y),
-        "near": float(cam.near),
-        "far": float(cam.far),
-        "view_matrix": cam.view_matrix().tolist(),
-        "projection_matrix": cam.projection_matrix(width, height).tolist(),
-    }
-
-
-def _unwrap(style: Any) -> Any:
-    if style.name == "contoured":
-        style = style.base
-    if style.name != "xtoon":
-        raise TypeError(f"style: expected an xtoon style, got {style.name!r}")
-    return style
-
-
-def _texture_spec(style: Any) -> Any:
-    spec = style.params().get("texture")
-    return spec if isinstance(spec, (str, dict)) else str(spec)
+def _map(case_dir: Path, role: str, array: Any, used_for: str) -> dict[str, Any]:
+    """A per-pixel or per-sample map (texelFetch) as one clamped float32 level."""
+    rows = " (image rows: (H, W) per pixel or (nH, nW) per sample)"
+    return write_table(
+        case_dir, role, array, orientation=ORIENTATION_ROW0_TOP + rows, used_for=used_for
+    )
 
 
 def _weight(cfg: Any, case_dir: Path, textures: dict[str, Any]) -> dict[str, Any]:
@@ -122,30 +105,21 @@ def _weight(cfg: Any, case_dir: Path, textures: dict[str, Any]) -> dict[str, Any
     if w.kind == "global":
         out["value"] = float(w.value)
     elif w.kind == "texture":
-        level0 = np.asarray(cfg.weight_pyramid.levels[0], dtype=np.float32)
-        textures["shape_weight"] = write_texture_levels(
+        textures["shape_weight"] = write_pyramid(
             case_dir,
             "shape_weight",
-            [level0],
-            encoding="linear",
-            wrap="repeat",
+            cfg.weight_pyramid.levels[:1],
             filter="linear",
-            orientation=ORIENTATION_ROW0_V0,
             used_for="X-Toon shape weight w at uv * uv_scale (bilinear GL_REPEAT, level 0 only)",
         )
         out["texture"] = "shape_weight"
         out["uv_scale"] = [float(s) for s in w.uv_scale]
     elif w.kind == "map":
-        textures["shape_weight"] = write_texture_levels(
+        textures["shape_weight"] = _map(
             case_dir,
             "shape_weight",
-            [np.asarray(w.texture, dtype=np.float32)],
-            encoding="linear",
-            wrap="clamp",
-            filter="nearest",
-            orientation=ORIENTATION_ROW0_TOP
-            + " (image rows: (H, W) per pixel or (nH, nW) per sample)",
-            used_for="X-Toon shape weight w per pixel or per sample (texelFetch)",
+            w.texture,
+            "X-Toon shape weight w per pixel or per sample (texelFetch)",
         )
         out["texture"] = "shape_weight"
     return out
@@ -154,29 +128,16 @@ def _weight(cfg: Any, case_dir: Path, textures: dict[str, Any]) -> dict[str, Any
 def export(
     style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
-    """Export an xtoon style for one case (see the module docstring for the params layout).
-
-    Parameters
-    ----------
-    style : refnpr.styles.xtoon.XToonStyle (or a ``contoured`` wrapper of one)
-    scene : refnpr.scenes.Scene
-    case_dir : Path
-        ``DIR/<case>``; the toon texture goes to ``case_dir/textures/toon/level_0.exr``.
-    width, height, spp : int
-        Image size and samples per pixel (the flow map's pixels are image pixels).
-
-    Returns
-    -------
-    StyleExport
-        params, textures (``toon``; ``detail_map`` and ``shape_weight`` where used), derived
-        texts, and ``_ABSTRACT_NORMAL`` per object when the style abstracts the shape.
-    """
+    """params, textures (``toon``; ``detail_map`` and ``shape_weight`` where used), derived
+    texts, ``_ABSTRACT_NORMAL`` per object when the style abstracts the shape, and both frames'
+    cameras of a flow case (see the module docstring)."""
     from refnpr.styles.xtoon.detail import FLOW_BEHIND, TINY, style_record
     from refnpr.styles.xtoon.evaluation import _abstract, plan
     from refnpr.styles.xtoon.params import PARAMS
     from refnpr.styles.xtoon.shape import unit_rows
 
-    style = _unwrap(style)
+    if style.name != "xtoon":
+        raise TypeError(f"style: expected an xtoon style, got {style.name!r}")
     cfg = style._cfg
     p = cfg.p
     # a flow style without prev_camera is frame 0 of a sequence: zero flow (the current camera)
@@ -191,16 +152,13 @@ def export(
                 "the camera instead (prev_camera), or leave the case out of the kit suite"
             )
     case_dir = Path(case_dir)
-    camera = scene.camera
     plan(cfg, scene)  # validates the light index against the scene (clear error)
-    record = style_record(p, cfg.texture, scene, camera)  # the frame's z_min, r and z_c
+    record = style_record(p, cfg.texture, scene, scene.camera)  # the frame's z_min, r and z_c
     textures: dict[str, Any] = {}
-    textures["toon"] = write_texture_levels(
+    textures["toon"] = write_table(
         case_dir,
         "toon",
-        [np.asarray(cfg.texture, dtype=np.float32)],
-        encoding="linear",
-        wrap="clamp",
+        cfg.texture,
         filter="linear",
         orientation=(
             "row i = detail D at (i + 0.5) / rows (row 0: D = 0, most abstract; rows grow with "
@@ -209,30 +167,25 @@ def export(
         used_for="X-Toon 2D toon texture, bilinear clamp-to-edge lookup at (tone, D)",
     )
     kind = p.detail
-    detail_map = None
     if kind == "map":
-        textures["detail_map"] = write_texture_levels(
+        textures["detail_map"] = _map(
             case_dir,
             "detail_map",
-            [np.asarray(p.detail_map, dtype=np.float32)],
-            encoding="linear",
-            wrap="clamp",
-            filter="nearest",
-            orientation=ORIENTATION_ROW0_TOP
-            + " (image rows: (H, W) per pixel or (nH, nW) per sample)",
-            used_for="X-Toon user detail map D per pixel or per sample (texelFetch)",
+            p.detail_map,
+            "X-Toon user detail map D per pixel or per sample (texelFetch)",
         )
-        detail_map = "detail_map"
     shaped = p.shape is not None
+    spec = style.params().get("texture")
+    prev_entry = camera_entry(prev_camera, width, height)
     params = PARAMS.resolved(  # every parameter, None where the detail map does not read it
         p,
         texture="toon",
         z_min=float(record.z_min),
         r=float(record.r),
-        prev_camera=_camera_table(prev_camera, width, height),
-        detail_map=detail_map,
+        prev_camera={k: v for k, v in prev_entry.items() if k != "conventions"},
+        detail_map="detail_map" if kind == "map" else None,
         shape_weight=_weight(cfg, case_dir, textures) if shaped else None,
-        texture_spec=_texture_spec(style),
+        texture_spec=spec if isinstance(spec, (str, dict)) else str(spec),
         z_focus=float(record.focus[0]) if kind == "focus" else None,
         flow_behind=float(FLOW_BEHIND),
         tiny=float(TINY),
@@ -249,7 +202,7 @@ def export(
     frames = None
     if kind == "flow":  # every frame's camera: the flow detail reads the previous one (Fig. 6)
         frames = [
-            {"frame": 0, "camera": camera_entry(prev_camera, width, height)},
+            {"frame": 0, "camera": prev_entry},
             {"frame": 1, "camera": camera_entry(scene.camera, width, height)},
         ]
     return StyleExport(
@@ -264,10 +217,7 @@ def export(
 def unresolved(params: dict[str, Any]) -> list[str]:
     """Key paths of exported xtoon params that only refnpr could resolve (none when exported by
     :func:`export`; ``texture_spec`` is informative only: the texture itself is ``toon``)."""
-    from ._generic import unresolved as generic
-
-    rest = {k: v for k, v in params.items() if k != "texture_spec"}
-    out = generic(rest)
+    out = _generic.unresolved({k: v for k, v in params.items() if k != "texture_spec"})
     if params.get("texture") != "toon":
         out.append(f"params.texture = {params.get('texture')!r} (expected the role 'toon')")
     return out
