@@ -1,14 +1,6 @@
-"""Built-in procedural meshes, Newell's teapot, mesh loading and TOML scene files.
-
+"""Built-in procedural meshes, Newell's teapot, mesh loading, TOML scene files (the format is in
+:mod:`refnpr.scenes.toml_format`) and animated scenes (``scene.at(frame)`` is a frame's still).
 World space is right-handed with +y up; meshes are counter-clockwise seen from outside.
-
-Meshes: :func:`uv_sphere`, :func:`icosphere`, :func:`torus`, :func:`torus_knot`, :func:`vase`
-(closed, watertight); :func:`teapot`, :func:`plane`, :func:`room`, :func:`terrain` (open).
-User meshes: :func:`load_mesh`; texture coordinates on demand: :func:`project_uv`,
-:func:`require_uv`. Scenes: :class:`Scene` and friends, :func:`load_scene`, :func:`parse_scene`,
-:func:`list_scenes`, :func:`mesh_from_spec` (the file format is documented in
-:mod:`refnpr.scenes.toml_format`). Animated scenes: :class:`Animation`, :class:`Track`,
-:class:`Keyframe` (:mod:`refnpr.scenes.animation`); ``scene.at(frame)`` is a frame's still.
 """
 
 from .animation import Animation, Track

@@ -1,8 +1,6 @@
-"""Validation of builder and scene parameters (private).
-
-Every check raises ``TypeError`` or ``ValueError`` whose message names the parameter, the value
-received, what was expected and how to fix it.
-"""
+"""Validation of builder and scene parameters (private): every check raises ``TypeError`` or
+``ValueError`` whose message names the parameter, the value received, what was expected and how
+to fix it."""
 
 from __future__ import annotations
 
@@ -11,13 +9,19 @@ import numbers
 
 import numpy as np
 
-__all__ = ["check_int", "check_real", "check_vec", "describe"]
+__all__ = ["check_int", "check_real", "check_type", "check_vec", "describe", "positives"]
 
 
 def describe(value) -> str:
     """Short ``repr`` of ``value`` for an error message."""
     text = repr(value.tolist() if isinstance(value, np.ndarray) else value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def check_type(name: str, value, cls, what: str) -> None:
+    """``TypeError`` ``"<name>: expected <what>, got <type>"`` unless ``value`` is a ``cls``."""
+    if not isinstance(value, cls):
+        raise TypeError(f"{name}: expected {what}, got {type(value).__name__}")
 
 
 def check_int(name: str, value, *, minimum: int | None = None, maximum: int | None = None) -> int:
@@ -34,13 +38,7 @@ def check_int(name: str, value, *, minimum: int | None = None, maximum: int | No
     return v
 
 
-def check_real(
-    name: str,
-    value,
-    *,
-    positive: bool = False,
-    nonnegative: bool = False,
-) -> float:
+def check_real(name: str, value, *, positive: bool = False, nonnegative: bool = False) -> float:
     """``value`` as a finite ``float``; optionally ``> 0`` or ``>= 0``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(
@@ -56,6 +54,11 @@ def check_real(
     return v
 
 
+def positives(**values) -> tuple[float, ...]:
+    """The keyword arguments' values, each checked by ``check_real(..., positive=True)``."""
+    return tuple(check_real(name, v, positive=True) for name, v in values.items())
+
+
 def check_vec(
     name: str,
     value,
@@ -65,10 +68,8 @@ def check_vec(
     nonnegative: bool = False,
     positive: bool = False,
 ) -> tuple[float, ...]:
-    """``value`` as a tuple of ``n`` finite floats.
-
-    With ``broadcast_scalar=True`` a single number ``x`` stands for ``(x,) * n``.
-    """
+    """``value`` as a tuple of ``n`` finite floats; with ``broadcast_scalar=True`` a single number
+    ``x`` stands for ``(x,) * n``."""
     if broadcast_scalar and isinstance(value, numbers.Real) and not isinstance(value, bool):
         value = (value,) * n
     if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
@@ -77,8 +78,7 @@ def check_vec(
     items = list(value)
     if len(items) != n:
         raise ValueError(f"{name}: expected {n} numbers, got {len(items)}: {describe(value)}")
-    out = tuple(
+    return tuple(
         check_real(f"{name}[{i}]", x, nonnegative=nonnegative, positive=positive)
         for i, x in enumerate(items)
     )
-    return out

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["grid_faces", "drop_degenerate", "compact", "concat", "split_u_seam", "unit"]
+__all__ = ["grid_faces", "drop_degenerate", "compact", "concat", "pole_u", "split_u_seam", "unit"]
 
 
 def unit(v: np.ndarray) -> np.ndarray:
@@ -20,14 +20,8 @@ def unit(v: np.ndarray) -> np.ndarray:
 
 
 def grid_faces(rows: int, cols: int, offset: int = 0) -> np.ndarray:
-    """Triangles of a ``(rows + 1) x (cols + 1)`` vertex grid.
-
-    Returns
-    -------
-    faces : (2 * rows * cols, 3) int64
-        Per quad ``(r, c)``: ``(r,c), (r,c+1), (r+1,c+1)`` and ``(r,c), (r+1,c+1), (r+1,c)``,
-        so the face normal is along ``d/dcol x d/drow``.
-    """
+    """(2 rows cols, 3) int64 triangles of a ``(rows + 1) x (cols + 1)`` vertex grid: per quad
+    ``(r,c), (r,c+1), (r+1,c+1)`` and ``(r,c), (r+1,c+1), (r+1,c)``, normal along d/dcol x d/drow."""
     r, c = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
     a = (r * (cols + 1) + c).ravel() + offset
     b = a + 1
@@ -51,15 +45,8 @@ def drop_degenerate(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def compact(n_vertices: int, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Remove unused vertices.
-
-    Returns
-    -------
-    keep : (K,) int64
-        Old index of each kept vertex (index the per-vertex arrays with it).
-    faces : (M, 3) int64
-        Faces renumbered to the kept vertices.
-    """
+    """Remove unused vertices: ``(keep, faces)``, the old index of each kept vertex (index the
+    per-vertex arrays with it) and the faces renumbered to them."""
     used = np.zeros(n_vertices, dtype=bool)
     used[faces.ravel()] = True
     keep = np.flatnonzero(used)
@@ -68,28 +55,22 @@ def compact(n_vertices: int, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return keep, remap[faces]
 
 
+def pole_u(u: np.ndarray, faces: np.ndarray, fpole: np.ndarray) -> np.ndarray:
+    """Per face, the mean ``u`` of its corners that are not poles (``fpole`` (M, 3) bool), where
+    a pole vertex of that face gets its ``u``."""
+    return np.where(fpole, 0.0, u[faces]).sum(axis=1) / np.maximum((~fpole).sum(axis=1), 1)
+
+
 def split_u_seam(
     u: np.ndarray, faces: np.ndarray, pole: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Make a periodic ``u`` in ``[0, 1]`` continuous inside every triangle.
+    """Make a periodic ``u`` (N,) in ``[0, 1]`` continuous inside every triangle of ``faces``.
 
-    A triangle whose (non-pole) corners span more than half a period straddles the seam: its
-    corners with ``u < 0.5`` get duplicates with ``u + 1``. Pole vertices (where ``u`` is
-    undefined) get one duplicate per incident triangle, with ``u`` the mean of the triangle's
-    other corners. Duplicates copy their source vertex, so positions stay bitwise identical.
-
-    Parameters
-    ----------
-    u : (N,) float64
-    faces : (M, 3) int64
-    pole : (N,) bool
-
-    Returns
-    -------
-    source : (K,) int64
-        Original vertex of each output vertex (index positions, normals, v with it).
-    u_out : (K,) float64
-    faces_out : (M, 3) int64
+    A triangle whose non-pole corners span more than half a period straddles the seam: its
+    corners with ``u < 0.5`` get duplicates with ``u + 1``. Pole vertices (``pole`` (N,) bool,
+    where ``u`` is undefined) get one duplicate per incident triangle, with :func:`pole_u`.
+    Returns ``(source, u_out, faces_out)``: the original vertex of each output vertex (index
+    positions, normals and v with it), its u, and the renumbered faces.
     """
     n = u.shape[0]
     fu = u[faces]
@@ -109,13 +90,9 @@ def split_u_seam(
     # poles: one duplicate per incident triangle
     fi, ci = np.nonzero(fpole)
     if fi.size:
-        fu2 = u_out[faces_out]
-        others = np.where(fpole, 0.0, fu2)
-        count = np.maximum((~fpole).sum(axis=1), 1)
-        mean = others.sum(axis=1) / count
         start = source.size
         source = np.concatenate([source, faces[fi, ci]])
-        u_out = np.concatenate([u_out, mean[fi]])
+        u_out = np.concatenate([u_out, pole_u(u_out, faces_out, fpole)[fi]])
         faces_out[fi, ci] = start + np.arange(fi.size)
     keep, faces_out = compact(source.size, faces_out)
     return source[keep], u_out[keep], faces_out

@@ -1,29 +1,11 @@
 """Animated scenes: tracks of keyframes for the camera, lights, object transforms and style
 parameters, and the still scene of any (fractional) frame.
 
-A :class:`Track` animates one *target*, named the way a scene file names the part:
-
-=============================================  ============  ===================================
-target                                         value         interpolation (default first)
-=============================================  ============  ===================================
-``camera.eye`` / ``camera.target`` / ``camera.up``  3 numbers  linear, catmull_rom
-``camera.fov_y`` / ``camera.near`` / ``camera.far``  1 number  linear, catmull_rom
-``light[i].direction`` (directional lights)    3 numbers     linear, catmull_rom
-``light[i].position`` (point lights)           3 numbers     linear, catmull_rom
-``light[i].color``                             3 (or 1)      linear, catmull_rom
-``object "name".translation``                  3 numbers     linear, catmull_rom
-``object "name".rotation``                     quaternion    slerp
-``object "name".scale``                        3 (or 1)      linear, catmull_rom
-``style.<param>``                              numbers       linear, catmull_rom
-=============================================  ============  ===================================
-
-Lights are numbered from 0 in file order. Rotations are unit quaternions ``[x, y, z, w]``
-(glTF order; :func:`~refnpr.scenes.tracks.quaternion_from_axis_angle` converts an axis and an
-angle). An animated object's transform is ``T @ R @ S`` (translation, rotation, scale: the
-object-to-world convention of :func:`~refnpr.scenes.transform_matrix`); the components it has
-no track for come from its static transform, which must then be a translation, rotation and
-scale without shear. A style track sets ``<param>`` in the still's ``style`` table (rounded to
-the nearest integer when the track is ``integer``).
+A :class:`Track` animates one *target*, named the way a scene file names the part
+(``camera.eye``, ``light[0].color``, ``object "teapot".rotation``, ``style.n``); the targets,
+their values and interpolations are tabled in docs/animation.md. An animated object's transform
+is ``T @ R @ S``; the parts without a track come from its static transform, which must then have
+no shear.
 """
 
 from __future__ import annotations
@@ -48,18 +30,20 @@ from .tracks import (
     quaternion_matrix,
 )
 
-__all__ = ["Animation", "Track", "Keyframe", "parse_target"]
+__all__ = ["Animation", "Track", "Keyframe", "check_keys_in_range", "parse_target"]
 
-_CAMERA_PARTS = {"eye": 3, "target": 3, "up": 3, "fov_y": 1, "near": 1, "far": 1}
-_LIGHT_PARTS = {"direction": 3, "position": 3, "color": 3}
-_OBJECT_PARTS = {"translation": 3, "rotation": 4, "scale": 3}
+_PARTS = {
+    "camera": {"eye": 3, "target": 3, "up": 3, "fov_y": 1, "near": 1, "far": 1},
+    "light": {"direction": 3, "position": 3, "color": 3},
+    "object": {"translation": 3, "rotation": 4, "scale": 3},
+}
 _BROADCAST = {("light", "color"), ("object", "scale")}
 
 _TARGET_RE = re.compile(
-    r"^(?:camera\.(?P<cam>\w+)"
+    r"^(?:camera\.(?P<camera>\w+)"
     r"|light\[(?P<light>\d+)\]\.(?P<lpart>\w+)"
-    r'|object\s*"(?P<obj>[^"]+)"\.(?P<opart>\w+)'
-    r"|style\.(?P<param>[A-Za-z_]\w*))$"
+    r'|object\s*"(?P<object>[^"]+)"\.(?P<opart>\w+)'
+    r"|style\.(?P<style>[A-Za-z_]\w*))$"
 )
 _TARGET_HELP = (
     "camera.eye|target|up|fov_y|near|far, light[i].direction|position|color, "
@@ -82,32 +66,18 @@ def parse_target(target: str) -> tuple[str, Any, str]:
     if not isinstance(target, str):
         raise TypeError(f"target: expected a string such as 'camera.eye', got {describe(target)}")
     m = _TARGET_RE.match(target.strip())
-    bad = f"target: unknown track target {target!r}; valid targets: {_TARGET_HELP}"
-    if m is None:
-        raise ValueError(bad)
-    if m["cam"] is not None:
-        if m["cam"] not in _CAMERA_PARTS:
-            raise ValueError(bad)
-        return "camera", None, m["cam"]
-    if m["light"] is not None:
-        if m["lpart"] not in _LIGHT_PARTS:
-            raise ValueError(bad)
-        return "light", int(m["light"]), m["lpart"]
-    if m["obj"] is not None:
-        if m["opart"] not in _OBJECT_PARTS:
-            raise ValueError(bad)
-        return "object", m["obj"], m["opart"]
-    return "style", None, m["param"]
-
-
-def _target_size(part: str, attr: str) -> int | None:
-    if part == "camera":
-        return _CAMERA_PARTS[attr]
-    if part == "light":
-        return _LIGHT_PARTS[attr]
-    if part == "object":
-        return _OBJECT_PARTS[attr]
-    return None  # style parameters: any length, the same for every key
+    if m is not None:
+        if m["style"] is not None:
+            return "style", None, m["style"]
+        if m["camera"] is not None:
+            part, which, attr = "camera", None, m["camera"]
+        elif m["light"] is not None:
+            part, which, attr = "light", int(m["light"]), m["lpart"]
+        else:
+            part, which, attr = "object", m["object"], m["opart"]
+        if attr in _PARTS[part]:
+            return part, which, attr
+    raise ValueError(f"target: unknown track target {target!r}; valid targets: {_TARGET_HELP}")
 
 
 @dataclass(frozen=True)
@@ -153,7 +123,7 @@ class Track:
             raise TypeError(f"keys: expected a list of keys, got {describe(keys)}")
         if not keys:
             raise ValueError(f"keys: track {self.target!r} needs at least one key")
-        size = _target_size(part, attr)
+        size = _PARTS[part][attr] if part in _PARTS else None  # style: any length, one for all
         out = []
         for i, key in enumerate(keys):
             where = f"keys[{i}]"
@@ -195,6 +165,17 @@ class Track:
         return interpolate(self.keys, float(frame), self.interpolation)
 
 
+def check_keys_in_range(where: str, keys, frames: int, fps: float, *, error=ValueError) -> None:
+    """An ``error`` starting with ``where`` for the first of ``keys`` after the last frame."""
+    for j, key in enumerate(keys):
+        if key.frame > frames - 1:
+            raise error(
+                f"{where}: keys[{j}]: frame {key.frame:g} (time {key.frame / fps:g} s at "
+                f"{fps:g} fps) lies after the last frame {frames - 1} (frames = {frames}); use "
+                f"frames = {math.ceil(key.frame) + 1} or an earlier key"
+            )
+
+
 def _decompose(name: str, m: np.ndarray) -> tuple[np.ndarray, tuple[float, ...], np.ndarray]:
     """Translation, rotation quaternion and per-axis scale of an affine ``T @ R @ S`` matrix."""
     a = np.asarray(m, dtype=np.float64)[:3, :3]
@@ -234,7 +215,6 @@ class Animation:
         object.__setattr__(self, "fps", check_real("fps", self.fps, positive=True))
         tracks = tuple(self.tracks)
         seen: set[str] = set()
-        last = self.frames - 1
         for i, track in enumerate(tracks):
             if not isinstance(track, Track):
                 raise TypeError(f"tracks[{i}]: expected a Track, got {type(track).__name__}")
@@ -244,27 +224,8 @@ class Animation:
                     "track (put all its keys in it)"
                 )
             seen.add(track.target)
-            for j, key in enumerate(track.keys):
-                if key.frame > last:
-                    raise ValueError(
-                        f"tracks[{i}] {track.target!r}: keys[{j}]: frame {key.frame:g} "
-                        f"(time {key.frame / self.fps:g} s at {self.fps:g} fps) lies after the "
-                        f"last frame {last}; use frames = {math.ceil(key.frame) + 1} or an "
-                        "earlier key"
-                    )
+            check_keys_in_range(f"tracks[{i}] {track.target!r}", track.keys, self.frames, self.fps)
         object.__setattr__(self, "tracks", tracks)
-
-    @property
-    def duration(self) -> float:
-        """Seconds: ``frames / fps``."""
-        return self.frames / self.fps
-
-    def track(self, target: str) -> Track | None:
-        """The track of ``target`` (None if it is not animated)."""
-        for t in self.tracks:
-            if t.target == target.strip():
-                return t
-        return None
 
     def check_frame(self, frame: Any) -> float:
         """``frame`` as a float in ``[0, frames - 1]`` (fractional allowed), else ValueError."""
@@ -328,7 +289,7 @@ class Animation:
             if part != "object":
                 continue
             animated = {u.parts[2] for u in self.tracks if u.parts[:2] == ("object", name)}
-            if animated != set(_OBJECT_PARTS):
+            if animated != set(_PARTS["object"]):
                 try:
                     _decompose(name, scene.objects[names.index(name)].transform)
                 except ValueError as exc:
@@ -347,15 +308,13 @@ class Animation:
             cam = by_part.get(("camera", None))
             if cam:
                 c = scene.camera
-                base = {k: getattr(c, k) for k in _CAMERA_PARTS}
-                base.update({k: (v[0] if _CAMERA_PARTS[k] == 1 else v) for k, v in cam.items()})
+                base = {k: getattr(c, k) for k in _PARTS["camera"]}
+                base.update({k: (v[0] if _PARTS["camera"][k] == 1 else v) for k, v in cam.items()})
                 changes["camera"] = Camera.look_at(**base)
-            lights = list(scene.lights)
-            for i, light in enumerate(lights):
-                vals = by_part.get(("light", i))
-                if vals:
-                    lights[i] = dataclasses.replace(light, **vals)
-            changes["lights"] = tuple(lights)
+            changes["lights"] = tuple(
+                dataclasses.replace(lt, **by_part[("light", i)]) if ("light", i) in by_part else lt
+                for i, lt in enumerate(scene.lights)
+            )
             objects = list(scene.objects)
             for i, obj in enumerate(objects):
                 vals = by_part.get(("object", obj.name))
@@ -371,7 +330,7 @@ class Animation:
 
 
 def _object_transform(obj: Any, vals: Mapping[str, tuple[float, ...]]) -> np.ndarray:
-    if set(vals) == set(_OBJECT_PARTS):
+    if set(vals) == set(_PARTS["object"]):
         t, q, s = vals["translation"], vals["rotation"], vals["scale"]
     else:
         t, q, s = _decompose(obj.name, obj.transform)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, check_real
+from ._params import check_int, positives
 from ._topology import grid_faces
 
 __all__ = ["torus_knot", "torus_knot_curve", "rotation_minimising_frames"]
@@ -99,8 +99,8 @@ def torus_knot(
     n_u: int = 256,
     n_v: int = 16,
 ) -> Mesh:
-    """A closed tube of radius ``tube_radius`` around the (p, q) torus knot (see
-    :func:`torus_knot_curve`), lying across the xy plane (the knot's axis is z).
+    """A closed tube of radius ``tube_radius`` around the (p, q) torus knot
+    (:func:`torus_knot_curve`), lying across the xy plane (the knot's axis is z).
 
     Parameters
     ----------
@@ -109,31 +109,27 @@ def torus_knot(
     R, r : float
         Radius of the core circle and of the torus the knot lies on, ``0 < r < R``.
     tube_radius : float
-        Radius of the tube (> 0); too large a tube intersects itself, which is rejected.
+        Radius of the tube (> 0); a tube that would intersect itself is rejected.
     n_u, n_v : int
         Segments along the knot (>= 8) and around the tube (>= 3).
 
     Returns
     -------
     Mesh
-        ``2 * n_u * n_v`` triangles. uv: u along the knot, v around the tube, both in [0, 1].
-        The tube's cross sections are oriented by a rotation-minimising frame closed up by
-        spreading its holonomy evenly, so the v = const lines do not twist needlessly.
+        ``2 * n_u * n_v`` triangles; uv: u along the knot, v around the tube, both in [0, 1].
+        Cross sections follow a rotation-minimising frame closed up by spreading its holonomy
+        evenly, so the v = const lines do not twist needlessly.
     """
-    p = check_int("p", p, minimum=1)
-    q = check_int("q", q, minimum=1)
+    p, q = check_int("p", p, minimum=1), check_int("q", q, minimum=1)
     if math.gcd(p, q) != 1:
         raise ValueError(
             f"p, q: must be coprime to trace a single knot, got p={p}, q={q} "
             f"(common factor {math.gcd(p, q)}); e.g. (2, 3), (3, 5), (2, 7)"
         )
-    R = check_real("R", R, positive=True)
-    r = check_real("r", r, positive=True)
+    R, r, tube_radius = positives(R=R, r=r, tube_radius=tube_radius)
     if r >= R:
         raise ValueError(f"r: must be smaller than R ({R}), got {r}")
-    tube_radius = check_real("tube_radius", tube_radius, positive=True)
-    n_u = check_int("n_u", n_u, minimum=8)
-    n_v = check_int("n_v", n_v, minimum=3)
+    n_u, n_v = check_int("n_u", n_u, minimum=8), check_int("n_v", n_v, minimum=3)
     clearance = _clearance(p, q, R, r)
     if tube_radius >= 0.5 * clearance:
         raise ValueError(

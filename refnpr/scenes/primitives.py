@@ -1,8 +1,7 @@
-"""Closed primitives: UV sphere, icosphere and torus (all watertight, y is the polar axis).
-
-All three are closed: seams and poles use duplicated vertices whose positions are bitwise
-copies, so merging vertices by exact position gives a watertight, consistently oriented
-manifold; normals point outward and faces are counter-clockwise seen from outside.
+"""Closed primitives: UV sphere, icosphere and torus (y is the polar axis). Seams and poles use
+duplicated vertices with bitwise-equal positions, so merging vertices by exact position gives a
+watertight, consistently oriented manifold; normals point outward, faces are counter-clockwise
+seen from outside.
 """
 
 from __future__ import annotations
@@ -78,17 +77,9 @@ def _subdivide(verts: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.nda
     mid = verts[a] + verts[b]
     mid /= np.linalg.norm(mid, axis=1, keepdims=True)
     m = (n + inverse.reshape(-1, 3)).astype(np.int64)  # midpoints of edges (01, 12, 20)
-    v0, v1, v2 = faces[:, 0], faces[:, 1], faces[:, 2]
-    m01, m12, m20 = m[:, 0], m[:, 1], m[:, 2]
-    new = np.stack(
-        [
-            np.stack([v0, m01, m20], axis=1),
-            np.stack([m01, v1, m12], axis=1),
-            np.stack([m20, m12, v2], axis=1),
-            np.stack([m01, m12, m20], axis=1),
-        ],
-        axis=1,
-    ).reshape(-1, 3)
+    (v0, v1, v2), (m01, m12, m20) = faces.T, m.T
+    corners = [v0, m01, m20, m01, v1, m12, m20, m12, v2, m01, m12, m20]  # 4 triangles per face
+    new = np.stack(corners, axis=1).reshape(-1, 3)
     return np.concatenate([verts, mid]), new
 
 

@@ -20,20 +20,9 @@ __all__ = ["MESH_BUILDERS", "mesh_from_spec"]
 
 #: Built-in mesh builders by the name a spec uses (``mesh = "teapot"``).
 MESH_BUILDERS: Mapping[str, Callable[..., Mesh]] = {
-    "teapot": teapot,
-    "uv_sphere": uv_sphere,
-    "icosphere": icosphere,
-    "torus": torus,
-    "torus_knot": torus_knot,
-    "vase": vase,
-    "plane": plane,
-    "room": room,
-    "terrain": terrain,
+    b.__name__: b
+    for b in (teapot, uv_sphere, icosphere, torus, torus_knot, vase, plane, room, terrain)
 }
-
-
-def _parameters(builder: Callable[..., Mesh]) -> list[str]:
-    return list(inspect.signature(builder).parameters)
 
 
 def mesh_from_spec(spec: Mapping, *, base_dir: str | Path | None = None) -> Mesh | list[Mesh]:
@@ -91,7 +80,7 @@ def mesh_from_spec(spec: Mapping, *, base_dir: str | Path | None = None) -> Mesh
             "(or use `path = <mesh file>`)"
         )
     builder = MESH_BUILDERS[name]
-    valid = _parameters(builder)
+    valid = list(inspect.signature(builder).parameters)
     for key in spec:
         if key not in valid:
             raise ValueError(

@@ -1,9 +1,9 @@
 """Surfaces of revolution about the +y axis, and the vase built from them.
 
-A profile is a polyline in the (r, y) half plane; :func:`revolve` sweeps it once around the y
-axis. The angle ``theta = 2 pi u`` runs counter-clockwise seen from +y, ``x = r cos(theta)``,
-``z = -r sin(theta)``. The seam column (u = 1) copies the u = 0 column, so seam positions are
-bitwise identical; profile points with r = 0 become poles (one vertex per triangle, u centred).
+:func:`revolve` sweeps a polyline profile in the (r, y) half plane once around the y axis:
+``theta = 2 pi u`` counter-clockwise seen from +y, ``x = r cos(theta)``, ``z = -r sin(theta)``.
+The seam column (u = 1) copies the u = 0 column bitwise; profile points with r = 0 become poles
+(one vertex per triangle, u centred).
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, check_real
-from ._topology import compact, concat, drop_degenerate, grid_faces, unit
+from ._params import check_int, positives
+from ._topology import compact, concat, drop_degenerate, grid_faces, pole_u, unit
 
 __all__ = ["revolve", "vase", "vase_profile"]
 
@@ -69,12 +69,9 @@ def revolve(
     faces = drop_degenerate(positions, grid_faces(k - 1, n_u))
     # poles: each pole vertex is now used by exactly one triangle; centre its u there
     pole = np.repeat(r == 0.0, n_u + 1)
-    fp = pole[faces]
-    fi, ci = np.nonzero(fp)
+    fi, ci = np.nonzero(pole[faces])
     if fi.size:
-        fu = uv[faces, 0]
-        mean_other = np.where(fp, 0.0, fu).sum(axis=1) / np.maximum((~fp).sum(axis=1), 1)
-        uv[faces[fi, ci], 0] = mean_other[fi]
+        uv[faces[fi, ci], 0] = pole_u(uv[:, 0], faces, pole[faces])[fi]
     keep, faces = compact(positions.shape[0], faces)
     return positions[keep], faces, normals[keep], uv[keep]
 
@@ -90,20 +87,15 @@ def vase_profile(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def vase(
-    height: float = 2.0,
-    radius: float = 1.0,
-    thickness: float = 0.04,
-    n_u: int = 64,
-    n_v: int = 48,
+    height: float = 2.0, radius: float = 1.0, thickness: float = 0.04, n_u: int = 64, n_v: int = 48
 ) -> Mesh:
     """A vase with walls of finite thickness: a closed (watertight) surface of revolution.
 
-    One profile, swept about +y, runs from the centre of the bottom (y = 0) out to the foot, up
-    the outer wall (radius ``radius * f(y / height)``, see :func:`vase_profile`), across the flat
-    rim at ``y = height``, down the inner wall (offset horizontally by ``thickness``) and across
-    the inner floor at ``y = thickness`` back to the axis. The open-looking top is therefore a rim
-    of width ``thickness`` and the mesh is closed; creases (foot, rim edges, inner floor) have
-    duplicated vertices with bitwise-equal positions and different normals.
+    One profile runs from the centre of the bottom (y = 0) out to the foot, up the outer wall
+    (radius ``radius * f(y / height)``, :func:`vase_profile`), across the flat rim at ``y =
+    height``, down the inner wall (``thickness`` further in) and across the inner floor at ``y =
+    thickness`` back to the axis. Creases (foot, rim edges, inner floor) have duplicated
+    vertices with bitwise-equal positions and different normals.
 
     Parameters
     ----------
@@ -117,14 +109,11 @@ def vase(
     Returns
     -------
     Mesh
-        ``uv``: u = angle / 2 pi in [0, 1]; v = arc length along the whole profile, normalized to
+        uv: u = angle / 2 pi in [0, 1]; v = arc length along the whole profile normalized to
         [0, 1] (outer wall in the lower middle, inner wall in the upper middle).
     """
-    height = check_real("height", height, positive=True)
-    radius = check_real("radius", radius, positive=True)
-    thickness = check_real("thickness", thickness, positive=True)
-    n_u = check_int("n_u", n_u, minimum=3)
-    n_v = check_int("n_v", n_v, minimum=1)
+    height, radius, thickness = positives(height=height, radius=radius, thickness=thickness)
+    n_u, n_v = check_int("n_u", n_u, minimum=3), check_int("n_v", n_v, minimum=1)
     if thickness >= height:
         raise ValueError(f"thickness: must be smaller than height ({height}), got {thickness}")
     s_out = np.linspace(0.0, 1.0, n_v + 1)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, check_real
+from ._params import check_int, positives
 from ._topology import concat, grid_faces
 
 __all__ = ["plane", "room"]
@@ -60,9 +60,7 @@ def plane(width: float = 10.0, depth: float = 10.0, tile: float = 1.0, segments:
     Mesh
         u grows with x, v grows towards -z (away from a camera on +z). Not closed.
     """
-    width = check_real("width", width, positive=True)
-    depth = check_real("depth", depth, positive=True)
-    tile = check_real("tile", tile, positive=True)
+    width, depth, tile = positives(width=width, depth=depth, tile=tile)
     segments = check_int("segments", segments, minimum=1)
     x0, x1, z0, z1 = -width / 2.0, width / 2.0, -depth / 2.0, depth / 2.0
     corners = np.array([[x0, 0.0, z1], [x1, 0.0, z1], [x0, 0.0, z0], [x1, 0.0, z0]])
@@ -97,14 +95,9 @@ def room(
         uv on the floor: u with x, v towards -z; on the back wall: u with x, v up; on the left
         wall: u towards -z (the back corner), v up. Ranges [0, extent / tile].
     """
-    width = check_real("width", width, positive=True)
-    depth = check_real("depth", depth, positive=True)
-    height = check_real("height", height, positive=True)
-    tile = check_real("tile", tile, positive=True)
-    segments = check_int("segments", segments, minimum=1)
-    x0, x1 = -width / 2.0, width / 2.0
-    z0, z1 = -depth / 2.0, depth / 2.0
-    n = segments
+    width, depth, height, tile = positives(width=width, depth=depth, height=height, tile=tile)
+    n = check_int("segments", segments, minimum=1)
+    x0, x1, z0, z1 = -width / 2.0, width / 2.0, -depth / 2.0, depth / 2.0
     # floor corners front-left, front-right, back-left, back-right, and the tops of the walls'
     # vertical edges; rectangles that meet share these exact values
     fl, fr, bl, br = [x0, 0.0, z1], [x1, 0.0, z1], [x0, 0.0, z0], [x1, 0.0, z0]

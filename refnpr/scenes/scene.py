@@ -15,12 +15,18 @@ from pathlib import Path
 import numpy as np
 
 from ..raster import Camera, Mesh
-from ._params import check_real, check_vec
+from ._params import check_real, check_type, check_vec
 from .animation import Animation
 
 __all__ = ["Material", "Light", "SceneObject", "Scene", "transform_matrix"]
 
 LIGHT_KINDS = ("directional", "point")
+
+
+def _set(obj, **values) -> None:
+    """Assign fields of a frozen dataclass (in ``__post_init__``)."""
+    for name, value in values.items():
+        object.__setattr__(obj, name, value)
 
 
 @dataclass(frozen=True)
@@ -48,23 +54,19 @@ class Material:
     uv_scale: tuple[float, float] = (1.0, 1.0)
 
     def __post_init__(self) -> None:
-        for name in ("ambient", "diffuse", "specular"):
-            value = check_vec(name, getattr(self, name), 3, broadcast_scalar=True, nonnegative=True)
-            object.__setattr__(self, name, value)
-        object.__setattr__(
-            self, "shininess", check_real("shininess", self.shininess, positive=True)
-        )
-        texture = self.texture
-        if isinstance(texture, Path):
-            texture = str(texture)
+        colors = {
+            k: check_vec(k, getattr(self, k), 3, broadcast_scalar=True, nonnegative=True)
+            for k in ("ambient", "diffuse", "specular")
+        }
+        shininess = check_real("shininess", self.shininess, positive=True)
+        texture = str(self.texture) if isinstance(self.texture, Path) else self.texture
         if texture is not None and (not isinstance(texture, str) or not texture):
             raise TypeError(
                 f"texture: expected a texture name or a file path (non-empty str) or None, "
                 f"got {texture!r}"
             )
-        object.__setattr__(self, "texture", texture)
         uv_scale = check_vec("uv_scale", self.uv_scale, 2, broadcast_scalar=True, positive=True)
-        object.__setattr__(self, "uv_scale", uv_scale)
+        _set(self, **colors, shininess=shininess, texture=texture, uv_scale=uv_scale)
 
 
 @dataclass(frozen=True)
@@ -98,27 +100,24 @@ class Light:
             raise ValueError(
                 "direction: must not be the zero vector; give the direction to the light"
             )
-        object.__setattr__(self, "direction", tuple(x / length for x in d))
+        position = self.position
         if self.kind == "point":
-            if self.position is None:
+            if position is None:
                 raise ValueError("position: a point light needs a position [x, y, z]")
-            object.__setattr__(self, "position", check_vec("position", self.position, 3))
-        elif self.position is not None:
+            position = check_vec("position", position, 3)
+        elif position is not None:
             raise ValueError(
-                f"position: a directional light has no position (got {self.position!r}); "
+                f"position: a directional light has no position (got {position!r}); "
                 "use kind='point' or give only a direction"
             )
-        object.__setattr__(
-            self,
-            "color",
-            check_vec("color", self.color, 3, broadcast_scalar=True, nonnegative=True),
-        )
+        color = check_vec("color", self.color, 3, broadcast_scalar=True, nonnegative=True)
+        _set(self, direction=tuple(x / length for x in d), position=position, color=color)
 
 
 def transform_matrix(
     translate=(0.0, 0.0, 0.0), rotate_deg=(0.0, 0.0, 0.0), scale=1.0
 ) -> np.ndarray:
-    """Object-to-world matrix ``T @ Rz @ Ry @ Rx @ S``.
+    """Object-to-world matrix ``T @ Rz @ Ry @ Rx @ S``, (4, 4) float64.
 
     Parameters
     ----------
@@ -127,10 +126,6 @@ def transform_matrix(
         Rotations about x, then y, then z (degrees, counter-clockwise looking down the axis).
     scale : float or 3 floats
         Uniform or per-axis scale (non-zero).
-
-    Returns
-    -------
-    (4, 4) float64
     """
     t = check_vec("translate", translate, 3)
     rx, ry, rz = (math.radians(a) for a in check_vec("rotate_deg", rotate_deg, 3))
@@ -185,20 +180,14 @@ class SceneObject:
     name: str = ""
 
     def __post_init__(self) -> None:
-        if not isinstance(self.mesh, Mesh):
-            raise TypeError(f"mesh: expected a refnpr Mesh, got {type(self.mesh).__name__}")
-        object.__setattr__(self, "transform", _as_transform(self.transform))
-        if not isinstance(self.material, Material):
-            raise TypeError(f"material: expected a Material, got {type(self.material).__name__}")
-        if not isinstance(self.name, str):
-            raise TypeError(f"name: expected a str, got {type(self.name).__name__}")
-        if not self.name:
-            object.__setattr__(self, "name", self.mesh.name)
+        check_type("mesh", self.mesh, Mesh, "a refnpr Mesh")
+        transform = _as_transform(self.transform)
+        check_type("material", self.material, Material, "a Material")
+        check_type("name", self.name, str, "a str")
+        _set(self, transform=transform, name=self.name or self.mesh.name)
 
     def world_mesh(self) -> Mesh:
-        """The mesh in world space (the mesh itself when the transform is the identity).
-
-        Computed once per object and memoized (meshes are immutable)."""
+        """The mesh in world space (itself for the identity transform), memoized (meshes are immutable)."""
         cached = self.__dict__.get("_world_mesh")
         if cached is None:
             identity = np.array_equal(self.transform, np.eye(4))
@@ -222,11 +211,10 @@ class Scene:
         RGBA clear colour in [0, 1].
     name : str
     style : dict
-        Optional default style from the scene file, e.g. ``{"name": "toon", "n": 3}``; the
-        renderer interprets it (empty if the file has none).
+        The scene file's default style, e.g. ``{"name": "toon", "n": 3}`` (empty if none).
     animation : Animation or None
-        Tracks over frames (:mod:`refnpr.scenes.animation`); None for a still scene. Every
-        track must name a part of this scene. :meth:`at` gives the still scene of a frame.
+        Tracks over frames, each naming a part of this scene; None for a still. :meth:`at` gives
+        the still scene of a frame.
     """
 
     objects: tuple[SceneObject, ...]
@@ -243,37 +231,24 @@ class Scene:
         if not objects:
             raise ValueError("objects: a scene needs at least one object")
         for i, obj in enumerate(objects):
-            if not isinstance(obj, SceneObject):
-                raise TypeError(f"objects[{i}]: expected a SceneObject, got {type(obj).__name__}")
-        object.__setattr__(self, "objects", objects)
-        if not isinstance(self.camera, Camera):
-            raise TypeError(
-                f"camera: expected a Camera (Camera.look_at(...)), got {type(self.camera).__name__}"
-            )
+            check_type(f"objects[{i}]", obj, SceneObject, "a SceneObject")
+        check_type("camera", self.camera, Camera, "a Camera (Camera.look_at(...))")
         lights = tuple(self.lights)
         for i, light in enumerate(lights):
-            if not isinstance(light, Light):
-                raise TypeError(f"lights[{i}]: expected a Light, got {type(light).__name__}")
-        object.__setattr__(self, "lights", lights)
+            check_type(f"lights[{i}]", light, Light, "a Light")
         ambient = check_vec("ambient", self.ambient, 3, broadcast_scalar=True, nonnegative=True)
-        object.__setattr__(self, "ambient", ambient)
         background = check_vec("background", self.background, 4)
         if not all(0.0 <= c <= 1.0 for c in background):
             raise ValueError(
                 f"background: RGBA components must lie in [0, 1], got {list(background)}"
             )
-        object.__setattr__(self, "background", background)
-        if not isinstance(self.name, str):
-            raise TypeError(f"name: expected a str, got {type(self.name).__name__}")
-        if not isinstance(self.style, dict):
-            raise TypeError(f"style: expected a dict, got {type(self.style).__name__}")
-        object.__setattr__(self, "style", dict(self.style))
+        check_type("name", self.name, str, "a str")
+        check_type("style", self.style, dict, "a dict")
+        _set(self, objects=objects, lights=lights, ambient=ambient, background=background)
+        _set(self, style=dict(self.style))
         if self.animation is not None:
-            if not isinstance(self.animation, Animation):
-                raise TypeError(
-                    "animation: expected a refnpr.scenes.animation.Animation or None, got "
-                    f"{type(self.animation).__name__}"
-                )
+            what = "a refnpr.scenes.animation.Animation or None"
+            check_type("animation", self.animation, Animation, what)
             self.animation.check_scene(self)
 
     @property
@@ -282,20 +257,15 @@ class Scene:
         return 1 if self.animation is None else self.animation.frames
 
     def at(self, frame: float) -> Scene:
-        """The still scene of ``frame``: the same objects and meshes, with the frame's camera,
-        lights, object transforms and style table, and ``animation=None``.
-
-        Parameters
-        ----------
-        frame : float
-            In ``[0, frames - 1]``; fractional frames interpolate (time = frame / fps). A
-            still scene has only frame 0 (it returns itself).
+        """The still scene of ``frame`` in ``[0, frames - 1]`` (fractional frames interpolate; time =
+        frame / fps): the same objects and meshes, with the frame's camera, lights, object
+        transforms and style table, and ``animation=None``. A still scene is its own frame 0.
 
         Raises
         ------
         ValueError
-            A frame outside the range, or a frame whose interpolated values are invalid (a
-            camera whose eye reaches its target, a zero scale), naming the frame.
+            A frame outside the range, or one whose interpolated values are invalid (a camera whose
+            eye reaches its target, a zero scale), naming the frame.
         """
         if self.animation is None:
             if isinstance(frame, bool) or not isinstance(frame, (int, float, np.number)):

@@ -1,20 +1,18 @@
 """Newell's teapot: 32 bicubic Bezier patches tessellated with analytic normals.
 
 The data file ``data/newell-teapot.bpt`` holds, one item per line, comma separated: the patch
-count (32); per patch 16 one-based control-point indices, row-major as ``C[i, j]`` with ``i`` the
-row; the control-point count (306); then the points ``x, y, z`` (z up; the spout points to +x).
+count (32); per patch 16 one-based control-point indices, row-major as ``C[i, j]``; the
+control-point count (306); then the points ``x, y, z`` (z up; the spout points to +x).
 
-Conventions (checked against the data): ``j`` (columns) runs around the body and ``i`` (rows)
-runs down the profile; with ``u`` the column parameter and ``v`` the row parameter the outward
-normal is ``dP/du x dP/dv`` for every patch. The lid-knob and bottom patches have a collapsed
-first row (four equal control points), where ``dP/du = 0``; there the normal is the limit
-``dP/du x dP/dv -> v (d2P/du dv x dP/dv)`` as v -> 0 (and likewise for other collapsed edges).
-A collapsed edge is evaluated as exactly its control point (the Bernstein weights do not sum
-to exactly 1 in floating point), so the triangles that degenerate there are found and dropped.
-
-Shared patch edges are evaluated bitwise identically on both sides (a reversal-symmetric
-Bernstein evaluation, see :func:`_bernstein`), so no cracks open between patches. The classic
-teapot is not closed (the lid sits in the rim, handle and spout pierce the body unstitched).
+Checked against the data: columns ``j`` run around the body and rows ``i`` down the profile;
+with ``u`` the column and ``v`` the row parameter the outward normal is ``dP/du x dP/dv``. The
+lid-knob and bottom patches have a collapsed first row (four equal control points), where
+``dP/du = 0`` and the normal is the limit ``v (d2P/du dv x dP/dv)`` as v -> 0 (likewise on other
+collapsed edges). A collapsed edge is evaluated as exactly its control point (the Bernstein
+weights do not sum to exactly 1 in floating point) and the triangles that degenerate there are
+dropped. Shared patch edges are evaluated bitwise identically from both sides
+(:func:`_bernstein`, :func:`_contract`), so no cracks open between patches. The classic teapot
+is not closed (the lid sits in the rim, handle and spout pierce the body unstitched).
 """
 
 from __future__ import annotations
@@ -80,28 +78,20 @@ def read_bpt(text: str, *, source: str = "<bpt>") -> np.ndarray:
 
 
 @cache
-def _teapot_nets() -> np.ndarray:
+def teapot_patches() -> np.ndarray:
+    """The 32 control nets of Newell's teapot, (32, 4, 4, 3) float64, z up (read-only)."""
     text = resources.files(__package__).joinpath("data", _DATA).read_text(encoding="utf-8")
     nets = read_bpt(text, source=_DATA)
     nets.setflags(write=False)
     return nets
 
 
-def teapot_patches() -> np.ndarray:
-    """The 32 control nets of Newell's teapot, (32, 4, 4, 3) float64, z up (read-only)."""
-    return _teapot_nets()
-
-
 def _bernstein(level: int) -> tuple[np.ndarray, np.ndarray]:
-    """Cubic Bernstein values and derivatives at t = k / level, k = 0..level.
+    """Cubic Bernstein values and derivatives, (level + 1, 4) float64 each, at t = k / level.
 
-    ``t = k / L`` and ``s = (L - k) / L`` are both correctly rounded quotients, and
-    ``b0 = s (s s)``, ``b1 = 3 t (s s)``, ``b2 = 3 s (t t)``, ``b3 = t (t t)``, so the row for
-    ``L - k`` is exactly the reversed row for ``k``.
-
-    Returns
-    -------
-    b, db : (level + 1, 4) float64
+    ``t = k / L`` and ``s = (L - k) / L`` are both correctly rounded, and ``b0 = s (s s)``,
+    ``b1 = 3 t (s s)``, ``b2 = 3 s (t t)``, ``b3 = t (t t)``, so the row for ``L - k`` is exactly
+    the reversed row for ``k``.
     """
     k = np.arange(level + 1, dtype=np.float64)
     t = k / level
@@ -114,20 +104,10 @@ def _bernstein(level: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _contract(b: np.ndarray, c: np.ndarray, axis: int) -> np.ndarray:
-    """Sum ``b[:, m] * c[..., m, ...]`` over m as ``(b0 c0 + b3 c3) + (b1 c1 + b2 c2)``.
-
-    The grouping is unchanged when both the basis row and the points are reversed, which makes
-    a shared patch edge evaluate to bitwise the same points from either side.
-
-    Parameters
-    ----------
-    b : (L + 1, 4) float64
-    c : array with 4 entries along ``axis`` (then a trailing xyz axis)
-
-    Returns
-    -------
-    array with ``axis`` replaced by one of length L + 1
-    """
+    """Sum ``b[:, m] * c[..., m, ...]`` over m (``c`` has 4 entries along ``axis``, which
+    becomes one of length L + 1) as ``(b0 c0 + b3 c3) + (b1 c1 + b2 c2)``: the grouping is
+    unchanged when both the basis row and the points are reversed, so a shared patch edge
+    evaluates to bitwise the same points from either side."""
     cs = [np.expand_dims(np.take(c, m, axis=axis), axis) for m in range(4)]
     shape = [1] * c.ndim
     shape[axis] = b.shape[0]
@@ -136,13 +116,8 @@ def _contract(b: np.ndarray, c: np.ndarray, axis: int) -> np.ndarray:
 
 
 def _evaluate(nets: np.ndarray, level: int) -> tuple[np.ndarray, ...]:
-    """Positions and derivatives on a (level + 1)^2 grid per patch.
-
-    Returns
-    -------
-    p, p_u, p_v, p_uv : (P, level + 1, level + 1, 3) float64
-        Indexed ``[patch, row (v), column (u)]``.
-    """
+    """Positions and derivatives ``p, p_u, p_v, p_uv``, each (P, level + 1, level + 1, 3)
+    float64 indexed ``[patch, row (v), column (u)]``."""
     b, db = _bernstein(level)
     q = _contract(b, nets, axis=2)  # along u (columns): (P, 4, L+1, 3)
     q_u = _contract(db, nets, axis=2)
@@ -171,11 +146,8 @@ def _normals(p_u, p_v, p_uv, level: int) -> np.ndarray:
 
 
 def _snap_collapsed_edges(p: np.ndarray, nets: np.ndarray) -> None:
-    """Set boundary rows/columns whose four control points coincide exactly to that point.
-
-    The Bernstein weights do not sum to exactly 1 in floating point, so a collapsed edge would
-    otherwise evaluate to points a few ulp apart instead of one point (in place on ``p``).
-    """
+    """Set boundary rows/columns of ``p`` whose four control points coincide exactly to that
+    point (in place): the Bernstein weights do not sum to exactly 1 in floating point."""
     for i in (0, 3):
         row = np.all(nets[:, i, :] == nets[:, i, :1], axis=(1, 2))
         col = np.all(nets[:, :, i] == nets[:, :1, i], axis=(1, 2))
@@ -190,21 +162,20 @@ def teapot(level: int = 8) -> Mesh:
     Parameters
     ----------
     level : int
-        Segments per patch side, 2..256 (at 1 some flat patch corners give zero-area triangles). Each patch gives ``2 level^2`` triangles less the ones
-        that collapse at the lid knob and bottom centre (dropped).
+        Segments per patch side, 2..256 (at 1 some flat patch corners give zero-area
+        triangles). Each patch gives ``2 level^2`` triangles less the ones that collapse at the
+        lid knob and bottom centre (dropped).
 
     Returns
     -------
     Mesh
-        y up (the data's z axis becomes +y, its y axis becomes -z: ``(x, y, z) -> (x, z, -y)``);
-        the teapot stands on y = 0, the spout points to +x; height 3.15 units. Vertices are
-        per patch (patch edges are duplicated with bitwise-equal positions). ``uv`` are the
-        patch parameters in [0, 1]^2: u along the columns (around the body), v along the rows
-        (down the profile). Normals come from the patch tangents (limits at collapsed corners).
-        Not closed.
+        y up (``(x, y, z) -> (x, z, -y)`` from the data), standing on y = 0, spout towards +x,
+        3.15 units high. Vertices are per patch (patch edges duplicated with bitwise-equal
+        positions); uv are the patch parameters in [0, 1]^2 (u around the body, v down the
+        profile); normals from the patch tangents (limits at collapsed corners). Not closed.
     """
     level = check_int("level", level, minimum=2, maximum=256)
-    nets = _teapot_nets()
+    nets = teapot_patches()
     p, p_u, p_v, p_uv = _evaluate(nets, level)
     _snap_collapsed_edges(p, nets)
     normals = _normals(p_u, p_v, p_uv, level)

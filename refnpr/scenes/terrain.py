@@ -55,23 +55,9 @@ def _fade(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _gradient_noise(
     x: np.ndarray, y: np.ndarray, perm: np.ndarray, grad: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """2D gradient noise in lattice units and its gradient, scaled to [-1, 1].
-
-    Parameters
-    ----------
-    x, y : float64 arrays of one shape
-        Lattice coordinates.
-    perm : (_TABLE,) int64
-        Hash permutation.
-    grad : (_TABLE, 2) float64
-        Unit gradients.
-
-    Returns
-    -------
-    n, dn_dx, dn_dy : float64 arrays shaped like ``x``
-        ``|n| <= 1`` (the unit-gradient noise is bounded by ``sqrt(2) / 2``; scaled by
-        ``sqrt(2)``).
-    """
+    """2D gradient noise at lattice coordinates ``(x, y)`` and its gradient, scaled by
+    ``sqrt(2)`` to [-1, 1] (unit-gradient noise is bounded by ``sqrt(2) / 2``); ``perm``
+    (_TABLE,) is the hash permutation and ``grad`` (_TABLE, 2) the unit gradients."""
     xf, yf = np.floor(x), np.floor(y)
     i, j = xf.astype(np.int64) % _TABLE, yf.astype(np.int64) % _TABLE
     fx, fy = x - xf, y - yf
@@ -197,10 +183,6 @@ def terrain(
     height = check_real("height", height, nonnegative=True)
     octaves = check_int("octaves", octaves, minimum=1, maximum=16)
     seed = check_int("seed", seed, minimum=0)
-    if not isinstance(noise, str) or noise not in NOISE_KINDS:
-        raise ValueError(
-            f"noise: unknown height function {noise!r}; expected one of {', '.join(NOISE_KINDS)}"
-        )
     a = np.arange(n + 1) / n
     x = size * (a - 0.5)
     z = size * (0.5 - a)

@@ -44,11 +44,6 @@ A scene file has a few top-level keys and tables (unknown keys are errors)::
     uv_scale = [4.0, 4.0]                  # or one number
 
     [animation]                            # optional: an animated scene (docs/animation.md)
-    frames = 48
-    fps = 24
-    [[animation.track]]                    # camera, lights, object transforms, style parameters
-    target = "camera.eye"
-    keys = [{ frame = 0, value = [6.0, 4.5, 8.0] }, { frame = 47, value = [8.0, 4.5, 6.0] }]
 
 ``transform`` applies ``scale``, then the rotations about x, y, z (degrees), then ``translate``
 (:func:`~refnpr.scenes.transform_matrix`). A mesh file with several geometries (glTF) becomes
@@ -69,9 +64,10 @@ from importlib import resources
 from pathlib import Path
 
 from ..raster import Camera
-from .animation_toml import parse_animation
+from .animation import Animation, Track, check_keys_in_range
 from .registry import mesh_from_spec
 from .scene import Light, Material, Scene, SceneObject, transform_matrix
+from .tracks import Keyframe, quaternion_from_axis_angle
 
 __all__ = [
     "SceneFileError",
@@ -98,7 +94,9 @@ _CAMERA_KEYS = ("eye", "target", "up", "fov_y", "near", "far")
 _LIGHT_KEYS = ("kind", "direction", "position", "color")
 _MATERIAL_KEYS = tuple(f.name for f in fields(Material))
 _TRANSFORM_KEYS = ("translate", "rotate_deg", "scale", "matrix")
-_OBJECT_KEYS = ("name", "transform", "material")  # plus the mesh spec's keys
+_ANIMATION_KEYS = ("frames", "fps", "track")
+_TRACK_KEYS = ("target", "interpolation", "keys", "integer")
+_KEY_KEYS = ("frame", "time", "value", "quaternion", "axis", "angle_deg")
 
 
 class SceneFileError(ValueError):
@@ -107,8 +105,8 @@ class SceneFileError(ValueError):
 
 @contextmanager
 def _where(source: str, where: str) -> Iterator[None]:
-    """Re-raise ValueError/TypeError/OSError (a missing mesh file) from the block as
-    SceneFileError prefixed with the location."""
+    """Re-raise ValueError, TypeError and OSError (a missing mesh file) as SceneFileError
+    prefixed with the location."""
     try:
         yield
     except SceneFileError:
@@ -117,17 +115,16 @@ def _where(source: str, where: str) -> Iterator[None]:
         raise SceneFileError(f"{source}: {where}: {exc}") from exc
 
 
-def _table(source: str, where: str, value, keys: tuple[str, ...] | None) -> dict:
+def _table(source: str, where: str, value, keys: tuple[str, ...] | None, example="") -> dict:
     if not isinstance(value, Mapping):
         raise SceneFileError(
-            f"{source}: {where}: expected a table, got {type(value).__name__} {value!r}"
+            f"{source}: {where}: expected a table{example}, got {type(value).__name__} {value!r}"
         )
-    if keys is not None:
-        for key in value:
-            if key not in keys:
-                raise SceneFileError(
-                    f"{source}: {where}: unknown key {key!r}; valid keys: {', '.join(keys)}"
-                )
+    unknown = [key for key in value if keys is not None and key not in keys]
+    if unknown:
+        raise SceneFileError(
+            f"{source}: {where}: unknown key {unknown[0]!r}; valid keys: {', '.join(keys)}"
+        )
     return dict(value)
 
 
@@ -139,10 +136,16 @@ def _array_of_tables(source: str, key: str, value) -> list:
     return value
 
 
+def _is_path(value: str) -> bool:
+    """A texture or style value with a slash or a suffix names a file (built-in names have
+    neither)."""
+    return "/" in value or "\\" in value or bool(Path(value).suffix)
+
+
 def _material(source: str, where: str, value, base_dir: Path) -> Material:
     spec = _table(source, where, value, _MATERIAL_KEYS)
     texture = spec.get("texture")
-    if isinstance(texture, str) and ("/" in texture or "\\" in texture or Path(texture).suffix):
+    if isinstance(texture, str) and _is_path(texture):
         path = base_dir / texture
         if path.is_dir():
             raise SceneFileError(
@@ -180,12 +183,8 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
     base_dir : str or Path
         Directory that relative mesh and texture paths are resolved against.
     source : str, optional
-        File name used in error messages (default ``"<scene dict>"``).
-
-    Raises
-    ------
-    SceneFileError
-        A ``ValueError`` naming ``source``, the table and the key.
+        File name that error messages (:class:`SceneFileError`, naming the table and the key)
+        start with (default ``"<scene dict>"``).
     """
     src = "<scene dict>" if source is None else str(source)
     base = Path(base_dir)
@@ -207,10 +206,8 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
         spec = _table(src, where, spec, _LIGHT_KEYS)
         with _where(src, where):
             lights.append(Light(**spec))
-    if "object" not in top:
-        raise SceneFileError(f"{src}: no [[object]] tables; a scene needs at least one object")
     objects = []
-    for i, spec in enumerate(_array_of_tables(src, "object", top["object"])):
+    for i, spec in enumerate(_array_of_tables(src, "object", top.get("object", []))):
         where = f"[[object]] #{i + 1}"
         spec = _table(src, where, spec, None)
         label = spec.get("name", spec.get("mesh", spec.get("path")))
@@ -252,24 +249,123 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
         )
     if "animation" not in top:
         return scene
+    animation = _animation(src, top["animation"])
+    shown = src.replace("{", "{{").replace("}", "}}")
     try:
-        animation = parse_animation(src, top["animation"])
-        shown = src.replace("{", "{{").replace("}", "}}")
         animation.check_scene(scene, label=shown + ": [[animation.track]] #{n} {target!r}")
-    except (TypeError, ValueError) as exc:
+    except ValueError as exc:
         raise SceneFileError(str(exc)) from exc
     return dataclasses.replace(scene, animation=animation)
 
 
+def _is_int(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _key(src: str, where: str, spec, fps: float, rotation: bool) -> Keyframe:
+    """One key of an ``[[animation.track]]``: at a ``frame`` or a ``time``; a rotation as a
+    ``quaternion`` or an ``axis`` and ``angle_deg``."""
+    _table(src, where, spec, _KEY_KEYS, " such as { frame = 0, value = [...] }")
+    if ("frame" in spec) == ("time" in spec):
+        raise SceneFileError(
+            f"{src}: {where}: give exactly one of `frame = N` or `time = SECONDS`, got "
+            + ("both" if "frame" in spec else "neither")
+        )
+    if "frame" in spec:
+        frame = spec["frame"]
+    else:
+        t = spec["time"]
+        if isinstance(t, bool) or not isinstance(t, (int, float)):
+            raise SceneFileError(f"{src}: {where}: time: expected seconds (a number), got {t!r}")
+        frame = t * fps
+    if rotation:
+        has_q, has_aa = "quaternion" in spec, "axis" in spec or "angle_deg" in spec
+        if "value" in spec or has_q == has_aa:
+            raise SceneFileError(
+                f"{src}: {where}: a rotation key needs `quaternion = [x, y, z, w]` or "
+                "`axis = [x, y, z]` with `angle_deg = A`, exactly one of the two"
+            )
+        if not has_q and ("axis" not in spec or "angle_deg" not in spec):
+            raise SceneFileError(
+                f"{src}: {where}: an axis-angle key needs both `axis` and `angle_deg`"
+            )
+    else:
+        extra = [k for k in ("quaternion", "axis", "angle_deg") if k in spec]
+        if extra:
+            raise SceneFileError(
+                f"{src}: {where}: {extra[0]!r} is for rotation tracks; this track takes `value`"
+            )
+        if "value" not in spec:
+            raise SceneFileError(f"{src}: {where}: missing `value`")
+    with _where(src, where):
+        if rotation and "quaternion" not in spec:
+            return Keyframe(frame, quaternion_from_axis_angle(spec["axis"], spec["angle_deg"]))
+        return Keyframe(frame, spec["quaternion" if rotation else "value"])
+
+
+def _animation(src: str, value) -> Animation:
+    """The ``[animation]`` table (docs/animation.md); a style track whose key values are all
+    integers rounds its interpolated value (``style.n``)."""
+    spec = _table(src, "[animation]", value, _ANIMATION_KEYS)
+    if "frames" not in spec:
+        raise SceneFileError(
+            f"{src}: [animation]: missing key 'frames' (the number of frames, >= 1)"
+        )
+    frames, fps = spec["frames"], spec.get("fps", 24.0)
+    with _where(src, "[animation]"):
+        Animation(frames, fps)  # frames and fps checked before the keys use fps
+    specs = spec.get("track", [])
+    if not isinstance(specs, list):
+        raise SceneFileError(
+            f"{src}: [animation]: track: expected an array of tables ([[animation.track]]), got "
+            f"{type(specs).__name__}"
+        )
+    tracks = []
+    for i, track in enumerate(specs):
+        where = f"[[animation.track]] #{i + 1}"
+        track = _table(src, where, track, _TRACK_KEYS)
+        target = track.get("target")
+        if not isinstance(target, str):
+            raise SceneFileError(
+                f"{src}: {where}: target: expected a string such as 'camera.eye', got {target!r}"
+            )
+        where += f" {target!r}"
+        keys = track.get("keys")
+        if not isinstance(keys, list) or not keys:
+            raise SceneFileError(
+                f"{src}: {where}: keys: expected a non-empty array of tables "
+                "[{ frame = 0, value = [...] }, ...], got "
+                + ("nothing" if keys is None else repr(keys))
+            )
+        rotation = target.strip().endswith(".rotation") and target.strip().startswith("object")
+        parsed = [
+            _key(src, f"{where}: keys[{j}]", k, float(fps), rotation) for j, k in enumerate(keys)
+        ]
+        check_keys_in_range(f"{src}: {where}", parsed, frames, fps, error=SceneFileError)
+        integer = track.get("integer")
+        if integer is None:
+            integer = target.strip().startswith("style.") and all(
+                isinstance(k, Mapping)
+                and (
+                    _is_int(k.get("value"))
+                    or (isinstance(k.get("value"), list) and all(map(_is_int, k["value"])))
+                )
+                for k in keys
+            )
+        with _where(src, where):
+            tracks.append(Track(target, tuple(parsed), track.get("interpolation"), integer))
+    with _where(src, "[animation]"):
+        return Animation(frames, fps, tuple(tracks))
+
+
 def _resolve_style_paths(value, base_dir: Path):
-    """Style parameters that name files (textures, screens, layers, maps) are relative to the
-    scene file, like material textures: any string with a slash or a suffix that names an
-    existing file next to the scene becomes an absolute path (tables and lists recursively)."""
+    """Style values that name existing files next to the scene file (a string with a slash or a
+    suffix, as material textures) become paths, in tables and lists too."""
     if isinstance(value, dict):
         return {k: _resolve_style_paths(v, base_dir) for k, v in value.items()}
     if isinstance(value, list):
         return [_resolve_style_paths(v, base_dir) for v in value]
-    if isinstance(value, str) and ("/" in value or "\\" in value or Path(value).suffix):
+    if isinstance(value, str) and _is_path(value):
         path = base_dir / value
         if not Path(value).is_absolute() and path.is_file():
             return str(path)
@@ -282,8 +378,6 @@ def _data_dir() -> Path:
 
 def _read(path: Path, source: str) -> dict:
     """Parse a scene file; every failure is a SceneFileError naming ``source`` (and the line)."""
-    if path.is_dir():
-        raise SceneFileError(f"{source}: is a directory; expected a .toml scene file")
     try:
         raw = path.read_bytes()
     except OSError as exc:
@@ -312,20 +406,12 @@ def parse_toml_bytes(
 
 def list_scenes() -> dict[str, str]:
     """Built-in scenes: name -> one-line description, sorted by name."""
-    out = {}
-    for path in sorted(_data_dir().glob("*.toml")):
-        out[path.stem] = str(_read(path, path.name).get("description", ""))
-    return out
+    paths = sorted(_data_dir().glob("*.toml"))
+    return {p.stem: str(_read(p, p.name).get("description", "")) for p in paths}
 
 
 def scene_frames(name: str) -> int:
-    """Number of frames of built-in scene ``name`` (1 for a still), read without building it.
-
-    Raises
-    ------
-    ValueError
-        For an unknown name (listing the valid ones) or a malformed ``frames``.
-    """
+    """Number of frames of built-in scene ``name`` (1 for a still), read without building it."""
     path = builtin_scene_path(name)
     animation = _read(path, path.name).get("animation")
     if animation is None:
@@ -348,17 +434,15 @@ def builtin_scene_path(name: str) -> Path:
 
 
 def load_scene(name_or_path: str | Path) -> Scene:
-    """Load a built-in scene by name (see :func:`list_scenes`) or a scene file by path.
-
-    A ``Path``, or a string that ends in ``.toml`` or contains a slash, is a file path;
-    any other string is a built-in name.
+    """Load a built-in scene by name (see :func:`list_scenes`) or a scene file by path: a
+    ``Path``, or a string that ends in ``.toml`` or contains a slash.
 
     Raises
     ------
     ValueError
-        For an unknown built-in name (listing the valid names) or an invalid file
-        (:class:`SceneFileError`, naming the file and the key): not UTF-8 (with the line),
-        invalid TOML (with the line), a directory, or an existing file without ``.toml``.
+        An unknown built-in name (listing the valid names) or an invalid file
+        (:class:`SceneFileError`, naming the file and the key): not UTF-8 or invalid TOML (with
+        the line), a directory, or an existing file without ``.toml``.
     FileNotFoundError
         If a scene file path does not exist.
     """

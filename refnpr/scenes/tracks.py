@@ -1,15 +1,6 @@
-"""Keyframe tracks: interpolation of vectors (linear, Catmull-Rom) and rotations (slerp).
-
-A track holds keys at increasing (possibly fractional) frames. Before its first key it holds
-the first value, after its last key the last value; between two keys it interpolates:
-
-* ``"linear"``: ``p = (1 - u) p_i + u p_{i+1}`` with ``u = (f - f_i) / (f_{i+1} - f_i)``.
-* ``"catmull_rom"``: the cubic Hermite curve through the keys whose tangent at key i is the
-  central difference ``(p_{i+1} - p_{i-1}) / (f_{i+1} - f_{i-1})`` (one-sided at the ends),
-  so it passes exactly through every key and reproduces linear motion exactly; for evenly
-  spaced keys it is the classic uniform Catmull-Rom spline.
-* ``"slerp"`` (rotations, unit quaternions ``[x, y, z, w]`` as in glTF): spherical linear
-  interpolation along the shorter arc (``q_{i+1}`` is negated when ``q_i . q_{i+1} < 0``).
+"""Keyframe tracks: interpolation of vectors (linear, Catmull-Rom) and rotations (slerp of unit
+quaternions ``[x, y, z, w]``, glTF order). A track holds its first value before its first key and
+its last after its last key; the interpolations are defined in docs/animation.md.
 """
 
 from __future__ import annotations

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import Mesh
+from ._params import check_type
 from ._topology import split_u_seam, unit
 from .primitives import spherical_uv
 
@@ -18,7 +19,6 @@ __all__ = ["UV_PROJECTIONS", "project_uv", "require_uv"]
 #: Accepted values of ``kind`` / ``uv_projection``.
 UV_PROJECTIONS = ("planar", "box", "spherical", "cylindrical")
 
-_AXES = {"x": 0, "y": 1, "z": 2}
 # rotations taking the named axis to +y (proper rotations, so angles keep their orientation)
 _TO_Y = {
     "x": np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
@@ -41,8 +41,7 @@ _BOX = np.array(
 
 def require_uv(mesh: Mesh, *, needed_by: str = "this style") -> Mesh:
     """Return ``mesh`` if it has texture coordinates, else raise a ``ValueError`` naming the remedy."""
-    if not isinstance(mesh, Mesh):
-        raise TypeError(f"mesh: expected a refnpr Mesh, got {type(mesh).__name__}")
+    check_type("mesh", mesh, Mesh, "a refnpr Mesh")
     if mesh.uv is None:
         raise ValueError(
             f"mesh {mesh.name!r} has no uv, which {needed_by} needs; "
@@ -87,8 +86,7 @@ def project_uv(mesh: Mesh, kind: str, *, axis: str | None = None) -> Mesh:
         A copy with ``uv`` (N', 2) float64; positions, normals and attributes are carried to
         the duplicated vertices bitwise.
     """
-    if not isinstance(mesh, Mesh):
-        raise TypeError(f"mesh: expected a refnpr Mesh, got {type(mesh).__name__}")
+    check_type("mesh", mesh, Mesh, "a refnpr Mesh")
     if kind not in UV_PROJECTIONS:
         raise ValueError(f"kind: unknown uv projection {kind!r}; expected one of {UV_PROJECTIONS}")
     if kind == "box":
@@ -96,7 +94,7 @@ def project_uv(mesh: Mesh, kind: str, *, axis: str | None = None) -> Mesh:
             raise ValueError(f"axis: the box projection uses all three axes, got axis={axis!r}")
     else:
         axis = {"planar": "z"}.get(kind, "y") if axis is None else axis
-        if axis not in _AXES:
+        if axis not in _TO_Y:
             raise ValueError(f"axis: expected 'x', 'y' or 'z', got {axis!r}")
     p = mesh.positions
     lo, hi = p.min(axis=0), p.max(axis=0)

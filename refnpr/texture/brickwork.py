@@ -1,18 +1,17 @@
 """The built-in ``brick`` image: a procedural running-bond brick wall that tiles exactly.
 
-It replaces scikit-image's brick photograph, a perspective view whose courses converge and
-do not line up across the image borders, so that every repeat showed a seam (a periodic
-decomposition cannot fix rows that do not meet). Here bricks, mortar joints, per-brick tone and
-the surface grain are all functions on the torus: the image repeats seamlessly along u and v.
-
-Orientation, as the photograph's: the bricks' long side runs along the image rows (v), the
-courses are stacked along the columns (u), so that on the built-in room walls, whose u is
-vertical, the courses lie horizontally.
+Bricks, mortar joints, per-brick tone and surface grain are functions on the torus, so the
+image repeats seamlessly along u and v (scikit-image's brick photograph, a perspective view
+whose courses converge, cannot be made to meet across its borders). As in the photograph the
+bricks' long side runs along the image rows (v) and the courses stack along the columns (u), so
+the courses lie horizontally on the built-in room walls, whose u is vertical.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from ._checks import _int
 
 __all__ = ["brick_texture"]
 
@@ -63,9 +62,8 @@ def brick_texture(
         Darker bricks with individual tones, rounded faces (darker towards the joints), faint
         stains and pits, lighter grainy mortar; anti-aliased joint edges (one texel).
     """
-    for name, value, lo in (("size", size, 16), ("courses", courses, 2), ("bricks", bricks, 1)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-            raise ValueError(f"{name}: expected an integer >= {lo}, got {value!r}")
+    size, courses = _int("size", size, 16), _int("courses", courses, 2)
+    bricks = _int("bricks", bricks, 1)
     if courses % 2:
         raise ValueError(
             f"courses: expected an even number (running bond shifts every other course by half "

@@ -1,13 +1,4 @@
-"""Built-in textures (all tile seamlessly), or image files (as given, or made to tile).
-
-The built-in names are scikit-image's bundled images (no download), each made to repeat without
-a seam under GL_REPEAT: ``brick`` is a procedural running-bond wall
-(:func:`refnpr.texture.brickwork.brick_texture`; the photograph's converging courses cannot be
-made to meet across its borders), ``checkerboard`` is drawn exactly (its squares' edges lie on
-the border, where a periodic decomposition would smear them), every other one is the periodic
-component of scikit-image's image (Moisan 2011,
-:func:`refnpr.texture.periodic.periodic_component`), clipped to [0, 1] and kept 8-bit.
-"""
+"""Built-in textures (all tile seamlessly), or image files (as given, or made to tile)."""
 
 from __future__ import annotations
 
@@ -29,10 +20,8 @@ BUILTIN_TEXTURES = ("brick", "grass", "gravel", "camera", "text", "checkerboard"
 
 
 def _checkerboard(size: int = 200, squares: int = 8) -> np.ndarray:
-    """scikit-image's checkerboard (200 x 200, 8 x 8 squares of 25 texels, white at the top
-    left) drawn exactly, with hard edges: the original lacks the soft edge between its last and
-    first squares, and the periodic component of a pattern whose edges lie on the border smears
-    the squares along it."""
+    """scikit-image's checkerboard (8 x 8 squares of 25 texels, white at the top left) drawn
+    with hard edges (the periodic component would smear squares whose edges lie on the border)."""
     cell = (np.arange(size) * squares) // size
     return np.where((cell[:, None] + cell[None, :]) % 2 == 0, 255, 0).astype(np.uint8)
 
@@ -43,14 +32,14 @@ def builtin_image(name: str) -> np.ndarray:
     Parameters
     ----------
     name : str
-        One of ``BUILTIN_TEXTURES``.
+        One of ``BUILTIN_TEXTURES``: scikit-image's bundled images (no download) made to repeat.
 
     Returns
     -------
     (rows, cols) uint8
-        ``brick``: :func:`refnpr.texture.brickwork.brick_texture` (512 x 512).
+        ``brick``: :func:`refnpr.texture.brickwork.brick_texture` (512 x 512), procedural.
         ``checkerboard``: 8 x 8 squares of 25 texels with hard edges (scikit-image's layout).
-        Others: scikit-image's image of that name, replaced by its periodic component (Moisan
+        Others: scikit-image's image of that name replaced by its periodic component (Moisan
         2011), clipped to [0, 255] and rounded (pointwise, so it still tiles).
     """
     if name not in BUILTIN_TEXTURES:
@@ -112,14 +101,12 @@ def load_texture(
                 f"path, got {type(name_or_path).__name__} {name_or_path!r}"
             )
         shown = str(name_or_path)
-        path = Path(name_or_path)
-        if not path.exists():
+        if not Path(name_or_path).exists():
             raise ValueError(
                 f"{param}: {shown!r} is neither a built-in texture {list(BUILTIN_TEXTURES)} "
                 f"nor an existing image file (no such file; expected {IMAGE_FORMATS} file)"
             )
-        img = read_image_file(name_or_path, what=param)
-        tex = as_texture(img, name=f"texture {shown!r}")
+        tex = as_texture(read_image_file(name_or_path, what=param), name=f"texture {shown!r}")
     if gray and tex.ndim == 3:
         from skimage.color import rgb2gray
 

@@ -1,18 +1,13 @@
 """CLAHE on the torus: contrast-limited adaptive histogram equalization of a repeating texture.
 
-Zuiderveld's CLAHE (Graphics Gems IV, 1994; the algorithm Veryovka 2002 sec. 3.1 applies to
-every mip level): the image is cut into contextual regions of about ``window`` x ``window``
-texels; each region's histogram is clipped at ``clip_limit`` times its texel count, the excess
-is spread evenly over all bins, and its cumulative histogram is the region's gray-level map.
-Every texel is mapped by the four regions whose centres surround it, bilinearly weighted.
-
-A threshold texture repeats (GL_REPEAT), so here the regions tile the torus: the level is cut
-into ``round(size / window)`` regions per axis whose borders partition one period, and a texel
-next to a border is interpolated with the regions on the far side. The result is a function on
-the torus and tiles exactly when the input does, for any level size (scikit-image's
-``equalize_adapthist`` pads the image by reflection and aligns its regions to the image's
-corner, so its output is not periodic, even with periodic padding, unless window divides the
-size and the padding covers the whole interpolation support).
+Zuiderveld's CLAHE (Graphics Gems IV, 1994; what Veryovka 2002 sec. 3.1 applies to every mip
+level): each contextual region of about ``window`` x ``window`` texels clips its histogram at
+``clip_limit`` times its texel count, spreads the excess evenly over all bins and maps gray
+levels by its cumulative histogram; a texel blends the maps of the four regions whose centres
+surround it, bilinearly. Here the regions tile the torus (``round(size / window)`` per axis,
+their borders partitioning one period; texels near a border blend regions across it), so the
+result tiles whenever the input does, for any level size. scikit-image's ``equalize_adapthist``
+pads by reflection and aligns its regions to the image corner, so its output is not periodic.
 """
 
 from __future__ import annotations

@@ -1,20 +1,17 @@
 """Periodic plus smooth decomposition of an image (Moisan 2011), to make a texture tile.
 
 L. Moisan, "Periodic plus smooth image decomposition", Journal of Mathematical Imaging and
-Vision 39(2):161-179, 2011. An image u (M x N) is the sum u = p + s of a *periodic* component p,
-whose GL_REPEAT copies join without a seam, and a *smooth* component s that carries the jumps
-between opposite borders. p is the unique image with
+Vision 39(2):161-179, 2011. An image u is the sum u = p + s of a *periodic* component p, whose
+GL_REPEAT copies join without a seam, and a *smooth* component s that carries the jumps between
+opposite borders. p is the unique image with
 
     Lap_per p = Lap_int u,    mean(p) = mean(u)                       (Moisan's definition of p)
 
-where Lap_per is the discrete Laplacian on the torus (every texel has four neighbours, across
-the borders too) and Lap_int the Laplacian of u with free borders (only the neighbours inside
-the image). So p keeps every local difference of u inside the image and replaces the jump
-across each border by the same smooth variation. s solves Lap_per s = v, with v the boundary
-image (the jumps across opposite borders); the FFT diagonalizes Lap_per, so s is one
-division per frequency (Moisan's closed-form solution).
-
-Texture-space convention as in :mod:`refnpr.texture.pyramid`: rows are v, columns are u.
+where Lap_per is the discrete Laplacian on the torus (four neighbours, across the borders too)
+and Lap_int the Laplacian of u with free borders: p keeps every local difference of u and
+replaces the jump across each border by a smooth variation. s solves Lap_per s = v, v the jumps
+across opposite borders, one division per frequency after the FFT (Moisan's closed form).
+Rows are v, columns u (:mod:`refnpr.texture.pyramid`).
 """
 
 from __future__ import annotations
@@ -54,7 +51,7 @@ def _boundary_image(u: np.ndarray) -> np.ndarray:
 
 
 def smooth_component(image) -> np.ndarray:
-    """The smooth component s of ``image`` (Moisan 2011): ``image - periodic_component(image)``.
+    """The smooth component ``s = image - periodic_component(image)`` (Moisan 2011).
 
     Parameters
     ----------
@@ -82,20 +79,11 @@ def smooth_component(image) -> np.ndarray:
 
 
 def periodic_component(image) -> np.ndarray:
-    """The periodic component p of ``image`` (Moisan 2011): it tiles without a seam.
+    """The periodic component p of ``image`` (Moisan 2011), which tiles without a seam: the
+    solution of ``Lap_per p = Lap_int u`` with ``mean(p) = mean(u)``, by the FFT in float64.
 
-    p solves ``Lap_per p = Lap_int u`` with ``mean(p) = mean(u)`` (see the module docstring),
-    computed with the FFT in float64.
-
-    Parameters
-    ----------
-    image : (M, N) or (M, N, C) array
-        Any numeric image; channels are decomposed independently.
-
-    Returns
-    -------
-    (M, N) or (M, N, C) float64
-        Same mean as ``image``; values may leave the input's range near the borders.
+    Takes and returns arrays as :func:`smooth_component`; p has the mean of ``image`` and may
+    leave its range near the borders.
     """
     u = _as_float64_image(image, "image")
     return u - smooth_component(u)
@@ -119,21 +107,9 @@ def check_tiling(tiling, *, param: str = "tiling") -> str:
 
 
 def make_tileable(texture: np.ndarray, tiling: str | None, *, param: str = "tiling") -> np.ndarray:
-    """A float texture in [0, 1] made to tile as ``tiling`` asks.
-
-    Parameters
-    ----------
-    texture : (rows, cols) or (rows, cols, C) float array in [0, 1]
-    tiling : {"none", "periodic"} or None
-        "none" / None: ``texture`` unchanged. "periodic": its periodic component (per channel),
-        clipped to [0, 1] (clipping is pointwise, so the result still tiles).
-    param : str
-        Name of the user's parameter, for error messages.
-
-    Returns
-    -------
-    (rows, cols[, C]) float32
-    """
+    """``texture`` ((rows, cols[, C]) float in [0, 1]) as is for ``tiling`` "none" or None; for
+    "periodic" its periodic component, clipped to [0, 1] (pointwise, so it still tiles), float32.
+    ``param`` names the user's parameter in error messages."""
     if check_tiling(tiling, param=param) == "none":
         return texture
     return np.clip(periodic_component(texture), 0.0, 1.0).astype(np.float32)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._checks import _int
 from .clahe import periodic_clahe
 
 __all__ = ["MipPyramid", "build_pyramid", "clahe_pyramid", "rank_equalize", "as_texture"]
@@ -104,14 +105,6 @@ def build_pyramid(image) -> MipPyramid:
     return MipPyramid(tuple(levels))
 
 
-def _clahe(level: np.ndarray, window: int, clip_limit: float, nbins: int) -> np.ndarray:
-    h, w = level.shape[:2]
-    if h < 2 or w < 2:
-        return np.full_like(level, 0.5)  # a single texel: the median threshold
-    # contextual regions on the torus: the equalized level tiles whenever the level does
-    return periodic_clahe(level, window=window, clip_limit=clip_limit, nbins=nbins)
-
-
 def rank_equalize(level: np.ndarray) -> np.ndarray:
     """Monotone map of a level onto exactly uniform values ``(rank + 0.5) / N`` (stable ties),
     so that thresholding against it preserves mean tone exactly; local order (minima, maxima)
@@ -128,36 +121,31 @@ def clahe_pyramid(
 ) -> MipPyramid:
     """Mip pyramid with CLAHE applied to every level (Veryovka 2002 sec. 3.1).
 
-    Each level is equalized with CLAHE (contextual regions of about ``window`` texels, or the
-    level size if smaller), computed on the torus (:func:`refnpr.texture.clahe.periodic_clahe`)
-    so that every level tiles exactly when ``image`` does; CLAHE makes threshold values
-    approximately uniform and homogeneous at every scale, so thresholding keeps the mean tone
-    while features stay sharp across mip levels. A texture that does not tile should be made
-    to first (``load_texture(..., tiling="periodic")``), or every level shows its seam.
+    CLAHE makes threshold values approximately uniform and homogeneous at every scale, so
+    thresholding keeps the mean tone while features stay sharp across mip levels. It runs on
+    the torus (:func:`refnpr.texture.clahe.periodic_clahe`), so every level tiles when ``image``
+    does; make an image that does not tile do so first (``load_texture(..., tiling="periodic")``).
 
     Parameters
     ----------
     image : (rows, cols) array
         Gray texture (uint8/uint16/bool or float in [0, 1]).
     window : int >= 2
-        CLAHE window w in texels (the paper's w; smaller gives softer textures).
+        CLAHE window w in texels (the paper's w, capped at the level size; smaller gives softer
+        textures).
     clip_limit : float in (0, 1]
         CLAHE clip limit (scikit-image's normalized units).
     nbins : int >= 2
     uniform : bool
-        Follow CLAHE by :func:`rank_equalize` on each level. CLAHE only *approximates* a uniform
-        distribution (with the default clip limit the brick texture's level 0 has a mean of
-        about 0.46, and its emptiest eighth of [0, 1] holds 1% as many texels as the fullest),
-        which darkens or lightens thresholded tone; the rank map makes it exact while
-        keeping CLAHE's local contrast and the alignment of minima and maxima across levels.
-        ``False`` keeps the paper's CLAHE output as is.
+        Follow CLAHE by :func:`rank_equalize` on each level: CLAHE only *approximates* a uniform
+        distribution (the brick texture's level 0 has a mean of about 0.46, its emptiest eighth
+        of [0, 1] 1% of the texels of the fullest), which shifts thresholded tone; the rank map
+        makes it exact, keeping CLAHE's local contrast and the alignment of minima and maxima
+        across levels. ``False`` keeps the paper's CLAHE output.
     """
-    if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 2:
-        raise ValueError(f"window: expected an integer >= 2 (texels), got {window!r}")
+    window, nbins = _int("window", window, 2), _int("nbins", nbins, 2)
     if not isinstance(clip_limit, (int, float)) or not 0.0 < clip_limit <= 1.0:
         raise ValueError(f"clip_limit: expected a number in (0, 1], got {clip_limit!r}")
-    if isinstance(nbins, bool) or not isinstance(nbins, (int, np.integer)) or nbins < 2:
-        raise ValueError(f"nbins: expected an integer >= 2, got {nbins!r}")
     if not isinstance(uniform, (bool, np.bool_)):  # 1 and 0 are not flags
         raise TypeError(f"uniform: expected a bool, got {uniform!r}")
     base = build_pyramid(image)
@@ -166,7 +154,12 @@ def clahe_pyramid(
             f"image: CLAHE threshold textures are gray, got {base.channels} channels; "
             "convert with skimage.color.rgb2gray first"
         )
-    levels = [_clahe(lv, int(window), float(clip_limit), int(nbins)) for lv in base.levels]
+    levels = [  # a level under 2 texels wide is the median threshold
+        np.full_like(lv, 0.5)
+        if min(lv.shape[:2]) < 2
+        else periodic_clahe(lv, window=window, clip_limit=float(clip_limit), nbins=nbins)
+        for lv in base.levels
+    ]
     if uniform:
         levels = [rank_equalize(lv) for lv in levels]
     return MipPyramid(tuple(levels))

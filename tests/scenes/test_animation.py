@@ -435,12 +435,13 @@ def test_scene_file_animation_round_trip():
     )
     scene = parse_scene(data, source="spin.toml")
     assert scene.frames == 25 and scene.animation.fps == 12.0
-    assert scene.animation.track("camera.eye").keys[1].frame == 12.0  # time 1 s at 12 fps
+    eye, _, n = scene.animation.tracks
+    assert eye.target == "camera.eye" and eye.keys[1].frame == 12.0  # time 1 s at 12 fps
     np.testing.assert_array_equal(scene.at(12).camera.eye, [5, 0, 0])
     np.testing.assert_allclose(
         scene.at(12).objects[0].transform, transform_matrix(rotate_deg=(0, 45, 0)), atol=1e-12
     )
-    assert scene.animation.track("style.n").integer
+    assert n.target == "style.n" and n.integer
     assert scene.at(18).style == {"name": "toon", "n": 4}  # 3.5 rounds up
     assert parse_scene(SCENE).animation is None
 

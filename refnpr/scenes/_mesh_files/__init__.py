@@ -1,13 +1,8 @@
-"""Raw checks of mesh files before trimesh reads them, and of what it read.
-
-trimesh silently drops non-finite vertices with their faces, reads a truncated ASCII PLY as a
-partial mesh and reports a truncated binary STL with an unrelated message; these parsers check
-each file against its own format first. Every check raises :class:`BadMeshFile` (what is wrong)
-and never anything else; :func:`refnpr.scenes.load_mesh` adds the path.
-
-The parsers are vectorized with numpy (one pass of C code per element, not a Python loop per
-line or face), so that checking costs about as much as trimesh's own read. A check returns
-``None``, or (OFF, which trimesh reads line by line) the vertices and triangles it parsed.
+"""Raw checks of mesh files before trimesh reads them (why: :mod:`refnpr.scenes.loading`), and
+of what it read. Each check raises :class:`BadMeshFile` (what is wrong; ``load_mesh`` adds the
+path) and nothing else. The parsers are vectorized with numpy (C speed, no Python loop per line
+or face), so checking costs about as much as trimesh's own read. A check returns ``None``, or
+(OFF, which trimesh reads line by line) the vertices and triangles it parsed.
 """
 
 from __future__ import annotations

@@ -59,6 +59,15 @@ def _check_finite(v: np.ndarray, where: Callable[[int], str]) -> None:
         )
 
 
+def _integral(counts: np.ndarray, flat: np.ndarray) -> np.ndarray:
+    """Face indices read as floats (``flat``, faces of ``counts`` indices) as int64, whole."""
+    bad = flat != np.floor(flat)
+    if bad.any():
+        i = int(np.searchsorted(np.cumsum(counts), np.argmax(bad), "right"))
+        raise BadMeshFile(f"face {i}: vertex indices must be integers")
+    return flat.astype(np.int64)
+
+
 def _check_faces(
     counts: np.ndarray, flat: np.ndarray, nv: int, where: Callable[[int], str], base: int = 0
 ) -> None:

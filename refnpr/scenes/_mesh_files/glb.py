@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import struct
 
-from .common import (
-    BadMeshFile,
-)
+from .common import BadMeshFile
 
 
 def _check_glb(data: bytes) -> None:

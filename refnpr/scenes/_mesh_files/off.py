@@ -12,6 +12,7 @@ from .common import (
     _check_finite,
     _float,
     _gather,
+    _integral,
     _is_count,
     _lines,
     _numbers,
@@ -62,10 +63,7 @@ def _check_off(data: bytes) -> dict:
     if verts is None:  # records wrapped across lines: a stream of numbers
         verts, fcount, flat = _off_stream(vals, nv, nf, _off_width(key))
     _check_finite(verts, lambda i: f"vertex {i}")
-    if not np.all(flat == np.floor(flat)):
-        i = int(np.searchsorted(np.cumsum(fcount), np.argmax(flat != np.floor(flat)), "right"))
-        raise BadMeshFile(f"face {i}: vertex indices must be integers")
-    flat = flat.astype(np.int64)
+    flat = _integral(fcount, flat)
     _check_faces(fcount, flat, nv, lambda i: f"face {i}")
     if not fcount.size:
         raise BadMeshFile(f"no faces ({nv} vertices; a point cloud?)")

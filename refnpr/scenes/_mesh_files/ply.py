@@ -6,13 +6,7 @@ import re
 
 import numpy as np
 
-from .common import (
-    BadMeshFile,
-    _check_faces,
-    _check_finite,
-    _is_count,
-    _numbers,
-)
+from .common import BadMeshFile, _check_faces, _check_finite, _integral, _is_count, _numbers
 
 _PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
@@ -126,11 +120,6 @@ def _ply_ascii(data: bytes, start: int, elements: list):
         key = _face_list(name, props)
         if key is not None:
             counts, flat = rows[key]
-            if not np.all(flat == np.floor(flat)):
-                i = int(
-                    np.searchsorted(np.cumsum(counts), np.argmax(flat != np.floor(flat)), "right")
-                )
-                raise BadMeshFile(f"face {i}: vertex indices must be integers")
     return verts, counts, flat
 
 
@@ -225,12 +214,9 @@ def _ply_binary(data: bytes, start: int, elements: list, order: str):
                 verts = np.stack([arr[f"p{names.index(c)}"].astype(np.float64) for c in "xyz"], -1)
         if key is not None:
             counts, flat = fc, ff
-    if flat.dtype.kind == "f" and not np.all(flat == np.floor(flat)):
-        i = int(np.searchsorted(np.cumsum(counts), np.argmax(flat != np.floor(flat)), "right"))
-        raise BadMeshFile(f"face {i}: vertex indices must be integers")
     if flat.dtype.kind == "u" and flat.size and flat.max() > np.iinfo(np.int64).max:
         flat = np.minimum(flat, np.iinfo(np.int64).max)
-    return verts, counts, flat.astype(np.int64, copy=False)
+    return verts, counts, flat if flat.dtype.kind == "f" else flat.astype(np.int64, copy=False)
 
 
 def _ply_binary_rows(data, off, name, count, props, order, key):
@@ -267,11 +253,11 @@ def _check_ply(data: bytes) -> None:
     else:
         order = "<" if fmt == "binary_little_endian" else ">"
         verts, counts, flat = _ply_binary(data, start, elements, order)
+    if flat.dtype.kind == "f":
+        flat = _integral(counts, flat)
     if verts is None:
         raise BadMeshFile("no vertex element with x, y, z properties")
     _check_finite(verts, lambda i: f"vertex {i}")
-    if flat.dtype.kind == "f":
-        flat = flat.astype(np.int64)
     _check_faces(counts, flat, len(verts), lambda i: f"face {i}")
     if not counts.size:
         raise BadMeshFile(f"no faces ({len(verts)} vertices; a point cloud?)")

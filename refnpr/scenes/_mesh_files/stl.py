@@ -7,11 +7,7 @@ import struct
 
 import numpy as np
 
-from .common import (
-    BadMeshFile,
-    _float,
-    _numbers,
-)
+from .common import BadMeshFile, _float, _numbers
 
 
 def _check_stl(data: bytes) -> None:

@@ -10,7 +10,7 @@ import numpy as np
 
 from refnpr.formulas import halftone
 
-from ._checks import _int, _pow2, _real
+from .._checks import _int, _pow2, _real
 from .lines import _box_overlap, hatching_layer
 from .stroke_set import StrokeSet, _box_half, level_sizes
 
@@ -18,9 +18,9 @@ BRICK_LEVELS = (0.3, 0.45, 0.6, 0.75)
 
 
 def _brick_fields(s: int, rows: int, per_row: int, seed: int):
-    """Per texel: distance (texels) to the brick cell's border, the outward unit direction of
-    the nearest border in (u, v), and the brick index; running bond (odd rows shifted half a
-    brick)."""
+    """Per texel of a running bond (odd rows shifted half a brick): distance (texels) to the
+    brick cell's border, the outward unit direction (u, v) of the nearest border, the brick's
+    random number, and (distance, direction) to its own left or lower border."""
     u = (np.arange(s) + 0.5) / s
     v = (np.arange(s) + 0.5) / s
     uu, vv = np.meshgrid(u, v)  # (rows=v, cols=u)
@@ -41,7 +41,6 @@ def _brick_fields(s: int, rows: int, per_row: int, seed: int):
     brick = row * per_row + col
     rng = np.random.default_rng(seed)
     rand = rng.random(rows * per_row)
-    # distance to the brick's own left or lower border and its outward direction (-u or -v)
     low = np.minimum(dl, dlo)
     low_u = dl < dlo
     return dist, du, dv, rand[brick], (low, np.where(low_u, -1.0, 0.0), np.where(low_u, 0.0, -1.0))
@@ -61,25 +60,19 @@ def brick_set(
 ) -> StrokeSet:
     """Built-in brick stroke set (after Winkenbach and Salesin's bricks, Freudenberg Fig. 7/8).
 
-    Layers (ink greys ``levels``, default :data:`BRICK_LEVELS`): 0 the brick outlines, 1
-    horizontal hatching in a random third of the bricks, 2 horizontal hatching in the other
-    bricks, 3 diagonal hatching over everything. With the default grey 0.3 the outlines show
-    where the target intensity is at most 0.7, so indication maps (sec. 5.1) and stroke lighting
-    (sec. 5.2) can fade them; ``levels = [0.0, ...]`` makes layer 0 the paper's unscaled first
-    layer, drawn at every intensity (every brick outline).
+    Layers (ink greys ``levels``): 0 the brick outlines, 1 horizontal hatching in a random third
+    of the bricks, 2 horizontal hatching in the other bricks, 3 diagonal hatching over
+    everything. With the default grey 0.3 the outlines show where the target intensity is at
+    most 0.7, so indication maps (sec. 5.1) and stroke lighting (sec. 5.2) can fade them;
+    ``levels = [0.0, ...]`` draws every outline at every intensity (the paper's first layer).
 
-    Every level draws its outlines on whole texels (as the hatching's strokes pass through
-    texel centres): the mortar gap and the outline width are rounded to texels, the outline at
-    least one texel wide, so an outline is solid ink at every mip level and the binary threshold
-    keeps it whole instead of breaking the grey, partly covered texels of a thin band into dots.
-    On levels where the mortar gap is under a texel, each brick draws only its lower and left
-    outline, one texel wide (the joint between two bricks is then one solid line, not two
-    adjacent ones that would fill small bricks with ink).
-
-    The normal map tilts each outline stroke outwards from its brick by ``tilt_deg`` (a
-    bevelled, raised brick), flat elsewhere: with individual stroke lighting (sec. 5.2) a light
-    from the upper right thins the upper and right outlines away and keeps the lower and left
-    ones. Running bond: odd rows are shifted by half a brick.
+    Every level draws its outlines on whole texels (mortar gap and outline width rounded, the
+    outline at least one texel), so the binary threshold keeps them whole instead of breaking
+    partly covered texels into dots. Where the mortar gap is under a texel, each brick draws only
+    its lower and left outline (one solid line per joint, not two that fill small bricks). The
+    normal map tilts each outline stroke outwards from its brick by ``tilt_deg`` (a bevelled,
+    raised brick): lit from the upper right, the upper and right outlines thin away. Running
+    bond: odd rows are shifted by half a brick.
 
     Parameters
     ----------
@@ -96,7 +89,7 @@ def brick_set(
     seed : int
         Which bricks get the first hatching layer.
     levels : 4 increasing values in [0, 1)
-        Ink grey of each layer (outlines first).
+        Ink grey of each layer (outlines first), default :data:`BRICK_LEVELS`.
 
     Returns
     -------
@@ -148,23 +141,9 @@ def brick_set(
             n_h //= 2
         horiz = hatching_layer(s, 0.0, n_h, max(0.3 * s / n_h, 1.0))
         diag = hatching_layer(s, 45.0, n_h, max(0.35 * s / n_h, 1.0)) * ~bevel
-        lay = np.stack(
-            [
-                band,
-                horiz * inside * (rand < 1 / 3),
-                horiz * inside * (rand >= 1 / 3),
-                diag,
-            ]
-        ).astype(np.float32)
-        layers_k.append(np.clip(lay, 0.0, 1.0))
+        lay = [band, horiz * inside * (rand < 1 / 3), horiz * inside * (rand >= 1 / 3), diag]
+        layers_k.append(np.clip(np.stack(lay).astype(np.float32), 0.0, 1.0))
         st, ct = math.sin(tilt), math.cos(tilt)
-        n = np.stack(
-            [
-                np.where(bevel, st * du, 0.0),
-                np.where(bevel, st * dv, 0.0),
-                np.where(bevel, ct, 1.0),
-            ],
-            axis=-1,
-        )
-        normals_k.append(((n + 1.0) / 2.0).astype(np.float32))
+        n = [np.where(bevel, st * du, 0.0), np.where(bevel, st * dv, 0.0), np.where(bevel, ct, 1.0)]
+        normals_k.append(((np.stack(n, axis=-1) + 1.0) / 2.0).astype(np.float32))
     return StrokeSet(tuple(layers_k), g, tuple(normals_k), "bricks")

@@ -6,21 +6,19 @@ import numpy as np
 
 from refnpr.formulas import halftone
 
+from .._checks import _pow2
 from ..pyramid import MipPyramid
-from ._checks import _pow2
 from .stroke_set import level_sizes
 
 
 def engraving_pyramid(size: int = 256, *, profile: str = "triangle") -> MipPyramid:
     """The 1D engraving screen (sec. 4.1) as a ``(1, size)`` mip-mapped texture along u.
 
-    Every level ``k`` is the profile sampled at its own texel centres,
-    :func:`refnpr.formulas.halftone.engraving_ramp` ``(size_k)``: the profile drawn at each
-    level, as the stroke layers are. For the ramp this equals the box-filtered pyramid; for the
-    triangle it keeps the full trough and peak that a box filter would flatten where the kink
-    falls inside a texel. Each level is as uniform as its texel count allows, so thresholding
-    keeps the tone at every level (up to the bilinear interpolation near the kinks) and the
-    lines stay centred where they were. The 1-texel level is 0.5.
+    Level ``k`` is :func:`refnpr.formulas.halftone.engraving_ramp` ``(size_k)``, the profile
+    sampled at the level's own texel centres (the 1-texel level is 0.5): for the ramp this is
+    the box-filtered pyramid; for the triangle it keeps the full trough and peak that a box
+    filter flattens where the kink falls inside a texel. Each level is as uniform as its texel
+    count allows, so thresholding keeps the tone at every level.
 
     Returns
     -------

@@ -9,7 +9,7 @@ import numpy as np
 
 from refnpr.formulas import halftone
 
-from ._checks import _int, _pow2, _real
+from .._checks import _int, _pow2, _real
 from .lines import _band, _centred, _line_distance, _wave_vector
 from .stroke_set import StrokeSet, _box_half, level_sizes
 
@@ -30,11 +30,10 @@ def _layer_coverage(m: int, i: int) -> float:
 
 
 def _hatch_lines(size: int, m: int, i: int, width: float) -> tuple[int, float]:
-    """Lines per tile of layer i at a level of ``size`` texels and the first guess of its stroke
-    width (texels): the power of two of lines that puts strokes of about ``width`` texels at the
-    coverage :func:`_layer_coverage` (so the stroke width, not the line count, is what every
-    level and layer share: strokes keep their texel width, hence their screen width, at every
-    mip level, and tone comes from their density), at least one line and at most ``size / 2``."""
+    """Lines per tile of layer i at a level of ``size`` texels (a power of two, 1 .. size / 2)
+    and the first guess of its stroke width: lines about ``width`` texels wide at the coverage
+    :func:`_layer_coverage`, so strokes keep their texel width at every level and layer (their
+    screen width at every mip level) and tone comes from their density."""
     cov = _layer_coverage(m, i)
     ideal = cov * size / width  # lines of the exact width
     n = 1 << max(0, round(math.log2(max(ideal, 1.0))))
@@ -56,10 +55,7 @@ def _calibrated_layers(size: int, m: int, width: float) -> np.ndarray:
         phase = _HATCH_PHASES[i % 8] + _centred(a, b, size)
         geometry.append(_line_distance(size, size, a, b, phase))
 
-    def draw(i: int, width: float) -> np.ndarray:
-        return _band(geometry[i], width)
-
-    alphas = [draw(i, widths[i]).astype(np.float64) for i in range(m)]
+    alphas = [_band(geometry[i], widths[i]).astype(np.float64) for i in range(m)]
     for _ in range(2):
         for i in range(m):
             # screen = top + through * (below + alpha_i (g_i - below))  (sec. 4.2, "over")
@@ -72,7 +68,7 @@ def _calibrated_layers(size: int, m: int, width: float) -> np.ndarray:
             i_mid = 1.0 - (i + 0.5) / m  # halfway through layer i's interval
 
             def excess(width: float, i=i, top=top, through=through, below=below, i_mid=i_mid):
-                a = draw(i, width)
+                a = _band(geometry[i], width)
                 screen = top + through * (below + a * (levels[i] - below))
                 return _binary_tone(screen, i_mid) - i_mid  # decreases with the width
 
@@ -97,7 +93,7 @@ def _calibrated_layers(size: int, m: int, width: float) -> np.ndarray:
                     f_lo = f_lo / 2 if side == -1 else f_lo
                     side = -1
             widths[i] = w
-            alphas[i] = draw(i, w).astype(np.float64)
+            alphas[i] = _band(geometry[i], w).astype(np.float64)
     return np.stack(alphas).astype(np.float32)
 
 
@@ -108,19 +104,15 @@ def hatching_set(
     as a tonal art map (Praun et al. 2001, the mip-mapping Freudenberg sec. 4.2 refers to).
 
     Layer i runs at ``HATCH_ANGLES[i % 8]`` (0, 90, 45, 135 degrees, then the same directions
-    between the earlier lines). Its ink grey is ``i / layers`` (:func:`stroke_levels`). Every
-    stroke of every layer and level has about the same width in texels, ``w = max(size / (2 m
-    lines), min_width)`` (the width that gives layer 0, ``lines`` lines per tile at level 0, its
-    coverage ``1/(2m)``): a layer that must cover more of the paper has more lines (a power of
-    two per tile, so the width stays within a factor sqrt(2) of w), and a coarser level has half
-    as many lines of the same texel width (its lines are a subset of the finer level's). Sampled
-    at its LOD a level's texel is about a pixel, so strokes keep their screen width at any
-    distance and the tone comes from their density ("adding strokes of constant line width",
-    sec. 4). Each width is then calibrated per level so that the binary threshold reproduces the
-    tone halfway between consecutive layer onsets: for an intensity I in layer i's interval
-    ``(1 - (i+1)/m, 1 - i/m]`` the white fraction is ``1 - (i + 1/2)/m``, within ``1/(2m)`` of I
-    (the staircase a stroke map gives). Where a level is too small for a layer's strokes of
-    width w (one line per tile), the calibrated stroke is narrower.
+    between the earlier lines), ink grey ``i / layers`` (:func:`stroke_levels`). Every stroke of
+    every layer and level is about ``w = max(size / (2 m lines), min_width)`` texels wide (layer
+    0's coverage ``1/(2m)`` with ``lines`` lines at level 0): a layer that covers more has more
+    lines (a power of two per tile, widths within a factor sqrt(2) of w), a coarser level half
+    as many lines of the same texel width, so strokes keep their screen width at any distance
+    and tone comes from their density (sec. 4). Each width is then calibrated per level so that
+    the binary threshold reproduces the tone halfway between consecutive layer onsets: in layer
+    i's interval ``(1 - (i+1)/m, 1 - i/m]`` the white fraction is ``1 - (i + 1/2)/m``, within
+    ``1/(2m)`` of the intensity. A level too small for strokes of width w gets narrower ones.
 
     Parameters
     ----------

@@ -10,6 +10,7 @@ import numpy as np
 
 from refnpr.formulas import halftone
 
+from ...image import read_image_file
 from ..pyramid import as_texture, build_pyramid
 from .stroke_set import StrokeSet
 
@@ -86,22 +87,16 @@ def load_stroke_layers(
 ) -> StrokeSet:
     """Read stroke layers from image files (darkest layer first), see
     :func:`stroke_set_from_layers`."""
-    import imageio.v3 as iio
-
     if isinstance(paths, (str, Path)):
         raise TypeError(
             f"paths: expected a list of layer files (darkest first), got the single path {paths!r}"
         )
-    images = []
-    for i, p in enumerate(paths):
-        path = Path(p)
-        if not path.is_file():
-            raise ValueError(f"paths[{i}]: {str(p)!r} is not an existing image file")
-        images.append(iio.imread(path))
-    nm = None
-    if normal_map is not None:
-        path = Path(normal_map)
-        if not path.is_file():
-            raise ValueError(f"normal_map: {str(normal_map)!r} is not an existing image file")
-        nm = iio.imread(path)
+
+    def read(path, what: str) -> np.ndarray:
+        if not Path(path).is_file():
+            raise ValueError(f"{what}: {str(path)!r} is not an existing image file")
+        return read_image_file(path, what=what)
+
+    images = [read(p, f"paths[{i}]") for i, p in enumerate(paths)]
+    nm = None if normal_map is None else read(normal_map, "normal_map")
     return stroke_set_from_layers(images, levels=levels, normal_map=nm, name="layers")

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ._checks import _int, _real
+from .._checks import _int, _real
 
 
 def _box_overlap(d: np.ndarray, w: float, fw: float) -> np.ndarray:
@@ -89,8 +89,7 @@ def hatching_layer(size: int, angle_deg: float, lines: int, width: float, *, pha
 
 
 def _centred(a: int, b: int, size: int) -> float:
-    """Phase that puts the lines through texel centres (a band 1 texel wide is then solid ink
-    on one texel column instead of half ink on two)."""
+    """Phase that puts the lines through texel centres."""
     return 0.5 * (a + b) / size
 
 

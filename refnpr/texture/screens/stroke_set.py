@@ -14,10 +14,7 @@ from ..pyramid import MipPyramid
 
 def level_sizes(size: int) -> list[int]:
     """GL mip sizes of a square ``size`` texture: ``size, size // 2, ..., 1``."""
-    out = [size]
-    while out[-1] > 1:
-        out.append(out[-1] // 2)
-    return out
+    return [size >> k for k in range(size.bit_length())]
 
 
 def _box_half(stack: np.ndarray) -> np.ndarray:

@@ -1,5 +1,5 @@
-"""Validation helpers of the screen generators: messages name the parameter, the value and what is
-expected."""
+"""Validation of texture and screen parameters (private): messages name the parameter, the value
+received and what is expected."""
 
 from __future__ import annotations
 
