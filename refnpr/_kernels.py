@@ -1,9 +1,8 @@
 """numba kernels of ``refnpr.render``: compositing, box resolve and unpremultiply in one pass.
 
-Private: :func:`refnpr.render.composite_resolve` validates the arrays and calls these. The
-arithmetic is the float64 arithmetic of the numpy code it replaces, operation for operation, so
-the result is bit-identical to it (and to itself for any thread count: each output row is owned
-by one thread, the samples of a pixel are summed in a fixed order).
+Private: :func:`refnpr.render.composite_resolve` validates the arrays and calls these. The float64
+arithmetic is numpy's, operation for operation, so the result is bit-identical to it, for any
+thread count (each output row is owned by one thread; a pixel's samples are summed in one order).
 """
 
 from __future__ import annotations
@@ -84,18 +83,11 @@ def composite_resolve_for(case):
     def composite_resolve(lo, hi, rgba, n, bg, out, bad_rows):
         """Composite per sample over ``bg``, box-resolve n x n samples, unpremultiply.
 
-        rgba : (n H, n W, 4) float32, C-contiguous, straight alpha per sample, as the style returned
-            it (``refnpr.render.composite_resolve`` makes it contiguous; rows are read as flat views).
-        n : int, samples per pixel along each axis.
-        bg : (4,) float64, straight-alpha background.
-        out : (H, W, 4) float32, C-contiguous, written: straight-alpha pixels.
-        bad_rows : (H,) uint8, written: 1 where a sample or a pixel of that output row is NaN or
-            inf (a pixel overflows float32 where finite samples are out of range), so a row of 0s
-            means every pixel written is finite.
-
-        Per sample (float64): ``over = (rgb * a, a) + (bg_rgb * bg_a, bg_a) * (1 - a)``; per pixel the
-        n x n ``over`` values summed sample row by sample row, left to right, then divided by n * n
-        (numpy's ``mean(axis=(1, 3))`` order); ``rgb / alpha`` where alpha > 0, else 0.
+        rgba (n H, n W, 4) float32 C-contiguous (rows read as flat views), n samples per pixel
+        along each axis, bg (4,) float64 straight alpha; writes out (H, W, 4) float32 and
+        bad_rows (H,) uint8: 1 where a sample or a pixel of that row is NaN or inf (a pixel
+        overflows float32 where finite samples are out of range). A pixel's n x n values are
+        summed sample row by sample row, left to right (numpy's ``mean(axis=(1, 3))`` order).
 
         Divisions are the costly part (double division is not pipelined on the CPUs measured): by a
         power-of-two n * n the mean is a multiplication by its exact reciprocal (the same bits as

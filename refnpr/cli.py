@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 import threading
@@ -49,6 +48,11 @@ def _param(text: str) -> tuple[str, object]:
     return key.strip(), value
 
 
+def _bar(fraction: float, width: int = 30) -> str:
+    filled = int(round(fraction * width))
+    return "#" * filled + "-" * (width - filled)
+
+
 class _Progress:
     """A stderr progress bar that appears only once a render has taken more than a second."""
 
@@ -65,11 +69,8 @@ class _Progress:
         self.phase, self.fraction = phase, fraction
 
     def _draw(self) -> None:
-        width = 30
-        filled = int(round(self.fraction * width))
         elapsed = time.perf_counter() - self.start
-        bar = "#" * filled + "-" * (width - filled)
-        self.stream.write(f"\r[{bar}] {self.phase:10s} {elapsed:6.1f}s")
+        self.stream.write(f"\r[{_bar(self.fraction)}] {self.phase:10s} {elapsed:6.1f}s")
         self.stream.flush()
         self._shown = True
 
@@ -88,12 +89,56 @@ class _Progress:
             self.stream.write("\n")
 
 
-def _cmd_render(args: argparse.Namespace) -> int:
-    from .image import check_png_path
-    from .render import render
+class _FrameProgress:
+    """A one-line stderr progress bar for `refnpr animate`: frame i/N, frames per second, ETA."""
+
+    def __init__(self, stream=None) -> None:
+        self.stream = sys.stderr if stream is None else stream
+        self.start = time.perf_counter()
+        self.rendered = 0
+        self._shown = False
+
+    def __call__(self, done: int, total: int, frame: int, status: str) -> None:
+        self.rendered += status == "rendered"
+        elapsed = time.perf_counter() - self.start
+        fps = self.rendered / elapsed if elapsed > 0 and self.rendered else 0.0
+        eta = f"{(total - done) / fps:6.0f}s" if fps > 0 else "     ?"
+        what = "(state) " if status == "state" else ""
+        bar = _bar(done / total if total else 1.0)
+        self.stream.write(
+            f"\r[{bar}] frame {done}/{total} {what}(#{frame}) {fps:5.2f} fps  ETA {eta}"
+        )
+        self.stream.flush()
+        self._shown = True
+
+    def close(self) -> None:
+        if self._shown:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _style_params(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    """--param pairs as a dict: each key once, and never the style's name."""
+    params: dict[str, object] = {}
+    for key, value in pairs:
+        if key == "name":
+            raise ValueError(
+                f"--param: 'name' is not a style parameter (got name={value!r}); choose the "
+                f"style with --style {value}"
+            )
+        if key in params:
+            raise ValueError(
+                f"--param: {key!r} given twice ({params[key]!r} and {value!r}); give it once"
+            )
+        params[key] = value
+    return params
+
+
+def _scene_and_style(args: argparse.Namespace) -> tuple[object, dict | None]:
+    """The scene of --scene and the style of --style/--param (None: the scene's own), the
+    options checked before the scene is loaded."""
     from .scenes import load_scene
 
-    check_png_path(args.output)  # before rendering, not after
     if args.style is not None and not args.style.strip():
         raise ValueError(
             f"--style: expected a style name, got {args.style!r}; list them with `refnpr styles`, "
@@ -101,18 +146,25 @@ def _cmd_render(args: argparse.Namespace) -> int:
         )
     params = _style_params(args.param or [])
     scene = load_scene(args.scene)
-    style = None
-    if args.style or params:
-        if args.style:
-            style = {"name": args.style, **params}
-        else:
-            base = dict(scene.style or {})
-            if not base:
-                raise ValueError(
-                    f"--param needs --style: the scene {args.scene!r} names no style; "
-                    "add --style NAME (list them with `refnpr styles`)"
-                )
-            style = {**base, **params}
+    if not (args.style or params):
+        return scene, None
+    if args.style:
+        return scene, {"name": args.style, **params}
+    base = dict(scene.style or {})
+    if not base:
+        raise ValueError(
+            f"--param needs --style: the scene {args.scene!r} names no style; "
+            "add --style NAME (list them with `refnpr styles`)"
+        )
+    return scene, {**base, **params}
+
+
+def _cmd_render(args: argparse.Namespace) -> int:
+    from .image import check_png_path
+    from .render import render
+
+    check_png_path(args.output)  # before rendering, not after
+    scene, style = _scene_and_style(args)
     width, height = args.size
     progress = _Progress() if not args.quiet else None
     try:
@@ -126,80 +178,15 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
-class _FrameProgress:
-    """A one-line stderr progress bar for `refnpr animate`: frame i/N, frames per second, ETA."""
-
-    def __init__(self, stream=None) -> None:
-        self.stream = sys.stderr if stream is None else stream
-        self.start = time.perf_counter()
-        self.rendered = 0
-        self._shown = False
-
-    def __call__(self, done: int, total: int, frame: int, status: str) -> None:
-        if status == "rendered":
-            self.rendered += 1
-        elapsed = time.perf_counter() - self.start
-        fps = self.rendered / elapsed if elapsed > 0 and self.rendered else 0.0
-        left = total - done
-        eta = f"{left / fps:6.0f}s" if fps > 0 else "     ?"
-        width = 30
-        filled = int(round(width * done / total)) if total else width
-        bar = "#" * filled + "-" * (width - filled)
-        what = "(state) " if status == "state" else ""
-        self.stream.write(
-            f"\r[{bar}] frame {done}/{total} {what}(#{frame}) {fps:5.2f} fps  ETA {eta}"
-        )
-        self.stream.flush()
-        self._shown = True
-
-    def close(self) -> None:
-        if self._shown:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def _style_arg(args: argparse.Namespace, scene) -> dict | None:
-    """The style of --style/--param (None: the scene's own), as `refnpr render` reads them."""
-    if args.style is not None and not args.style.strip():
-        raise ValueError(
-            f"--style: expected a style name, got {args.style!r}; list them with `refnpr styles`, "
-            "or leave --style out to use the scene's own style"
-        )
-    params = _style_params(args.param or [])
-    if not (args.style or params):
-        return None
-    if args.style:
-        return {"name": args.style, **params}
-    base = dict(scene.style or {})
-    if not base:
-        raise ValueError(
-            f"--param needs --style: the scene {args.scene!r} names no style; "
-            "add --style NAME (list them with `refnpr styles`)"
-        )
-    return {**base, **params}
-
-
 def _cmd_animate(args: argparse.Namespace) -> int:
-    from .scenes import load_scene
-    from .sequence import frame_range, render_sequence, write_video
+    from .sequence import _video_suffix, frame_range, render_sequence, write_video
 
     out = Path(args.output)
     if out.exists() and not out.is_dir():
         raise ValueError(f"-o/--output: {args.output!r} is a file; give a directory for the frames")
-    if args.video is not None and Path(args.video).suffix.lower() not in (".mp4", ".gif"):
-        raise ValueError(
-            f"--video: expected a file name ending in .mp4 or .gif, got {args.video!r}"
-        )
-    if args.video is not None and Path(args.video).suffix.lower() == ".mp4":
-        try:
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError:
-            raise ValueError(
-                f"--video: writing {args.video!r} (MP4) needs ffmpeg from the imageio-ffmpeg "
-                "package; install it with `pip install 'refnpr[video]'`, or write a .gif"
-            ) from None
-    scene = load_scene(args.scene)
-    style = _style_arg(args, scene)
+    if args.video is not None:
+        _video_suffix(args.video, "--video")
+    scene, style = _scene_and_style(args)
     try:
         frame_range(args.frames, scene.frames)
     except (TypeError, ValueError) as exc:
@@ -250,41 +237,6 @@ def _cluster_args(args: argparse.Namespace) -> dict | None:
     if args.workers is not None and args.workers < 1:
         raise ValueError(f"--workers: expected a whole number >= 1, got {args.workers}")
     return {"workers": args.workers, "scheduler": args.scheduler}
-
-
-def _add_cluster_options(parser: argparse.ArgumentParser) -> None:
-    where = parser.add_mutually_exclusive_group()
-    where.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        metavar="N",
-        help="render on a local Dask cluster of N worker processes (pip install "
-        "'refnpr[distributed]'); results identical to a serial run",
-    )
-    where.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDR",
-        help="render on a running Dask cluster, e.g. tcp://10.0.0.5:8786",
-    )
-
-
-def _style_params(pairs: list[tuple[str, object]]) -> dict[str, object]:
-    """--param pairs as a dict: each key once, and never the style's name."""
-    params: dict[str, object] = {}
-    for key, value in pairs:
-        if key == "name":
-            raise ValueError(
-                f"--param: 'name' is not a style parameter (got name={value!r}); choose the "
-                f"style with --style {value}"
-            )
-        if key in params:
-            raise ValueError(
-                f"--param: {key!r} given twice ({params[key]!r} and {value!r}); give it once"
-            )
-        params[key] = value
-    return params
 
 
 def _cmd_scenes(args: argparse.Namespace) -> int:
@@ -347,16 +299,26 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_golden(args: argparse.Namespace) -> int:
-    from .golden import check_suite, update_suite
+def _command(args: argparse.Namespace) -> str:
+    """The command as typed: ``golden``, ``kit export``."""
+    return " ".join(filter(None, (args.command, getattr(args, "kit_command", None))))
 
+
+def _suite(args: argparse.Namespace) -> Path:
     suite = Path(args.suite)
     if args.suite == str(DEFAULT_SUITE) and not suite.exists():
         raise ValueError(
             f"--suite: no suite file at {str(suite.absolute())!r} (the default is "
-            f"{str(DEFAULT_SUITE)!r}, relative to the current directory); run refnpr golden in "
-            "a refnpr checkout, or pass --suite FILE"
+            f"{str(DEFAULT_SUITE)!r}, relative to the current directory); run refnpr "
+            f"{_command(args)} in a refnpr checkout, or pass --suite FILE"
         )
+    return suite
+
+
+def _cmd_golden(args: argparse.Namespace) -> int:
+    from .golden import check_suite, update_suite
+
+    suite = _suite(args)
     cluster = _cluster_args(args)
     if cluster is not None:  # the same files and report, the cases rendered on a Dask cluster
         import functools
@@ -391,6 +353,7 @@ def _fraction(name: str):
 
 
 def _cmd_warmup(args: argparse.Namespace) -> int:
+    from ._jit import usable_cores
     from .warmup import warm
 
     t0 = time.perf_counter()
@@ -398,8 +361,6 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
     def progress(label: str, fraction: float) -> None:
         if not args.quiet and label != "done":
             print(f"warmup: {label}", file=sys.stderr, flush=True)
-
-    from ._jit import usable_cores
 
     jobs = args.jobs if args.jobs is not None else min(4, usable_cores())
     times = warm(jobs=jobs, progress=progress)
@@ -411,10 +372,15 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_gallery(args: argparse.Namespace) -> int:
-    from .gallery import run
+def _run_of(module: str):
+    """A command whose work is ``run(args)`` of a refnpr module, imported when it runs."""
 
-    return run(args)
+    def command(args: argparse.Namespace) -> int:
+        import importlib
+
+        return importlib.import_module(f"{__package__}.{module}").run(args)
+
+    return command
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
@@ -446,15 +412,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         m for m in results if not m.passes(max_frac_over=args.max_frac_over, min_ssim=args.min_ssim)
     ]
     if args.json:
-        rows = [
-            {
-                k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                for k, v in m.__dict__.items()
-            }
-            for m in results
-        ]
         with atomic_file(args.json, suffix=".json") as tmp:
-            tmp.write_text(json.dumps(rows, indent=2))
+            tmp.write_text(json.dumps([m.as_dict() for m in results], indent=2))
     print(f"{len(results) - len(bad)} passed, {len(bad)} failed")
     return 1 if bad else 0
 
@@ -462,28 +421,44 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 def _cmd_kit_export(args: argparse.Namespace) -> int:
     from .kit.export import export_kit
 
-    suite = Path(args.suite)
-    if args.suite == str(DEFAULT_SUITE) and not suite.exists():
-        raise ValueError(
-            f"--suite: no suite file at {str(suite.absolute())!r} (the default is "
-            f"{str(DEFAULT_SUITE)!r}, relative to the current directory); run refnpr kit export "
-            "in a refnpr checkout, or pass --suite FILE"
-        )
+    suite = _suite(args)
     log = (lambda line: None) if args.quiet else print
     written = export_kit(args.dir, suite=suite, only=args.only, log=log)
     print(f"exported {len(written)} case(s) to {args.dir}")
     return 0
 
 
-def _cmd_kit_check(args: argparse.Namespace) -> int:
-    from .kit.check import run
+def _add_style_options(p: argparse.ArgumentParser, style_help: str) -> None:
+    p.add_argument("--style", help=style_help)
+    p.add_argument(
+        "--param",
+        action="append",
+        type=_param,
+        metavar="KEY=VALUE",
+        help="style parameter (TOML value), repeatable; `refnpr styles NAME` lists them",
+    )
 
-    return run(args)
+
+def _add_cluster_options(parser: argparse.ArgumentParser) -> None:
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="render on a local Dask cluster of N worker processes (pip install "
+        "'refnpr[distributed]'); results identical to a serial run",
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDR",
+        help="render on a running Dask cluster, e.g. tcp://10.0.0.5:8786",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="refnpr", description="CPU reference renderer for NPR shading")
     sub = p.add_subparsers(dest="command", required=True)
+    own_style = "style name (default: the scene's own style)"
 
     r = sub.add_parser(
         "render",
@@ -496,18 +471,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument(
         "--scene", default="default", help="built-in scene name or .toml file (default: default)"
     )
-    r.add_argument(
-        "--style",
-        default=None,
-        help="style name (default: the scene's own style, toon if it names none)",
-    )
-    r.add_argument(
-        "--param",
-        action="append",
-        type=_param,
-        metavar="KEY=VALUE",
-        help="style parameter (TOML value), repeatable; `refnpr styles NAME` lists them",
-    )
+    _add_style_options(r, "style name (default: the scene's own style, toon if it names none)")
     r.add_argument("--size", type=_size, default=DEFAULT_SIZE, help="WxH (default 768x432, 16:9)")
     r.add_argument(
         "--spp",
@@ -529,27 +493,19 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     a.add_argument("scene", help="built-in scene name or .toml file (see `refnpr scenes`)")
-    a.add_argument("--style", default=None, help="style name (default: the scene's own style)")
-    a.add_argument(
-        "--param",
-        action="append",
-        type=_param,
-        metavar="KEY=VALUE",
-        help="style parameter (TOML value), repeatable; `refnpr styles NAME` lists them",
-    )
+    _add_style_options(a, own_style)
     a.add_argument("--size", type=_size, default=DEFAULT_SIZE, help="WxH (default 768x432)")
     a.add_argument(
         "--spp", type=int, default=DEFAULT_SPP, help="samples per pixel, a square (default 4)"
     )
     a.add_argument(
         "--frames",
-        default=None,
         metavar="A:B",
         help="frames A to B-1, like a Python slice (10:, :24); default all",
     )
     a.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for the frames")
     a.add_argument("--exr", action="store_true", help="also write linear float EXR frames")
-    a.add_argument("--video", default=None, metavar="FILE", help="also encode FILE.mp4 or FILE.gif")
+    a.add_argument("--video", metavar="FILE", help="also encode FILE.mp4 or FILE.gif")
     a.add_argument(
         "--progress", action="store_true", help="show the progress bar even if stderr is no tty"
     )
@@ -557,7 +513,6 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument(
         "--chunk",
         type=int,
-        default=None,
         metavar="N",
         help="with --workers/--scheduler, stateful styles: frames per chunk (default: split "
         "evenly over the workers)",
@@ -565,7 +520,6 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument(
         "--warmup",
         type=int,
-        default=None,
         metavar="K",
         help="with --workers/--scheduler, stateful styles: frames shaded before each chunk for "
         "the state only (default 8)",
@@ -591,15 +545,15 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument(
         "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
     )
-    g.add_argument("--only", nargs="+", default=None, metavar="NAME", help="only these cases")
+    g.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
     _add_cluster_options(g)
     g.set_defaults(func=_cmd_golden)
 
     c = sub.add_parser("compare", help="compare another backend's renders with reference images")
     c.add_argument("reference", help="directory of reference PNGs (e.g. golden/)")
     c.add_argument("candidate", help="directory of candidate PNGs with the same file names")
-    c.add_argument("--out", default=None, help="write NAME.diff.png and report.json here")
-    c.add_argument("--json", default=None, help="write the metrics as JSON to this file")
+    c.add_argument("--out", help="write NAME.diff.png and report.json here")
+    c.add_argument("--json", help="write the metrics as JSON to this file")
     c.add_argument("--tolerance", type=_fraction("--tolerance"), default=2.0 / 255)
     c.add_argument("--max-frac-over", type=_fraction("--max-frac-over"), default=0.001)
     c.add_argument("--min-ssim", type=_fraction("--min-ssim"), default=0.99)
@@ -610,13 +564,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     gal.add_argument("out_dir", help="directory for the PNGs (e.g. docs/images/gallery)")
     gal.add_argument("--size", type=_size, default=(320, 240), help="WxH of each image (320x240)")
-    gal.add_argument("--suite", default=None, help="golden suite file (golden/suite.toml)")
-    gal.add_argument("--spp", type=int, default=None, help="samples per pixel (the cases')")
-    gal.add_argument(
-        "--only", nargs="+", default=None, metavar="FILE", help="only these entries (by file name)"
-    )
+    gal.add_argument("--suite", help="golden suite file (golden/suite.toml)")
+    gal.add_argument("--spp", type=int, help="samples per pixel (the cases')")
+    gal.add_argument("--only", nargs="+", metavar="FILE", help="only these entries (by file name)")
     gal.add_argument("--markdown", action="store_true", help="print the README table")
-    gal.set_defaults(func=_cmd_gallery)
+    gal.set_defaults(func=_run_of("gallery"))
 
     kit = sub.add_parser(
         "kit",
@@ -634,18 +586,45 @@ def build_parser() -> argparse.ArgumentParser:
     ke.add_argument(
         "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
     )
-    ke.add_argument("--only", nargs="+", default=None, metavar="NAME", help="only these cases")
+    ke.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
     ke.add_argument("-q", "--quiet", action="store_true", help="no line per case")
     ke.set_defaults(func=_cmd_kit_export)
     kc = ksub.add_parser("check", help="compare a backend's renders with a kit")
     kc.add_argument("kit_dir", help="an exported kit (refnpr kit export)")
     kc.add_argument("renders_dir", help="the backend's renders: <case>.png, <case>/<channel>.npy")
-    kc.add_argument("--report", default=None, metavar="DIR", help="write index.html and masks")
-    kc.add_argument("--json", default=None, metavar="FILE", help="write the metrics as JSON")
-    kc.set_defaults(func=_cmd_kit_check)
-    from .coherence.cli import add_parser as _coherence_parser
+    kc.add_argument("--report", metavar="DIR", help="write index.html and masks")
+    kc.add_argument("--json", metavar="FILE", help="write the metrics as JSON")
+    kc.set_defaults(func=_run_of("kit.check"))
 
-    _coherence_parser(sub)
+    co = sub.add_parser(
+        "coherence",
+        help="temporal coherence of an animated scene (exact motion field)",
+        description=(
+            "Render frames A..B-1 of an animated scene and measure each consecutive pair with "
+            "the exact motion field: warping error E, plain difference D on the same mask, "
+            "E / D and the flip fraction (docs/coherence.md)."
+        ),
+    )
+    co.add_argument("scene", help="built-in scene name or .toml file with an [animation] table")
+    _add_style_options(co, own_style)
+    co.add_argument("--size", type=_size, default=(256, 192), help="WxH (default 256x192)")
+    co.add_argument("--spp", type=int, default=1, help="samples per pixel of the frames (1)")
+    co.add_argument("--frames", metavar="A:B", help="frames A..B-1 (default all)")
+    co.add_argument(
+        "--depth-rtol",
+        type=float,
+        help="relative depth tolerance of the visibility test (default 0.01, DEPTH_RTOL)",
+    )
+    co.add_argument(
+        "--strokes",
+        action="store_true",
+        help="also measure strokes by id (TAMISS): endpoint jitter, strokes appearing/vanishing",
+    )
+    co.add_argument("--json", metavar="FILE", help="write the report as JSON")
+    co.add_argument("--plot", metavar="FILE.png", help="plot the numbers over frames")
+    co.add_argument("-q", "--quiet", action="store_true", help="no table")
+    co.set_defaults(func=_run_of("coherence.cli"))
+
     w = sub.add_parser(
         "warmup",
         help="compile and cache the kernels of every style's default path (once, after install)",
@@ -659,7 +638,6 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument(
         "--jobs",
         type=int,
-        default=None,
         metavar="N",
         help="processes compiling at once (default: one per core, at most 4; 1: this process)",
     )
@@ -668,15 +646,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)
     except (ValueError, TypeError, OSError) as exc:
-        command = args.command
-        if getattr(args, "kit_command", None):
-            command += f" {args.kit_command}"
-        print(f"refnpr {command}: error: {exc}", file=sys.stderr)
+        print(f"refnpr {_command(args)}: error: {exc}", file=sys.stderr)
         return 2
 
 

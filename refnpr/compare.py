@@ -45,6 +45,13 @@ class ImageMetrics:
     def passes(self, *, max_frac_over: float, min_ssim: float) -> bool:
         return self.status == "ok" and self.frac_over <= max_frac_over and self.ssim >= min_ssim
 
+    def as_dict(self) -> dict:
+        """JSON-ready: inf and NaN become None."""
+        return {
+            k: (None if isinstance(v, float) and not np.isfinite(v) else v)
+            for k, v in asdict(self).items()
+        }
+
 
 def load_image(path: str | Path, *, what: str = "image") -> np.ndarray:
     """An image file as (H, W, 4) float64 in [0, 1] (alpha 1 if absent).
@@ -214,15 +221,8 @@ def compare_dirs(
         if out_dir is not None and m.status == "ok":
             write_png_atomic(Path(out_dir) / f"{stem}.diff.png", difference_image(ref, cand))
     if out_dir is not None:
-        report = [
-            {
-                k: (None if isinstance(v, float) and not np.isfinite(v) else v)
-                for k, v in asdict(m).items()
-            }
-            for m in results
-        ]
         with atomic_file(Path(out_dir) / "report.json", suffix=".json") as tmp:
-            tmp.write_text(json.dumps(report, indent=2))
+            tmp.write_text(json.dumps([m.as_dict() for m in results], indent=2))
     return results
 
 

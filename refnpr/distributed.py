@@ -1,49 +1,20 @@
 """Frames and golden cases on Dask distributed (the optional extra ``refnpr[distributed]``).
 
-DESIGN.md: "Beyond one machine, frames and golden cases run on Dask distributed (a LocalCluster
-by default, any cluster by scheduler address), with results identical to a serial run; never a
-home-made process pool." This module is that: the same functions as
-:func:`refnpr.sequence.render_sequence`, :func:`refnpr.golden.check_suite` and
-:func:`refnpr.golden.update_suite`, with the rendering done by the workers of a cluster.
-
-* **Cluster.** :func:`open_client` starts a ``LocalCluster(n_workers=N, threads_per_worker=1,
-  processes=True)`` or connects to a running scheduler (``tcp://HOST:PORT``). One task runs at
-  a time in each worker process; numba parallelizes inside it. A LocalCluster gives each worker
-  ``NUMBA_NUM_THREADS`` (and the BLAS / OpenMP thread counts) ``max(1, cores // N)``, so N
-  workers together use the machine's cores without oversubscribing them. The workers of an
-  existing cluster keep their own settings (start them with ``--nthreads 1`` and
-  ``NUMBA_NUM_THREADS`` set the same way). Pixels do not depend on the thread count. A
-  LocalCluster sets no memory limit per worker (Dask would kill a worker over its share of the
-  memory where a serial run succeeds): each frame's own memory check applies, as serially.
-* **Frames.** Stateless styles (:func:`refnpr.sequence.is_stateful`; X-Toon's optical flow
-  included, since its ``for_frame`` needs only the previous *still*, which the animation gives)
-  render one task per frame. A stateful style renders chunks of consecutive frames, each from
-  the style's ``initial_state()`` at ``warmup`` frames before the chunk (frame 0 at the
-  latest); those warm-up frames are shaded for their state only and discarded. A frame equals
-  the serial run's whenever the style's state depends on the last ``warmup`` frames only (and
-  always in the first chunk); otherwise it differs the way documented in docs/animation.md
-  ("Many machines"), and its record says so: ``"state_from": S``, the frame its state started
-  from (serial records, whose state starts at 0, have no such key).
-* **Files.** Workers return each frame's PNG bytes (encoded there, in parallel) and, for
-  ``exr``, its float32 RGBA; the client writes the files and records, atomically, exactly as
-  the serial driver does (one writer per directory, so the restart rules and a mixed serial /
-  distributed resume hold; and the workers need no access to the output directory, so a
-  remote cluster works as a local one). Golden cases come back as their images or G-buffer
-  channels and are compared (reports, failure images, golden files) on the client by the
-  serial code.
-* **Progress** comes from the futures as they complete (``as_completed``); on an error or
-  KeyboardInterrupt the futures are cancelled and a cluster this module started is closed.
-
-Workers must be able to import refnpr (the same version: the frame records hold it); a
-LocalCluster's do. Without dask installed every entry point raises a ``ValueError`` naming the
-extra to install.
+The functions of :mod:`refnpr.sequence` and :mod:`refnpr.golden` with the rendering done by the
+workers of a cluster, results identical to a serial run (docs/animation.md, "Many machines"): a
+``LocalCluster`` of single-threaded worker processes sharing the cores, or a running scheduler.
+Stateless styles render one task per frame; a stateful style renders chunks of consecutive
+frames, each from its ``initial_state()`` ``warmup`` frames before the chunk (a frame whose
+state did not start at frame 0 records ``"state_from": S``). Workers return PNG bytes (and EXR
+RGBA) or golden renders; the client writes every file and compares, with the serial code. On an
+error or KeyboardInterrupt the futures are cancelled and a cluster started here is closed.
 """
 
 from __future__ import annotations
 
 import contextlib
+import inspect
 import math
-import os
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -54,17 +25,12 @@ import numpy as np
 from . import golden as _golden
 from . import sequence as _sequence
 from ._jit import usable_cores
-from .sequence import SequenceProgress, SequenceResult
+from .sequence import SequenceResult
 
 __all__ = ["check_suite", "open_client", "render_sequence", "update_suite", "worker_threads"]
 
 #: Default warm-up frames before each chunk of a stateful style.
 DEFAULT_WARMUP = 8
-
-_MISSING = (
-    "needs Dask distributed, which is not installed; install the extra with "
-    "`pip install 'refnpr[distributed]'` (or run without --workers / --scheduler)"
-)
 
 
 def _dask(what: str) -> Any:
@@ -72,7 +38,10 @@ def _dask(what: str) -> Any:
     try:
         import distributed
     except ImportError:
-        raise ValueError(f"{what}: {_MISSING}") from None
+        raise ValueError(
+            f"{what}: needs Dask distributed, which is not installed; install the extra with "
+            "`pip install 'refnpr[distributed]'` (or run without --workers / --scheduler)"
+        ) from None
     return distributed
 
 
@@ -87,7 +56,9 @@ def worker_threads(n_workers: int, cores: int | None = None) -> int:
     return max(1, cores // n_workers)
 
 
-def _check_workers(workers: Any, scheduler: Any) -> None:
+def _check_workers(workers: Any, scheduler: Any) -> Any:
+    """Where to run, checked before any work; the ``distributed`` module (a ValueError naming
+    the option given when Dask is not installed)."""
     if workers is not None and scheduler is not None:
         raise ValueError(
             f"workers / scheduler: give one, not both (got workers={workers!r} and scheduler="
@@ -102,6 +73,7 @@ def _check_workers(workers: Any, scheduler: Any) -> None:
             f"scheduler: expected a scheduler address such as 'tcp://10.0.0.5:8786', got "
             f"{scheduler!r}"
         )
+    return _dask("scheduler" if scheduler is not None else "workers")
 
 
 @contextlib.contextmanager
@@ -123,52 +95,39 @@ def open_client(workers: int | None = None, scheduler: str | None = None) -> Ite
         Closed (and the LocalCluster with it) when the block ends, on errors and
         KeyboardInterrupt too.
     """
-    _check_workers(workers, scheduler)
-    what = "scheduler" if scheduler is not None else "workers"
-    dd = _dask(what)
+    dd = _check_workers(workers, scheduler)
     import logging
 
-    if scheduler is not None:
-        try:
-            client = dd.Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as exc:
-            raise ValueError(
-                f"scheduler: cannot connect to {scheduler!r} ({exc}); start one with "
-                "`dask scheduler` and workers with `dask worker ADDRESS --nthreads 1`, or use "
-                "--workers N for a local cluster"
-            ) from None
-        try:
-            yield client
-        finally:
-            client.close()
-        return
-    n = 2 if workers is None else workers
-    threads = str(worker_threads(n))
-    env = {
-        k: threads
-        for k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-    }
-    cluster = dd.LocalCluster(
-        n_workers=n,
-        threads_per_worker=1,
-        processes=True,
-        memory_limit=0,  # no nanny kills or spilling: refnpr's own memory check guards a frame
-        dashboard_address=":0",  # no dashboard on the shared port 8787
-        silence_logs=logging.CRITICAL,  # worker errors reach the client as exceptions
-        env=env,
-    )
-    try:
-        client = dd.Client(cluster)
-        try:
-            yield client
-        finally:
-            client.close()
-    finally:
-        cluster.close()
+    with contextlib.ExitStack() as stack:
+        if scheduler is not None:
+            try:
+                client = dd.Client(scheduler, timeout="10s")
+            except (OSError, TimeoutError) as exc:
+                raise ValueError(
+                    f"scheduler: cannot connect to {scheduler!r} ({exc}); start one with "
+                    "`dask scheduler` and workers with `dask worker ADDRESS --nthreads 1`, or "
+                    "use --workers N for a local cluster"
+                ) from None
+        else:
+            n = 2 if workers is None else workers
+            threads = str(worker_threads(n))
+            cluster = dd.LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                memory_limit=0,  # no nanny kills or spilling: refnpr's memory check guards a frame
+                dashboard_address=":0",  # no dashboard on the shared port 8787
+                silence_logs=logging.CRITICAL,  # worker errors reach the client as exceptions
+                env={f"{k}_NUM_THREADS": threads for k in ("NUMBA", "OMP", "OPENBLAS", "MKL")},
+            )
+            stack.callback(cluster.close)
+            client = dd.Client(cluster)
+        stack.callback(client.close)  # first: the client, then the cluster
+        yield client
 
 
 @contextlib.contextmanager
-def _client_for(client: Any, workers: Any, scheduler: Any, what: str) -> Iterator[Any]:
+def _client_for(client: Any, workers: Any, scheduler: Any) -> Iterator[Any]:
     """The caller's client (left open), or one of :func:`open_client`."""
     if client is not None:
         if workers is not None or scheduler is not None:
@@ -176,7 +135,6 @@ def _client_for(client: Any, workers: Any, scheduler: Any, what: str) -> Iterato
                 f"client: give a client or workers / scheduler, not both (got workers="
                 f"{workers!r}, scheduler={scheduler!r})"
             )
-        _dask(what)
         yield client
         return
     with open_client(workers, scheduler) as c:
@@ -201,29 +159,19 @@ def _as_completed(client: Any, futures: list[Any]) -> Iterator[Any]:
 # -- frames -------------------------------------------------------------------------------------
 
 
-def _frame_payload(plan: Any, f: int, image: Any) -> tuple[int, bytes, np.ndarray | None]:
-    rgba = np.array(image.rgba, dtype=np.float32) if plan.exr else None  # the buffer is reused
-    return f, _sequence._png_bytes(image), rgba
-
-
-def _frame_task(plan: Any, f: int) -> list[tuple[int, bytes, np.ndarray | None]]:
-    """Worker: one frame of a stateless style (its previous still from the animation)."""
-    shader = _sequence._Shader(plan, f)
-    return [_frame_payload(plan, f, shader.shade(f))]
-
-
 def _chunk_task(
     plan: Any, start: int, stop: int, wanted: Sequence[int]
 ) -> list[tuple[int, bytes, np.ndarray | None]]:
-    """Worker: frames ``start .. stop - 1`` of a stateful style from its initial state at
-    ``start``; only the ``wanted`` frames are returned (the others are warm-up or done)."""
-    shader = _sequence._Shader(plan, start)
-    keep = set(wanted)
+    """Worker: frames ``start .. stop - 1`` from the style's initial state at ``start`` (one
+    frame of a stateless style, its previous still from the animation); only the ``wanted``
+    frames are returned (the others are warm-up or done)."""
+    shader = _sequence._Shader(plan)
     out = []
     for f in range(start, stop):
         image = shader.shade(f)
-        if f in keep:
-            out.append(_frame_payload(plan, f, image))
+        if f in wanted:
+            rgba = np.array(image.rgba, dtype=np.float32) if plan.exr else None  # reused buffer
+            out.append((f, image.to_png_bytes(), rgba))
     return out
 
 
@@ -241,21 +189,13 @@ def _chunks(todo: range, n: int, chunk: int | None) -> list[range]:
 
 
 def render_sequence(
-    scene: Any,
-    style: Any = None,
-    width: int = 512,
-    height: int = 512,
-    spp: int = 1,
-    *,
-    out_dir: str | os.PathLike,
-    frames: Any = None,
-    exr: bool = False,
-    progress: SequenceProgress | None = None,
+    *args: Any,
     workers: int | None = None,
     scheduler: str | None = None,
     client: Any = None,
     chunk: int | None = None,
     warmup: int = DEFAULT_WARMUP,
+    **kwargs: Any,
 ) -> SequenceResult:
     """:func:`refnpr.sequence.render_sequence` with the frames rendered on a Dask cluster.
 
@@ -264,11 +204,11 @@ def render_sequence(
 
     Parameters
     ----------
-    scene, style, width, height, spp, out_dir, frames, exr
-        As for :func:`refnpr.sequence.render_sequence`.
-    progress : callable(done, total, frame, status), optional
-        Called for each frame as its result arrives (``"rendered"``), after the done frames
-        (``"skipped"``); frames arrive in completion order, not frame order.
+    *args, **kwargs
+        ``scene, style, width, height, spp, out_dir, frames, exr, progress`` as for
+        :func:`refnpr.sequence.render_sequence`; ``progress`` is called for each frame as its
+        result arrives (``"rendered"``), in completion order, after the done frames
+        (``"skipped"``).
     workers, scheduler, client
         Where to run: a new LocalCluster of ``workers`` processes (default 2), a running
         cluster's ``scheduler`` address, or an open ``distributed.Client`` (left open).
@@ -289,48 +229,38 @@ def render_sequence(
         if isinstance(value, bool) or not isinstance(value, int) or value < lo:
             raise ValueError(f"{name}: expected a whole number >= {lo}, got {value!r}")
     _check_workers(workers, scheduler)
-    what = "scheduler" if scheduler is not None else "workers"
-    _dask(what)
-    plan = _sequence._plan(scene, style, width, height, spp, out_dir, frames, exr, progress)
-    todo = plan.todo
-    result = SequenceResult(plan.out, list(todo), stateful=plan.stateful)
-    result.paths = [plan.out / f"{_sequence.FRAME_NAME.format(f)}.png" for f in todo]
+    bound = inspect.signature(_sequence.render_sequence).bind(*args, **kwargs)
+    bound.apply_defaults()
+    plan = _sequence._plan(**bound.arguments)
+    progress, todo, result = bound.arguments["progress"], plan.todo, plan.result()
     missing = [f for f in todo if not plan.done(f)]
-    result.skipped = [f for f in todo if f not in set(missing)]
-    count = 0
-    for f in result.skipped:
-        count += 1
-        if progress is not None:
-            progress(count, len(todo), f, "skipped")
+    for f in todo:
+        if f not in missing:
+            result._tick(f, "skipped", progress)
     if missing:
-        with _client_for(client, workers, scheduler, what) as c:
+        with _client_for(client, workers, scheduler) as c:
             [plan_f] = c.scatter([plan], broadcast=True, hash=False)
-            extra: dict[int, dict[str, Any]] = {}
-            if not plan.stateful:
-                futures = [c.submit(_frame_task, plan_f, f, pure=False) for f in missing]
-            else:
-                n = _n_workers(c)
-                futures = []
-                left = set(missing)
-                for part in _chunks(todo, n, chunk):
-                    wanted = [f for f in part if f in left]
-                    if not wanted:
-                        continue
-                    start = max(0, part.start - warmup)
-                    stop = max(wanted) + 1
-                    futures.append(c.submit(_chunk_task, plan_f, start, stop, wanted, pure=False))
-                    if start > 0:
-                        extra.update({f: {"state_from": start} for f in wanted})
+            parts = [(f, f + 1, [f]) for f in missing]  # (start, stop, wanted) of each task
+            if plan.stateful:
+                parts = []
+                for part in _chunks(todo, _n_workers(c), chunk):
+                    wanted = [f for f in part if f in missing]
+                    if wanted:
+                        parts.append((max(0, part.start - warmup), max(wanted) + 1, wanted))
+            extra = {  # the frames of a chunk whose state did not start at frame 0
+                f: {"state_from": start}
+                for start, _, wanted in parts
+                if plan.stateful and start > 0
+                for f in wanted
+            }
+            futures = [c.submit(_chunk_task, plan_f, *part, pure=False) for part in parts]
             with contextlib.closing(_as_completed(c, futures)) as arrived:
                 for fut in arrived:
                     payload = fut.result()
                     fut.release()  # the workers forget it (an EXR frame's RGBA is large)
                     for f, png, rgba in payload:
                         _sequence._write_frame(plan, f, png, rgba, extra.get(f))
-                        result.rendered.append(f)
-                        count += 1
-                        if progress is not None:
-                            progress(count, len(todo), f, "rendered")
+                        result._tick(f, "rendered", progress)
     result.rendered.sort()
     result.seconds = time.perf_counter() - t_start
     return result
@@ -339,16 +269,9 @@ def render_sequence(
 # -- golden cases -------------------------------------------------------------------------------
 
 
-def _case_task(case: Any, catch: bool) -> tuple[Any, str | None]:
-    """Worker: one golden case rendered; with ``catch``, a render error as check_suite words it."""
-    if not catch:
-        return _golden.render_case(case), None
-    return _golden.render_or_error(case)
-
-
 def _case_renderer(client: Any, catch: bool) -> Any:
     def render_cases(cases: Sequence[Any]) -> Iterator[tuple[int, Any, str | None]]:
-        futures = [client.submit(_case_task, case, catch, pure=False) for case in cases]
+        futures = [client.submit(_golden._render, case, catch, pure=False) for case in cases]
         index = {fut.key: i for i, fut in enumerate(futures)}
         with contextlib.closing(_as_completed(client, futures)) as arrived:
             for fut in arrived:
@@ -368,17 +291,12 @@ def check_suite(
     scheduler: str | None = None,
     client: Any = None,
 ) -> list[Any]:
-    """:func:`refnpr.golden.check_suite` with the cases rendered on a Dask cluster.
-
-    Same results (in suite order), messages and failure images as the serial check; the
-    comparison runs on the client. ``workers``, ``scheduler``, ``client``: as for
-    :func:`render_sequence`.
-    """
+    """:func:`refnpr.golden.check_suite` with the cases rendered on a Dask cluster (``workers``,
+    ``scheduler``, ``client``: as for :func:`render_sequence`); the comparison runs on the client,
+    so results (in suite order), messages and failure images are the serial check's."""
     _check_workers(workers, scheduler)
-    what = "scheduler" if scheduler is not None else "workers"
-    _dask(what)
     _golden.load_suite(suite_path)  # a bad suite fails before a cluster starts
-    with _client_for(client, workers, scheduler, what) as c:
+    with _client_for(client, workers, scheduler) as c:
         return _golden.check_suite(
             suite_path,
             only=only,
@@ -396,17 +314,12 @@ def update_suite(
     scheduler: str | None = None,
     client: Any = None,
 ) -> list[Path]:
-    """:func:`refnpr.golden.update_suite` with the cases rendered on a Dask cluster.
-
-    The same golden files, written by the client as each case arrives (``log`` lines in
-    completion order; the returned paths in suite order). A case that fails to render raises
-    its error, as serially.
-    """
+    """:func:`refnpr.golden.update_suite` with the cases rendered on a Dask cluster: the same
+    golden files, written by the client as each case arrives (``log`` lines in completion order,
+    the returned paths in suite order); a case that fails to render raises, as serially."""
     _check_workers(workers, scheduler)
-    what = "scheduler" if scheduler is not None else "workers"
-    _dask(what)
     _golden.load_suite(suite_path)
-    with _client_for(client, workers, scheduler, what) as c:
+    with _client_for(client, workers, scheduler) as c:
         return _golden.update_suite(
             suite_path, only=only, log=log, render_cases=_case_renderer(c, catch=False)
         )

@@ -21,6 +21,8 @@ Where the parameters and their ranges come from
 
 from __future__ import annotations
 
+import ast
+import dataclasses
 import functools
 import math
 import re
@@ -28,7 +30,6 @@ import sys
 import types
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -40,22 +41,20 @@ from .styles import Style, get_style, style_from_spec
 
 __all__ = ["Explorer", "Orbit", "explore", "orbit_camera", "orbit_of", "parameter_controls"]
 
-_EXTRA_HINT = (
-    "refnpr.explore needs ipywidgets, from the optional extra `notebook`: "
-    "pip install 'refnpr[notebook]' (or pip install ipywidgets)"
-)
-
 
 def _widgets():
     try:
         import ipywidgets
     except ImportError as exc:
-        raise ImportError(_EXTRA_HINT) from exc
+        raise ImportError(
+            "refnpr.explore needs ipywidgets, from the optional extra `notebook`: "
+            "pip install 'refnpr[notebook]' (or pip install ipywidgets)"
+        ) from exc
     return ipywidgets
 
 
 # ---------------------------------------------------------------------------- the camera
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class Orbit:
     """A camera as an orbit about its target: angles in degrees, ``distance`` in world units.
 
@@ -104,22 +103,25 @@ def orbit_camera(base: Camera, orbit: Orbit, fov_y: float | None = None) -> Came
 
 
 # ---------------------------------------------------------------------------- parameters
-def _accepts(spec: tuple[tuple[str, Any], ...], name: str, value: Any) -> bool:
-    params = dict(spec)
-    style_name = params.pop("name")
-    params.pop("contours", None)
-    params[name] = value
+def _error(spec: tuple[tuple[str, Any], ...], name: str, value: Any) -> str | None:
+    """The message of building the style of ``spec`` with ``name = value``; None if it builds."""
+    params = {**_params_only(spec), name: value}
     with warnings.catch_warnings():  # a probe is not the user's choice: no advice for it
         warnings.simplefilter("ignore")
         try:
-            get_style(style_name, **params)
-        except (TypeError, ValueError):
-            return False
-    return True
+            get_style(dict(spec)["name"], **params)
+        except (TypeError, ValueError) as exc:
+            return str(exc)
+    return None
 
 
 def _frozen(spec: Mapping[str, Any]) -> tuple[tuple[str, Any], ...]:
+    """``spec`` as a hashable key of the probes' caches (values by ``repr``)."""
     return tuple(sorted((k, repr(v)) for k, v in spec.items()))
+
+
+def _thawed(style_name: str, base: tuple[tuple[str, Any], ...]) -> tuple[tuple[str, Any], ...]:
+    return tuple((k, ast.literal_eval(v)) for k, v in base) + (("name", style_name),)
 
 
 @functools.lru_cache(maxsize=512)
@@ -127,7 +129,7 @@ def _probe_range(
     style_name: str, base: tuple[tuple[str, Any], ...], name: str, value: float, is_int: bool
 ) -> tuple[float, float]:
     """(lo, hi) around ``value`` that the style accepts (see the module docstring)."""
-    spec = tuple((k, _literal(v)) for k, v in base) + (("name", style_name),)
+    spec = _thawed(style_name, base)
     if is_int:
         lo, hi = 0.0, float(max(4 * value, value + 8))
     elif value == 0:
@@ -140,7 +142,7 @@ def _probe_range(
         lo, hi = 4.0 * value, -4.0 * value
 
     def ok(x: float) -> bool:
-        return _accepts(spec, name, int(round(x)) if is_int else float(x))
+        return _error(spec, name, int(round(x)) if is_int else float(x)) is None
 
     def settle(end: float) -> float:
         if ok(end):
@@ -161,13 +163,6 @@ def _probe_range(
     return settle(lo), settle(hi)
 
 
-def _literal(text: str) -> Any:
-    """Inverse of ``repr`` for the literal values a style's parameters hold."""
-    import ast
-
-    return ast.literal_eval(text)
-
-
 _LISTED = re.compile(r"expected one of (\[[^\]]*\])")
 
 
@@ -177,28 +172,15 @@ def _probe_choices(
 ) -> tuple[str, ...]:
     """The strings the style lists for ``name`` in its message for an unknown value, each
     checked by building the style with it; empty when it lists none."""
-    spec = tuple((k, _literal(v)) for k, v in base) + (("name", style_name),)
-    params = dict(spec)
-    params.pop("name")
-    params.pop("contours", None)
-    params[name] = "\x00?"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            get_style(style_name, **params)
-        except (TypeError, ValueError) as exc:
-            message = str(exc)
-        else:
-            return ()
+    spec = _thawed(style_name, base)
+    message = _error(spec, name, "\x00?")
+    if message is None:
+        return ()
     listed = _LISTED.search(message)
     if listed:
-        return tuple(str(c) for c in _literal(listed.group(1)))
+        return tuple(str(c) for c in ast.literal_eval(listed.group(1)))
     words = re.findall(r"[A-Za-z][A-Za-z0-9_\-]*", message.replace(name + ":", "", 1))
-    seen: list[str] = []
-    for w in words:
-        if w not in seen and _accepts(spec, name, w):
-            seen.append(w)
-    return tuple(seen)
+    return tuple(w for w in dict.fromkeys(words) if _error(spec, name, w) is None)
 
 
 def _step(lo: float, hi: float) -> float:
@@ -227,12 +209,10 @@ def parameter_controls(style: Style, spec: Mapping[str, Any] | None = None) -> d
     """
     w = _widgets()
     values = style.params()
-    base = dict(values if spec is None else spec)
-    base.pop("name", None)
-    base.pop("contours", None)
+    base = _params_only(values if spec is None else spec)
     try:
         frozen = _frozen(base)
-        tuple((k, _literal(v)) for k, v in frozen)
+        _thawed(style.name, frozen)
     except (ValueError, SyntaxError):  # values without a literal repr: probe with none fixed
         frozen = ()
     controls: dict[str, Any] = {}
@@ -319,35 +299,23 @@ class Explorer:
         self.controls = parameter_controls(inner, _params_of_spec(self.spec))
         self._start = {k: c.value for k, c in self.controls.items()}
         d = self.orbit.distance
-        common = {"continuous_update": False, "style": _LABEL_STYLE}
+        sliders = {  # value, min, max, step
+            "azimuth": (0.0, -180.0, 180.0, 1.0),
+            "elevation": (round(self.orbit.elevation, 3), -89.0, 89.0, 1.0),
+            "distance": (d, 0.2 * d, 4.0 * d, _step(0.2 * d, 4.0 * d)),
+            "fov_y": (float(self.base_camera.fov_y), 5.0, 120.0, 1.0),
+        }
         self.camera_controls = {
-            "azimuth": w.FloatSlider(
-                value=0.0, min=-180.0, max=180.0, step=1.0, description="azimuth", **common
-            ),
-            "elevation": w.FloatSlider(
-                value=round(self.orbit.elevation, 3),
-                min=-89.0,
-                max=89.0,
-                step=1.0,
-                description="elevation",
-                **common,
-            ),
-            "distance": w.FloatSlider(
-                value=d,
-                min=0.2 * d,
-                max=4.0 * d,
-                step=_step(0.2 * d, 4.0 * d),
-                description="distance",
-                **common,
-            ),
-            "fov_y": w.FloatSlider(
-                value=float(self.base_camera.fov_y),
-                min=5.0,
-                max=120.0,
-                step=1.0,
-                description="fov_y",
-                **common,
-            ),
+            name: w.FloatSlider(
+                value=v,
+                min=lo,
+                max=hi,
+                step=step,
+                description=name,
+                continuous_update=False,
+                style=_LABEL_STYLE,
+            )
+            for name, (v, lo, hi, step) in sliders.items()
         }
         self.image = w.Image(format="png", width=width, height=height)
         self.status = w.HTML()
@@ -376,16 +344,9 @@ class Explorer:
 
     def current_camera(self) -> Camera:
         """The camera the camera sliders stand for."""
-        cc = self.camera_controls
-        orbit = Orbit(
-            self.orbit.target,
-            self.orbit.up,
-            self.orbit.reference,
-            float(cc["azimuth"].value),
-            float(cc["elevation"].value),
-            float(cc["distance"].value),
-        )
-        return orbit_camera(self.base_camera, orbit, float(cc["fov_y"].value))
+        now = {k: float(c.value) for k, c in self.camera_controls.items()}
+        fov_y = now.pop("fov_y")
+        return orbit_camera(self.base_camera, dataclasses.replace(self.orbit, **now), fov_y)
 
     def render(self) -> Image | None:
         """Rebuild style and camera from the controls and render into ``image``; on an error
@@ -414,15 +375,7 @@ class Explorer:
         display(self.widget)
 
 
-def explore(
-    scene: Any,
-    style: Any = None,
-    *,
-    width: int = 384,
-    height: int = 288,
-    spp: int = 1,
-    camera: Camera | None = None,
-) -> Explorer:
+def explore(scene: Any, style: Any = None, **options: Any) -> Explorer:
     """Sliders for ``style``'s parameters and for the camera, re-rendering ``scene`` on change.
 
     Parameters
@@ -431,11 +384,11 @@ def explore(
         A scene, a built-in scene name or a scene TOML file.
     style : Style, str, dict or None
         As for :func:`refnpr.render.render` (None: the scene's style, else the default style).
-    width, height : int
-        Render size in pixels.
-    spp : int
-        Samples per pixel (a square number).
-    camera : Camera, optional
+    width, height : int, keyword-only
+        Render size in pixels (default 384 x 288).
+    spp : int, keyword-only
+        Samples per pixel (a square number; default 1).
+    camera : Camera, optional, keyword-only
         The starting camera (default: the scene's); the sliders orbit about its target.
 
     Returns
@@ -449,7 +402,7 @@ def explore(
     ImportError
         Naming the optional extra ``notebook`` when ipywidgets is not installed.
     """
-    return Explorer(scene, style, width=width, height=height, spp=spp, camera=camera)
+    return Explorer(scene, style, **options)
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -481,14 +434,17 @@ def _inner_style(style: Style) -> Style:
     return base if style.name == "contoured" and isinstance(base, Style) else style
 
 
+def _params_only(spec: Any) -> dict[str, Any]:
+    """A style table (mapping or pairs) without its ``name`` and ``contours``."""
+    return {k: v for k, v in dict(spec).items() if k not in ("name", "contours")}
+
+
 def _params_of_spec(spec: Mapping[str, Any]) -> dict[str, Any]:
-    params = dict(spec)
-    if params.get("name") == "contoured":
-        base = params.get("base", "toon")
-        params = {} if isinstance(base, str) else dict(base)
-    params.pop("name", None)
-    params.pop("contours", None)
-    return params
+    """The parameters of a style table (a contoured style's: its base's)."""
+    if spec.get("name") == "contoured":
+        base = spec.get("base", "toon")
+        spec = {} if isinstance(base, str) else base
+    return _params_only(spec)
 
 
 def _html(text: str) -> str:

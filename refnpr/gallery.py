@@ -8,6 +8,7 @@ them and prints the table.
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 from collections.abc import Sequence
@@ -213,30 +214,17 @@ def gallery_markdown(
 
 def run(args: Namespace) -> int:
     """``refnpr gallery``: build the gallery from the parsed options (``out_dir``, ``size``,
-    ``suite``, ``spp``, ``only``, ``markdown``); 0 on success, 2 with a message on stderr."""
+    ``suite``, ``spp``, ``only``, ``markdown``); 0 on success (errors: ValueError)."""
     entries = GALLERY
     if args.only:
         unknown = [n for n in args.only if n not in {e.file for e in GALLERY}]
         if unknown:
-            print(
-                f"refnpr gallery: --only: unknown gallery entries {unknown}; "
-                f"choose from {[e.file for e in GALLERY]}",
-                file=sys.stderr,
+            raise ValueError(
+                f"--only: unknown gallery entries {unknown}; choose from {[e.file for e in GALLERY]}"
             )
-            return 2
         entries = tuple(e for e in GALLERY if e.file in args.only)
-    try:
-        build_gallery(
-            args.out_dir,
-            args.size,
-            suite=args.suite,
-            entries=entries,
-            spp=args.spp,
-            log=lambda line: print(line, file=sys.stderr),
-        )
-    except ValueError as exc:
-        print(f"refnpr gallery: {exc}", file=sys.stderr)
-        return 2
+    log = functools.partial(print, file=sys.stderr)
+    build_gallery(args.out_dir, args.size, suite=args.suite, entries=entries, spp=args.spp, log=log)
     if args.markdown:
         print(gallery_markdown(Path(args.out_dir).as_posix(), entries), end="")
     return 0

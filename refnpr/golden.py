@@ -36,25 +36,17 @@ Suite format::
     channels = ["depth", "tri_id", "uv", "duv_dx", "duv_dy", "normal"]
     rtol = 1e-5             # gbuffer cases: relative tolerance of float channels
 
-Tolerance keys a conformance kit carries per case (``refnpr kit export``; see docs/kit.md):
-
-* ``tolerance``, ``max_frac_over``, ``min_ssim``: as above, on 8-bit sRGB values.
-* ``position_deviation`` (int >= 0, default 1): the Vulkan CTS "fuzzy" position tolerance used
-  by ``refnpr kit check``: a pixel of another backend's render also passes when some reference
-  pixel within this Chebyshev distance matches it within ``tolerance``. One pixel is the
-  default because the differences a correct GPU implementation shows are edge placements: a
-  float32 evaluation flips a sample whose value sits on a toon step, a threshold or a coverage
-  edge, which moves that edge by at most one pixel, while a wrong formula changes whole
-  regions. ``refnpr golden --check`` (refnpr against itself) does not use it.
-* ``discrete_max_pixels`` (int >= 0, default 0): gbuffer cases: how many samples of each
-  discrete channel (``tri_id``, ``mesh_id``) may differ; discrete buffers are otherwise exact.
-* ``rtol``, ``atol``: gbuffer cases: float channels pass where |a - b| <= atol + rtol |b|.
+``position_deviation`` and ``discrete_max_pixels`` are the tolerances of ``refnpr kit check``
+(the conformance kit carries every tolerance key per case: docs/kit.md); ``refnpr golden
+--check`` (refnpr against itself) does not use them. G-buffer float channels pass where
+|a - b| <= atol + rtol |b|.
 """
 
 from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -259,15 +251,30 @@ def render_or_error(case: GoldenCase) -> tuple[Any, str | None]:
         return None, f"render failed: {exc}"
 
 
-def _serial_check_renders(cases: Sequence[GoldenCase]) -> Iterator[tuple[int, Any, str | None]]:
-    for i, case in enumerate(cases):
-        got, error = render_or_error(case)
-        yield i, got, error
+def _render(case: GoldenCase, catch: bool) -> tuple[Any, str | None]:
+    """One case's render, and with ``catch`` a render error as check_suite words it."""
+    return render_or_error(case) if catch else (render_case(case), None)
 
 
-def _serial_update_renders(cases: Sequence[GoldenCase]) -> Iterator[tuple[int, Any, str | None]]:
-    for i, case in enumerate(cases):
-        yield i, render_case(case), None
+def _serial(catch: bool) -> RenderCases:
+    def render_cases(cases: Sequence[GoldenCase]) -> Iterator[tuple[int, Any, str | None]]:
+        for i, case in enumerate(cases):
+            yield i, *_render(case, catch)
+
+    return render_cases
+
+
+@contextmanager
+def _renders(render_cases: RenderCases | None, cases: list[GoldenCase], catch: bool):
+    """The renders of ``cases``, closed when the block ends: a generator of renders elsewhere
+    cancels what is left (errors, Ctrl-C)."""
+    renders = iter((render_cases or _serial(catch))(cases))
+    try:
+        yield renders
+    finally:
+        close = getattr(renders, "close", None)
+        if close is not None:
+            close()
 
 
 def _files(root: Path, case: GoldenCase) -> Path:
@@ -291,8 +298,7 @@ def update_suite(
     root = suite_path.parent
     cases = _select(load_suite(suite_path), only)
     written: dict[int, Path] = {}
-    renders = iter((render_cases or _serial_update_renders)(cases))
-    try:
+    with _renders(render_cases, cases, catch=False) as renders:
         for i, result, _ in renders:
             case = cases[i]
             target = _files(root, case)
@@ -303,10 +309,6 @@ def update_suite(
                 write_png_atomic(target, result)
             written[i] = target
             log(f"wrote {target}")
-    finally:  # a generator of renders elsewhere cancels what is left (errors, Ctrl-C)
-        close = getattr(renders, "close", None)
-        if close is not None:
-            close()
     return [written[i] for i in sorted(written)]
 
 
@@ -393,8 +395,7 @@ def check_suite(
             )
         else:
             present.append(i)
-    renders = iter((render_cases or _serial_check_renders)([cases[i] for i in present]))
-    try:
+    with _renders(render_cases, [cases[i] for i in present], catch=True) as renders:
         for j, got, error in renders:
             i = present[j]
             case = cases[i]
@@ -402,10 +403,6 @@ def check_suite(
                 results[i] = CaseResult(case.name, False, error)
             else:
                 results[i] = _check_case_render(case, _files(root, case), got, fail_root)
-    finally:  # a generator of renders elsewhere cancels what is left (errors, Ctrl-C)
-        close = getattr(renders, "close", None)
-        if close is not None:
-            close()
     return [results[i] for i in sorted(results)]
 
 

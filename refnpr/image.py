@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from ._memory import read_proc_number
+
 __all__ = [
     "IMAGE_FORMATS",
     "Image",
@@ -97,22 +99,9 @@ def _decode_reason(exc: BaseException) -> str:
 
 
 def check_png_path(path: str | os.PathLike) -> Path:
-    """Validate an output path before any work: not a directory, a ``.png`` suffix, and a parent
-    directory that exists (or can be created) and is writable.
-
-    Parameters
-    ----------
-    path : str or path
-
-    Returns
-    -------
-    Path
-
-    Raises
-    ------
-    ValueError
-        Naming the path as given and what to give instead.
-    """
+    """``path`` as a Path, validated before any work: not a directory, a ``.png`` suffix, and a
+    parent directory that exists (or can be created) and is writable; else a ValueError naming
+    the path as given and what to give instead."""
     shown = os.fspath(path)
     p = Path(path)
     if isinstance(shown, str) and shown.endswith(("/", os.sep)):
@@ -148,8 +137,8 @@ _TERMINATING = tuple(
 )
 
 #: Temporary files of the atomic writes under way, in every thread: what the signal handler
-#: removes. Changed and read under ``_LIVE_LOCK``, re-entrant because the handler runs in the
-#: main thread between any two bytecodes, possibly while that thread holds the lock.
+#: removes. Under ``_LIVE_LOCK``, re-entrant: the handler runs in the main thread between any
+#: two bytecodes, possibly while that thread holds the lock.
 _LIVE: set[str] = set()
 _LIVE_LOCK = threading.RLock()
 #: How many atomic writes of the main thread are open (nested or interleaved blocks): the
@@ -162,11 +151,8 @@ _PROC_STATUS = "/proc/self/status"
 
 
 def _on_signal(signum: int, frame: Any) -> None:
-    """Temporary handler: put the previous handler back, remove the temporary files, and end the
-    process with the same signal (the default action, so the exit status is the usual one).
-
-    The previous handler is set first, so a second signal (one arriving while the files are
-    removed, or the one ``os.kill`` sends) never re-enters this function."""
+    """Temporary handler: put the previous handler back first (so a second signal never re-enters
+    here), remove the temporary files, and end the process with the same signal."""
     with suppress(ValueError, OSError):
         signal.signal(signum, _INSTALLED.get(signum) or signal.SIG_DFL)
     got = _LIVE_LOCK.acquire(timeout=1.0)  # a worker holds it for a set operation at most
@@ -204,16 +190,9 @@ def _restore() -> None:
 
 @contextmanager
 def _signals_remove() -> Iterator[None]:
-    """While the block runs, a terminating signal whose handler is the default one removes the
-    files registered in ``_LIVE`` and then ends the process as the default action would
-    (re-sent with the default handler, so the exit status is the conventional one).
-
-    Blocks nest: the outermost installs the handlers, the inner ones only count, and the
-    handlers are restored when the last one ends, each only if it is still ours (one the
-    caller installed inside the block is kept). Handlers set from Python (KeyboardInterrupt
-    for SIGINT, a caller's own) are left alone: those that raise unwind through the caller's
-    cleanup. Outside the main thread, where handlers cannot be set, this does nothing (the
-    caller's ``try``/``except`` still cleans up)."""
+    """While the block runs (main thread only), a terminating signal whose handler is the
+    default one removes the files of ``_LIVE`` first (see :func:`atomic_file`). Blocks nest;
+    handlers set from Python (KeyboardInterrupt, a caller's own) are left alone."""
     global _DEPTH
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -229,24 +208,13 @@ def _signals_remove() -> Iterator[None]:
 
 
 def _current_umask() -> int:
-    """The process's umask, read from ``/proc/self/status`` without changing it (setting it,
-    even briefly, would give files other threads create meanwhile the wrong mode). Where that
-    is unavailable, falls back to setting and restoring it (to 0o077 meanwhile, not 0).
-
-    Returns
-    -------
-    int
-        The umask, such as ``0o022``.
-    """
-    try:
-        with open(_PROC_STATUS, encoding="ascii") as f:
-            for line in f:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError, IndexError):
-        pass
-    umask = os.umask(0o077)
-    os.umask(umask)
+    """The process's umask, read from ``/proc/self/status``: setting it, even briefly, would give
+    files other threads create meanwhile the wrong mode. Elsewhere, set and restored (to 0o077
+    meanwhile, not 0)."""
+    umask = read_proc_number(_PROC_STATUS, "Umask:", 8)
+    if umask is None:
+        umask = os.umask(0o077)
+        os.umask(umask)
     return umask
 
 
@@ -256,40 +224,20 @@ _OPEN_FLAGS = (
 
 
 def _create_registered(parent: Path, prefix: str, suffix: str) -> str:
-    """Create a new empty file (mode 0600) named ``prefix + random + suffix`` in ``parent``.
-
-    The name is registered in ``_LIVE`` before the file is created, so a signal at any point
-    finds it there (removing a name not created yet is harmless). On failure it is
-    unregistered and the error raised; a name already taken is retried with another.
-
-    Parameters
-    ----------
-    parent : Path
-        The directory (it exists).
-    prefix, suffix : str
-        Around the random part of the name.
-
-    Returns
-    -------
-    str
-        The file's path, registered in ``_LIVE`` (the caller unregisters it).
-    """
+    """A new empty file (mode 0600) ``parent/prefix<random>suffix``, registered in ``_LIVE``
+    before it is created (so a signal at any point finds it) and unregistered on failure."""
     for _ in range(1000):
         name = os.path.join(parent, f"{prefix}{secrets.token_hex(5)}{suffix}")
         with _LIVE_LOCK:
             _LIVE.add(name)
         try:
-            fd = os.open(name, _OPEN_FLAGS, 0o600)
-        except FileExistsError:
+            os.close(os.open(name, _OPEN_FLAGS, 0o600))
+            return name
+        except BaseException as exc:
             with _LIVE_LOCK:
                 _LIVE.discard(name)
-            continue
-        except BaseException:
-            with _LIVE_LOCK:
-                _LIVE.discard(name)
-            raise
-        os.close(fd)
-        return name
+            if not isinstance(exc, FileExistsError):  # a name already taken: another one
+                raise
     raise FileExistsError(f"cannot create a temporary file in {str(parent)!r}: names taken")
 
 
@@ -298,14 +246,13 @@ def atomic_file(path: str | os.PathLike, *, suffix: str = "") -> Iterator[Path]:
     """A temporary file beside ``path`` that replaces ``path`` (atomic rename) when the block
     ends normally, and is removed on every other exit. ``path`` is never partial.
 
-    The temporary file is removed on an exception or KeyboardInterrupt (``try``/``except``, in
-    every thread). In the main thread it is also removed on SIGTERM, SIGHUP or SIGINT whose
-    handler is the default one: a temporary handler removes the temporary files of all the
-    atomic writes under way (nested ones included) and re-sends the signal, so the process
+    Removed on an exception or KeyboardInterrupt (in every thread), and in the main thread on
+    SIGTERM, SIGHUP or SIGINT whose handler is the default one: a temporary handler removes the
+    temporary files of all the atomic writes under way and re-sends the signal, so the process
     ends with the conventional status; the previous handlers are restored when the outermost
-    block ends, unless the caller replaced ours meanwhile. Worker threads cannot set signal
-    handlers: there the cleanup is ``try``/``except`` only, and a signal that ends the process
-    leaves their temporary file unless a main-thread atomic write is under way at the time.
+    block ends, unless the caller replaced ours meanwhile. Worker threads cannot set handlers: a
+    signal that ends the process leaves their temporary file unless a main-thread atomic write
+    is under way.
 
     Parameters
     ----------
@@ -337,11 +284,8 @@ def atomic_file(path: str | os.PathLike, *, suffix: str = "") -> Iterator[Path]:
 
 
 def write_png_atomic(path: str | os.PathLike, pixels: np.ndarray) -> Path:
-    """Write an 8-bit image as PNG through a temporary file and an atomic rename.
-
-    An interrupted write never leaves a corrupted target nor the temporary file: it is removed
-    on errors, on KeyboardInterrupt, and on SIGTERM/SIGHUP (when called from the main thread;
-    the process then ends with the signal's conventional status).
+    """Write an 8-bit image as PNG through a temporary file and an atomic rename
+    (:func:`atomic_file`: an interrupted write leaves neither a partial target nor the temporary).
 
     Parameters
     ----------
@@ -409,13 +353,8 @@ class Image:
         object.__setattr__(image, "timings", timings)
         return image
 
-    @property
-    def width(self) -> int:
-        return int(self.rgba.shape[1])
-
-    @property
-    def height(self) -> int:
-        return int(self.rgba.shape[0])
+    width = property(lambda self: int(self.rgba.shape[1]), doc="Pixels per row.")
+    height = property(lambda self: int(self.rgba.shape[0]), doc="Rows of pixels.")
 
     def to_srgb8(self) -> np.ndarray:
         """(H, W, 4) uint8: sRGB-encoded colour, linear alpha, rounded to nearest."""
@@ -429,13 +368,8 @@ class Image:
         return write_png_atomic(path, self.to_srgb8())
 
     def to_png_bytes(self) -> bytes:
-        """The image as an 8-bit sRGB PNG with alpha, in memory: the bytes :meth:`save` writes.
-
-        Returns
-        -------
-        bytes
-            A PNG whose decoded pixels equal :meth:`to_srgb8` ``(H, W, 4)`` uint8.
-        """
+        """The image as an 8-bit sRGB PNG with alpha, in memory: the bytes :meth:`save` writes
+        (decoded: :meth:`to_srgb8`, ``(H, W, 4)`` uint8)."""
         import imageio.v3 as iio
 
         return bytes(iio.imwrite("<bytes>", self.to_srgb8(), extension=".png"))

@@ -53,13 +53,13 @@ def _still(scene: Any):
 
 
 def _style_of(style: Any, scene: Any) -> Style:
-    if style is None:
-        spec = getattr(scene, "style", None) or DEFAULT_STYLE
-        return style_from_spec(spec)
-    return style_from_spec(style)
+    """``style``, else the scene's own, else ``DEFAULT_STYLE``, built."""
+    return style_from_spec(
+        style if style is not None else getattr(scene, "style", None) or DEFAULT_STYLE
+    )
 
 
-def _check_args(width: Any, height: Any, spp: Any, camera: Any, progress: Any, gbuf: Any):
+def _check_args(width, height, spp, camera=None, progress=None, gbuf=False, copy=False):
     """render's own arguments, checked before any scene work (spp's square-ness: rasterize)."""
     width = check_int("width", width, minimum=1)
     height = check_int("height", height, minimum=1)
@@ -74,8 +74,9 @@ def _check_args(width: Any, height: Any, spp: Any, camera: Any, progress: Any, g
             "progress: expected a callable progress(phase: str, fraction: float) or None, "
             f"got {type(progress).__name__} {progress!r}"
         )
-    if not isinstance(gbuf, (bool, np.bool_)):
-        raise TypeError(f"return_gbuffer: expected a bool, got {type(gbuf).__name__} {gbuf!r}")
+    for name, flag in (("return_gbuffer", gbuf), ("copy", copy)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"{name}: expected a bool, got {type(flag).__name__} {flag!r}")
     return width, height, spp
 
 
@@ -100,10 +101,8 @@ def composite_resolve(
     """Composite samples over the background, box-resolve them and unpremultiply, in one pass.
 
     Per sample, in float64: premultiplied ``(rgb * a, a)`` "over" the premultiplied background;
-    the n x n samples of a pixel are averaged (box filter), and the pixel's colour is divided by
-    its alpha (0 where alpha is 0). Bit-identical to the numpy expression
-    ``box_resolve(premult + bg_premult * (1 - a), n)`` followed by ``rgb / alpha``, for any
-    numba thread count (``refnpr._kernels.composite_resolve_for``).
+    the n x n samples of a pixel averaged (box filter); ``rgb / alpha`` (0 where alpha is 0).
+    Bit-identical to that numpy expression, for any numba thread count.
 
     Parameters
     ----------
@@ -170,62 +169,6 @@ def required_channels(scene: Any, style: Any = None) -> frozenset[str]:
     return frozenset(_style_of(style, scene).requires(scene))
 
 
-def _frame(
-    scene,
-    style,
-    cam,
-    width,
-    height,
-    spp,
-    channels,
-    options,
-    progress,
-    t0,
-    gb_out,
-    out,
-    shader=None,
-    samples=None,
-):
-    """One frame: rasterize (into ``gb_out`` if given), shade, composite + resolve (into ``out``).
-
-    ``shader(ctx) -> rgba`` replaces ``style.shade`` (a sequence frame's ``shade_frame``).
-    ``samples``: a list holding the caller's per-sample RGBA buffer (one is made if it is empty
-    or of another shape), lent to the style through ``ShadeContext.rgba_out``."""
-    if progress is not None:
-        progress("rasterize", 0.0)
-    gb = rasterize(scene, cam, width, height, channels, spp, out=gb_out, **options)
-    t1 = time.perf_counter()
-    if progress is not None:
-        progress("shade", 0.4)
-    shade = style.shade if shader is None else shader
-    spare = []
-    if samples is not None:
-        shape = gb.sample_shape + (4,)
-        if not samples or samples[0].shape != shape:
-            samples[:] = [np.empty(shape, dtype=np.float32)]
-        spare = [samples[0]]
-    rgba = np.asarray(shade(ShadeContext(gb, scene.with_camera(cam), spare)), dtype=np.float32)
-    if rgba.shape != gb.sample_shape + (4,):
-        raise ValueError(
-            f"style {style.name!r} returned shape {rgba.shape}; expected {gb.sample_shape + (4,)}"
-        )
-    t2 = time.perf_counter()
-    if progress is not None:
-        progress("resolve", 0.9)
-    out = composite_resolve(rgba, gb.n, scene.background, out=out, style_name=style.name)
-    t3 = time.perf_counter()
-    timings = {
-        "rasterize": t1 - t0,
-        "shade": t2 - t1,
-        "resolve": t3 - t2,
-        "total": t3 - t0,
-        **{f"raster.{k}": v for k, v in gb.timings.items()},
-    }
-    if progress is not None:
-        progress("done", 1.0)
-    return out, timings, gb
-
-
 def render(
     scene: Any,
     style: Any = None,
@@ -263,19 +206,13 @@ def render(
         ``rgba`` (H, W, 4) float32 linear straight-alpha, composited over ``scene.background``.
     """
     t0 = time.perf_counter()
-    width, height, spp = _check_args(width, height, spp, camera, progress, return_gbuffer)
-    scene = _still(as_scene(scene))
-    style = _style_of(style, scene)
-    cam = camera if camera is not None else scene.camera
-    channels = sorted(style.requires(scene))
-    _check_memory(scene, style, channels, width, height, spp)
-    options = style.raster_options(scene)
-    out, timings, gb = _frame(
-        scene, style, cam, width, height, spp, channels, options, progress, t0, None, None
+    _check_args(width, height, spp, camera, progress, return_gbuffer)
+    got = RenderContext(scene, style, width, height, spp).render(
+        camera, progress=progress, return_gbuffer=return_gbuffer
     )
-    image = Image._of_finite(out, timings)  # composite_resolve checked every pixel
-    timings["total"] = time.perf_counter() - t0  # the whole call, as the caller waits for it
-    return (image, gb) if return_gbuffer else image
+    image = got[0] if return_gbuffer else got
+    image.timings["total"] = time.perf_counter() - t0  # the whole call, as the caller waits for it
+    return got
 
 
 def _same_options(a: dict, b: dict) -> bool:
@@ -290,23 +227,16 @@ class RenderContext:
     """A renderer for many frames of one scene and style at one size: ``render`` without the
     per-frame set-up and fresh buffers.
 
-    The scene and style are resolved, the channel set and rasterizer options computed and the
-    memory check done once, here; each :meth:`render` rasterizes into the G-buffer of the
-    previous frame (``rasterize(..., out=gb)``), lends the style the per-sample RGBA buffer of
-    the previous frame (``ShadeContext.rgba_out``) and composites into the same output buffer,
-    so a steady state pays no page faults for them. Every frame is bit-identical to
-    ``render(scene, style, width, height, spp, camera=camera)``.
+    Scene, style, channel set, rasterizer options and the memory check are resolved once, here;
+    each frame rasterizes into the previous frame's G-buffer (``rasterize(..., out=gb)``), lends
+    the style the previous per-sample RGBA buffer (``ShadeContext.rgba_out``) and composites
+    into the same output buffer, so a steady state pays no page faults for them. Every frame is
+    bit-identical to ``render(scene, style, width, height, spp, camera=camera)``.
 
     Parameters
     ----------
-    scene : Scene, str or path
+    scene, style, width, height, spp
         As for :func:`render`.
-    style : Style, str, dict or None
-        As for :func:`render`.
-    width, height : int
-        Image size in pixels.
-    spp : int
-        Samples per pixel (a square n * n).
 
     Notes
     -----
@@ -317,7 +247,7 @@ class RenderContext:
     def __init__(
         self, scene: Any, style: Any = None, width: int = 512, height: int = 512, spp: int = 1
     ) -> None:
-        width, height, spp = _check_args(width, height, spp, None, None, False)
+        width, height, spp = _check_args(width, height, spp)
         self.scene = _still(as_scene(scene))
         self.style = _style_of(style, self.scene)
         self.width, self.height, self.spp = width, height, spp
@@ -326,7 +256,7 @@ class RenderContext:
         self._options = self.style.raster_options(self.scene)
         self._gb = None
         self._out = None
-        self._samples: list[np.ndarray] = []  # the styles' sample buffer (ShadeContext.rgba_out)
+        self._samples: np.ndarray | None = None  # lent to the styles (ShadeContext.rgba_out)
 
     def __repr__(self) -> str:
         return (
@@ -361,28 +291,9 @@ class RenderContext:
             ``rgba`` (H, W, 4) float32, the context's buffer unless ``copy``.
         """
         t0 = time.perf_counter()
-        _check_args(self.width, self.height, self.spp, camera, progress, return_gbuffer)
-        if not isinstance(copy, (bool, np.bool_)):
-            raise TypeError(f"copy: expected a bool, got {type(copy).__name__} {copy!r}")
+        _check_args(self.width, self.height, self.spp, camera, progress, return_gbuffer, copy)
         cam = camera if camera is not None else self.scene.camera
-        out, timings, gb = _frame(
-            self.scene,
-            self.style,
-            cam,
-            self.width,
-            self.height,
-            self.spp,
-            self.channels,
-            self._options,
-            progress,
-            t0,
-            self._gb,
-            self._out,
-            samples=self._samples,
-        )
-        self._gb, self._out = gb, out
-        image = Image._of_finite(out.copy() if copy else out, timings)
-        timings["total"] = time.perf_counter() - t0  # with the copy: what the caller waits for
+        image, gb = self._frame(t0, self.scene, self.style, cam, self._gb, progress, copy)
         return (image, gb) if return_gbuffer else image
 
     def render_frame(
@@ -397,12 +308,11 @@ class RenderContext:
     ) -> tuple[Image, Any] | tuple[Image, Any, Any]:
         """Render one frame of a sequence: its own still scene and style, shaded from ``state``.
 
-        The scene (``scene.at(frame)`` of an animation: the same meshes, the frame's camera,
-        lights and transforms) and the style (``style.for_frame(...)``) replace the context's for
-        this frame only; the buffers are reused whenever the frame needs the same channels and
-        rasterizer options as the previous one. Shading is ``style.shade_frame(ctx, state)``
-        (:class:`~refnpr.styles.Style`'s sequence protocol), so a stateful style gets its state
-        explicitly and returns the next one.
+        The scene (``scene.at(frame)``: the same meshes, the frame's camera, lights and
+        transforms) and style (``style.for_frame(...)``) replace the context's for this frame;
+        the buffers are reused while the channels and rasterizer options stay the same. Shading
+        is ``style.shade_frame(ctx, state)``, the sequence protocol of
+        :class:`~refnpr.styles.Style`: a stateful style gets its state and returns the next one.
 
         Parameters
         ----------
@@ -422,9 +332,7 @@ class RenderContext:
             The image (the context's buffer unless ``copy``) and the state for the next frame.
         """
         t0 = time.perf_counter()
-        _check_args(self.width, self.height, self.spp, None, progress, return_gbuffer)
-        if not isinstance(copy, (bool, np.bool_)):
-            raise TypeError(f"copy: expected a bool, got {type(copy).__name__} {copy!r}")
+        _check_args(self.width, self.height, self.spp, None, progress, return_gbuffer, copy)
         scene = as_scene(scene)
         style = self.style if style is None else style_from_spec(style)
         channels = sorted(style.requires(scene))
@@ -435,27 +343,43 @@ class RenderContext:
             self.channels, self._options, gb_out = channels, options, None
         box: list[Any] = [state]
 
-        def shader(ctx: ShadeContext) -> np.ndarray:
+        def shade(ctx: ShadeContext) -> np.ndarray:
             rgba, box[0] = style.shade_frame(ctx, state)
             return rgba
 
-        out, timings, gb = _frame(
-            scene,
-            style,
-            scene.camera,
-            self.width,
-            self.height,
-            self.spp,
-            channels,
-            options,
-            progress,
-            t0,
-            gb_out,
-            self._out,
-            shader,
-            self._samples,
-        )
-        self._gb, self._out = gb, out
-        image = Image._of_finite(out.copy() if copy else out, timings)
-        timings["total"] = time.perf_counter() - t0  # with the copy: what the caller waits for
+        image, gb = self._frame(t0, scene, style, scene.camera, gb_out, progress, copy, shade)
         return (image, gb, box[0]) if return_gbuffer else (image, box[0])
+
+    def _frame(self, t0, scene, style, cam, gb_out, progress, copy, shade=None):
+        """Rasterize into ``gb_out`` (new if None), shade (``shade(ctx) -> rgba``, default
+        ``style.shade``) into the per-sample buffer of the previous frame, composite and resolve
+        into the output buffer; the image (the buffer itself unless ``copy``) and G-buffer."""
+        tell = progress or (lambda phase, fraction: None)
+        tell("rasterize", 0.0)
+        w, h, spp = self.width, self.height, self.spp
+        gb = rasterize(scene, cam, w, h, self.channels, spp, out=gb_out, **self._options)
+        t1 = time.perf_counter()
+        tell("shade", 0.4)
+        shape = gb.sample_shape + (4,)
+        if self._samples is None or self._samples.shape != shape:
+            self._samples = np.empty(shape, dtype=np.float32)
+        ctx = ShadeContext(gb, scene.with_camera(cam), [self._samples])
+        rgba = np.asarray((shade or style.shade)(ctx), dtype=np.float32)
+        if rgba.shape != shape:
+            raise ValueError(f"style {style.name!r} returned shape {rgba.shape}; expected {shape}")
+        t2 = time.perf_counter()
+        tell("resolve", 0.9)
+        out = composite_resolve(rgba, gb.n, scene.background, out=self._out, style_name=style.name)
+        t3 = time.perf_counter()
+        timings = {
+            "rasterize": t1 - t0,
+            "shade": t2 - t1,
+            "resolve": t3 - t2,
+            "total": t3 - t0,
+            **{f"raster.{k}": v for k, v in gb.timings.items()},
+        }
+        tell("done", 1.0)
+        self._gb, self._out = gb, out
+        image = Image._of_finite(out.copy() if copy else out, timings)  # resolve checked them
+        timings["total"] = time.perf_counter() - t0  # with the copy: what the caller waits for
+        return image, gb

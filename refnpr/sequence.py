@@ -1,37 +1,13 @@
 """Render frames of an animated scene to a directory, restartably (``refnpr animate``).
 
-:func:`render_sequence` renders frames ``A .. B - 1`` of a scene (a still scene is frame 0 of a
-one-frame sequence) with the style protocol of :class:`refnpr.styles.Style`: for each frame the
-still ``scene.at(f)`` and the previous frame's still (``None`` at frame 0) go to
-``style.for_frame``, and ``style.shade_frame(ctx, state)`` carries the style's state from frame
-to frame, so nothing is kept in globals. Buffers are reused across frames
-(:meth:`refnpr.render.RenderContext.render_frame`).
-
-Files, per frame ``f`` (the animation's frame number): ``DIR/frame_00000.png`` (8-bit sRGB RGBA),
-optionally ``DIR/frame_00000.exr`` (linear float32 RGBA), and ``DIR/frame_00000.json``, the
-restart record, written last. Every file is written through a temporary file and an atomic
-rename, so a killed run leaves complete files only; the temporaries of a run killed by SIGKILL
-(which no process can clean up) are removed by the next run in that directory.
-
-Restart rules. A frame's record holds a hash of everything the pixels depend on: the scene (its
-meshes, transforms, materials, camera, lights, style table and animation), the style
-specification, the size, spp and frame number, and the refnpr version; and the SHA-256 of the
-PNG (and EXR) it describes. A frame whose record matches, and whose files match the record, is
-done:
-
-* a **stateless** style (``initial_state()`` is None and ``shade_frame`` is the default; the
-  contour layer counts as its base style) skips it: a killed run loses nothing but the frame it
-  was on;
-* a **stateful** style (TAMISS hash tables, aggregate history) re-runs from frame 0 of the
-  animation up to the last frame still to render, since the state of frame f depends on all
-  frames before it; frames before ``A`` are shaded for their state only, and frames already
-  done are not rewritten (a range that is all done is not shaded at all). A style whose state
-  reaches only K frames back (``Style.state_frames()``, e.g. TAMISS averaging k frames with
-  exact aggregation: K = k) re-runs from K frames before the first frame still to render.
-
-Either way the frames on disk after any number of kills and restarts are byte-identical to an
-uninterrupted run. One run per directory at a time. :mod:`refnpr.distributed` renders the same
-frames on a Dask cluster with these files and rules (the client writes them).
+Frame ``f`` is ``DIR/frame_00000.png`` (8-bit sRGB RGBA), optionally ``.exr`` (linear float32
+RGBA), and ``.json``, the restart record, written last; every file through a temporary file and
+an atomic rename (a SIGKILL's temporaries are removed by the next run). A record holds a hash of
+everything the pixels depend on and the SHA-256 of the files it describes; a frame whose record
+and files match is done. A stateless style skips done frames; a stateful one re-runs from frame 0
+(or ``Style.state_frames()`` frames before the first frame still to render) up to the last frame
+still to render, without rewriting done frames. Either way the directory after any number of
+kills and restarts is byte-identical to an uninterrupted run (docs/animation.md).
 """
 
 from __future__ import annotations
@@ -50,7 +26,7 @@ import numpy as np
 
 from . import __version__
 from .image import atomic_file
-from .render import DEFAULT_STYLE, RenderContext, as_scene
+from .render import DEFAULT_STYLE, RenderContext, _check_args, as_scene
 from .scenes._params import check_int
 from .styles import Style, style_from_spec
 
@@ -101,6 +77,13 @@ class SequenceResult:
     stateful: bool = False
     seconds: float = 0.0
 
+    def _tick(self, f: int, status: str, progress: SequenceProgress | None) -> None:
+        """Record frame ``f`` as rendered or skipped (not a "state" frame) and report it."""
+        if status != "state":
+            (self.rendered if status == "rendered" else self.skipped).append(f)
+        if progress is not None:
+            progress(len(self.rendered) + len(self.skipped), len(self.frames), f, status)
+
 
 def frame_range(frames: Any, count: int) -> range:
     """Frames ``A .. B - 1`` from ``None`` (all), a ``range``, ``(A, B)`` or ``"A:B"``.
@@ -136,10 +119,7 @@ def frame_range(frames: Any, count: int) -> range:
         raise TypeError(f"frames: expected None, a range, (A, B) or 'A:B', got {frames!r}")
     a = 0 if a is None else check_int("frames start", a)
     b = count if b is None else check_int("frames stop", b)
-    if a < 0:
-        a += count
-    if b < 0:
-        b += count
+    a, b = (v + count if v < 0 else v for v in (a, b))
     if not 0 <= a < b <= count:
         raise ValueError(
             f"frames: {frames!r} selects no frames of 0..{count - 1} ({count} frames); give "
@@ -149,13 +129,9 @@ def frame_range(frames: Any, count: int) -> range:
 
 
 def is_stateful(style: Style) -> bool:
-    """Whether ``style`` carries state from frame to frame (see the module docstring).
-
-    The protocol's contract (:meth:`refnpr.styles.Style.initial_state`): a style is stateful
-    exactly when its initial state is not None. Overriding ``shade_frame`` alone says nothing
-    (the contour layer passes it through to its base; TAMISS's default configuration has no
-    state and is rendered frame by frame like any stateless style).
-    """
+    """Whether ``style`` carries state from frame to frame: exactly when its
+    :meth:`~refnpr.styles.Style.initial_state` is not None (overriding ``shade_frame`` alone
+    says nothing: the contour layer passes it through to its base)."""
     return style.initial_state() is not None
 
 
@@ -203,34 +179,11 @@ def scene_digest(scene: Any) -> str:
     return h.hexdigest()
 
 
-def _style_label(spec: Any) -> Any:
-    """The style specification as JSON-able data (for the hash and the record)."""
-    if isinstance(spec, Style):
-        return {"instance": repr(spec)}
-    return _jsonable(spec)
-
-
 def _file_sha(path: Path) -> str | None:
     try:
         return hashlib.sha256(path.read_bytes()).hexdigest()
     except OSError:
         return None
-
-
-def _done(out: Path, stem: str, key: str, exr: bool) -> bool:
-    """Whether the frame's record matches ``key`` and its files match the record."""
-    try:
-        record = json.loads((out / f"{stem}.json").read_text())
-    except (OSError, ValueError):
-        return False
-    if not isinstance(record, dict) or record.get("hash") != key:
-        return False
-    if record.get("png_sha256") != _file_sha(out / f"{stem}.png"):
-        return False
-    return not exr or (
-        record.get("exr_sha256") is not None
-        and record.get("exr_sha256") == _file_sha(out / f"{stem}.exr")
-    )
 
 
 def _write_exr(path: Path, rgba: np.ndarray) -> None:
@@ -248,12 +201,6 @@ def _write_exr(path: Path, rgba: np.ndarray) -> None:
     with atomic_file(path, suffix=".exr") as tmp:
         with OpenEXR.File(header, channels) as f:
             f.write(str(tmp))
-
-
-def _remove_stray_temporaries(out: Path) -> None:
-    for p in out.iterdir():
-        if _TEMP_RE.match(p.name) and p.is_file():
-            p.unlink(missing_ok=True)
 
 
 def _style_tracks(scene: Any) -> list[str]:
@@ -313,6 +260,10 @@ class _Plan:
     spp: int
     exr: bool
 
+    def result(self) -> SequenceResult:
+        paths = [self.out / f"{FRAME_NAME.format(f)}.png" for f in self.todo]
+        return SequenceResult(self.out, list(self.todo), paths=paths, stateful=self.stateful)
+
     def key_of(self, f: int) -> str:
         """The restart hash of frame ``f`` (module docstring)."""
         blob = {
@@ -332,7 +283,20 @@ class _Plan:
         return style_from_spec({**self.spec, **self.scene.animation.style_values(float(f))})
 
     def done(self, f: int) -> bool:
-        return _done(self.out, FRAME_NAME.format(f), self.key_of(f), self.exr)
+        """Whether frame ``f``'s record matches its hash and its files match the record."""
+        stem = FRAME_NAME.format(f)
+        try:
+            record = json.loads((self.out / f"{stem}.json").read_text())
+        except (OSError, ValueError):
+            return False
+        if not isinstance(record, dict) or record.get("hash") != self.key_of(f):
+            return False
+        if record.get("png_sha256") != _file_sha(self.out / f"{stem}.png"):
+            return False
+        return not self.exr or (
+            record.get("exr_sha256") is not None
+            and record.get("exr_sha256") == _file_sha(self.out / f"{stem}.exr")
+        )
 
 
 def _plan(
@@ -347,9 +311,7 @@ def _plan(
     progress: Any,
 ) -> _Plan:
     """Check the arguments of a sequence run, create ``out_dir`` and remove stray temporaries."""
-    width = check_int("width", width, minimum=1)
-    height = check_int("height", height, minimum=1)
-    spp = check_int("spp", spp, minimum=1)
+    width, height, spp = _check_args(width, height, spp)
     if not isinstance(exr, (bool, np.bool_)):
         raise TypeError(f"exr: expected a bool, got {type(exr).__name__} {exr!r}")
     if progress is not None and not callable(progress):
@@ -370,11 +332,13 @@ def _plan(
     if isinstance(spec, str):
         spec = {"name": spec}
     out.mkdir(parents=True, exist_ok=True)
-    _remove_stray_temporaries(out)
+    for p in out.iterdir():  # the temporaries a SIGKILL left
+        if _TEMP_RE.match(p.name) and p.is_file():
+            p.unlink(missing_ok=True)
     return _Plan(
         scene=scene,
         spec=spec,
-        label=_style_label(spec),
+        label={"instance": repr(spec)} if isinstance(spec, Style) else _jsonable(spec),
         digest=scene_digest(scene),
         base_style=base_style,
         animated_style=animated_style,
@@ -389,40 +353,28 @@ def _plan(
 
 
 class _Shader:
-    """Shades consecutive frames of a plan: the style protocol, one reused RenderContext.
+    """Shades frames of a plan through the style protocol with one reused RenderContext, each
+    from the state the previous ``shade`` left (the style's ``initial_state()`` at first)."""
 
-    ``shade(f)`` renders frame ``f`` from the state the previous ``shade`` left (the style's
-    ``initial_state()`` at first); ``skip()`` marks a gap, after which the next frame computes
-    its own previous still.
-    """
-
-    def __init__(self, plan: _Plan, first: int) -> None:
+    def __init__(self, plan: _Plan) -> None:
         self.plan = plan
         self.ctx: RenderContext | None = None
         self.state = plan.base_style.initial_state()
-        self.prev = plan.scene.at(first - 1) if first > 0 else None
-
-    def skip(self) -> None:
-        self.prev = None
+        self.last: tuple[int, Any] | None = None  # the last frame shaded and its still
 
     def shade(self, f: int) -> Any:
         plan = self.plan
         still = plan.scene.at(f)
-        if self.prev is None and f > 0:
-            self.prev = plan.scene.at(f - 1)
-        frame_style = plan.style_of(f).for_frame(still, self.prev)
+        if self.last is not None and self.last[0] == f - 1:
+            prev = self.last[1]
+        else:  # the previous still comes from the animation, rendered or not
+            prev = plan.scene.at(f - 1) if f > 0 else None
+        frame_style = plan.style_of(f).for_frame(still, prev)
         if self.ctx is None:
             self.ctx = RenderContext(still, frame_style, plan.width, plan.height, plan.spp)
         image, self.state = self.ctx.render_frame(still, frame_style, self.state)
-        self.prev = still
+        self.last = (f, still)
         return image
-
-
-def _png_bytes(image: Any) -> bytes:
-    """The frame's 8-bit sRGB RGBA PNG, encoded in memory (the bytes every run writes)."""
-    import imageio.v3 as iio
-
-    return bytes(iio.imwrite("<bytes>", image.to_srgb8(), extension=".png"))
 
 
 def _write_frame(
@@ -501,61 +453,47 @@ def render_sequence(
     """
     t_start = time.perf_counter()
     plan = _plan(scene, style, width, height, spp, out_dir, frames, exr, progress)
-    todo, out, stateful = plan.todo, plan.out, plan.stateful
-
-    result = SequenceResult(out, list(todo), stateful=stateful)
-    result.paths = [out / f"{FRAME_NAME.format(f)}.png" for f in todo]
+    todo, result = plan.todo, plan.result()
     done_flags = {f: plan.done(f) for f in todo}
-    if all(done_flags.values()):  # nothing to render: no state to rebuild either
-        result.skipped = list(todo)
-        result.seconds = time.perf_counter() - t_start
-        if progress is not None:
-            for i, f in enumerate(todo):
-                progress(i + 1, len(todo), f, "skipped")
-        return result
-    first = todo.start
-    count = 0
-    if stateful:  # from frame 0, or state_frames() before the first frame still to render
+    missing = [f for f in todo if not done_flags[f]]
+    first = stop = todo.start  # shade from first; skip done frames before first or from stop
+    if plan.stateful and missing:  # from frame 0, or state_frames() before the first missing
         back = plan.base_style.state_frames()
-        need = min(f for f in todo if not done_flags[f])
-        first = 0 if back is None else max(0, need - back)
-        for f in range(todo.start, min(first, todo.stop)):  # done, and before the state's reach
-            result.skipped.append(f)
-            count += 1
-            if progress is not None:
-                progress(count, len(todo), f, "skipped")
-    # a stateful style runs up to the last frame still to render; done frames after it are kept
-    stop = max(f for f in todo if not done_flags[f]) + 1 if stateful else todo.stop
-    run = range(first, todo.stop)
-
-    shader = _Shader(plan, first)
-    for f in run:
-        in_range = f in todo
-        done = in_range and done_flags[f]
-        if done and (not stateful or f >= stop):
-            result.skipped.append(f)
-            count += 1
-            if progress is not None:
-                progress(count, len(todo), f, "skipped")
-            shader.skip()
+        first = 0 if back is None else max(0, missing[0] - back)
+        stop = missing[-1] + 1  # done frames after the last missing one are kept, not shaded
+    shader = None
+    for f in range(min(first, todo.start), todo.stop):
+        done = done_flags.get(f, False)
+        if done and (f < first or f >= stop):
+            result._tick(f, "skipped", progress)
             continue
+        shader = shader or _Shader(plan)
         image = shader.shade(f)
-        if not in_range:
-            if progress is not None:
-                progress(count, len(todo), f, "state")
+        if done or f not in todo:  # shaded for the state only (done: its files are this frame)
+            result._tick(f, "skipped" if done else "state", progress)
             continue
-        count += 1
-        if done:  # stateful: shaded for its state; the files on disk are this frame already
-            result.skipped.append(f)
-            if progress is not None:
-                progress(count, len(todo), f, "skipped")
-            continue
-        _write_frame(plan, f, _png_bytes(image), image.rgba if plan.exr else None)
-        result.rendered.append(f)
-        if progress is not None:
-            progress(count, len(todo), f, "rendered")
+        _write_frame(plan, f, image.to_png_bytes(), image.rgba if plan.exr else None)
+        result._tick(f, "rendered", progress)
     result.seconds = time.perf_counter() - t_start
     return result
+
+
+def _video_suffix(path: str | os.PathLike, what: str = "video") -> str:
+    """The suffix of a video file name (``.mp4`` or ``.gif``); for MP4, imageio-ffmpeg must be
+    installed. ValueError naming ``what``, the path and the fix otherwise."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".mp4", ".gif"):
+        raise ValueError(f"{what}: expected a file name ending in .mp4 or .gif, got {str(path)!r}")
+    if suffix == ".mp4":
+        try:
+            import imageio_ffmpeg  # noqa: F401
+        except ImportError:
+            raise ValueError(
+                f"{what}: writing {str(path)!r} (MP4) needs ffmpeg from the imageio-ffmpeg "
+                "package; install the extra with `pip install 'refnpr[video]'`, or write a "
+                ".gif instead"
+            ) from None
+    return suffix
 
 
 def write_video(paths: list[Path] | list[str], path: str | os.PathLike, fps: float) -> Path:
@@ -579,22 +517,11 @@ def write_video(paths: list[Path] | list[str], path: str | os.PathLike, fps: flo
     import imageio.v3 as iio
 
     target = Path(path)
-    suffix = target.suffix.lower()
-    if suffix not in (".mp4", ".gif"):
-        raise ValueError(f"video: expected a file name ending in .mp4 or .gif, got {str(path)!r}")
+    suffix = _video_suffix(path)
     if not paths:
         raise ValueError("video: no frames to encode")
     if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not fps > 0:
         raise ValueError(f"fps: expected a positive number, got {fps!r}")
-    if suffix == ".mp4":
-        try:
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError:
-            raise ValueError(
-                f"video: writing {str(path)!r} (MP4) needs ffmpeg from the imageio-ffmpeg "
-                "package; install the extra with `pip install 'refnpr[video]'`, or write a "
-                ".gif instead"
-            ) from None
     frames = [np.asarray(iio.imread(p))[..., :3] for p in paths]
     shape = frames[0].shape
     for p, fr in zip(paths, frames, strict=True):

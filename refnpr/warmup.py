@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from .render import render
-from .styles._common import check_count
+from .styles._declare import check_number
 
 __all__ = ["WARM_ROWS", "warm"]
 
@@ -46,11 +46,8 @@ def _label(scene: str, style: str | None, spp: int, contours: bool) -> str:
 
 
 def _jobs(rows: Sequence[tuple[str, str | None]]) -> list[tuple[str, str | None, int, bool]]:
-    out = []
-    for scene, style in rows:
-        out.append((scene, style, 1, False))
-        out.append((scene, style, 4, True))
-    return out
+    """Each row at spp 1, then at spp 4 with contours."""
+    return [(scene, style, spp, spp > 1) for scene, style in rows for spp in (1, 4)]
 
 
 def _render_job(scene: str, style: str | None, spp: int, contours: bool) -> float:
@@ -112,7 +109,7 @@ def warm(
         isinstance(r, tuple) and len(r) == 2 for r in rows
     ):
         raise TypeError(f"rows: expected a sequence of (scene, style or None) pairs, got {rows!r}")
-    jobs = check_count("jobs", jobs, lo=1, hi=64)
+    jobs = check_number("jobs", jobs, integer=True, lo=1, hi=64)
     rows = list(rows)
     work = _jobs(rows)
     groups = _groups(rows)

@@ -21,38 +21,23 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-#: Public name -> submodule. Imported on first use, so that ``refnpr coherence --help`` (and
-#: every other ``refnpr`` command, whose parser imports ``refnpr.coherence.cli``) does not pay
-#: for the renderer.
+#: Public name -> submodule. Imported on first use: ``import refnpr.coherence`` does not pay for
+#: the renderer.
 _EXPORTS = {
-    "measure": "driver",
-    "render_frame": "driver",
-    "InkFloor": "floor",
-    "carry_strips": "floor",
-    "ink_floor": "floor",
-    "ink_image": "floor",
-    "INK_THRESHOLD": "metrics",
-    "LUMA": "metrics",
-    "PairMetrics": "metrics",
-    "luminance": "metrics",
-    "pair_metrics": "metrics",
-    "DEPTH_RTOL": "motion",
-    "MOTION_CHANNELS": "motion",
-    "SNAP_PX": "motion",
-    "MotionField": "motion",
-    "bilinear_taps": "motion",
-    "motion_field": "motion",
-    "METRICS": "report",
-    "STROKE_METRICS": "report",
-    "CoherenceReport": "report",
-    "STROKE_CHANNELS": "strokes",
-    "StrokeEnds": "strokes",
-    "StrokePairMetrics": "strokes",
-    "measure_strokes": "strokes",
-    "stroke_ends": "strokes",
-    "stroke_pair_metrics": "strokes",
-    "warp": "resample",
+    name: module
+    for module, names in {
+        "driver": "measure render_frame",
+        "floor": "InkFloor carry_strips ink_floor ink_image",
+        "metrics": "INK_THRESHOLD LUMA PairMetrics luminance pair_metrics",
+        "motion": "DEPTH_RTOL MOTION_CHANNELS SNAP_PX MotionField bilinear_taps motion_field",
+        "report": "METRICS STROKE_METRICS CoherenceReport",
+        "strokes": "STROKE_CHANNELS StrokeEnds StrokePairMetrics measure_strokes stroke_ends "
+        "stroke_pair_metrics",
+        "resample": "warp",
+    }.items()
+    for name in names.split()
 }
+__all__ = sorted(_EXPORTS)
 
 
 def __getattr__(name: str) -> Any:
@@ -66,34 +51,3 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))
-
-
-__all__ = [
-    "DEPTH_RTOL",
-    "INK_THRESHOLD",
-    "LUMA",
-    "METRICS",
-    "MOTION_CHANNELS",
-    "SNAP_PX",
-    "STROKE_CHANNELS",
-    "STROKE_METRICS",
-    "CoherenceReport",
-    "InkFloor",
-    "MotionField",
-    "PairMetrics",
-    "StrokeEnds",
-    "StrokePairMetrics",
-    "bilinear_taps",
-    "carry_strips",
-    "ink_floor",
-    "ink_image",
-    "luminance",
-    "measure",
-    "measure_strokes",
-    "motion_field",
-    "pair_metrics",
-    "render_frame",
-    "stroke_ends",
-    "stroke_pair_metrics",
-    "warp",
-]

@@ -8,40 +8,23 @@ from typing import Any
 import numpy as np
 
 from ..raster import rasterize
-from ..render import DEFAULT_STYLE, composite_resolve
+from ..render import DEFAULT_STYLE, RenderContext, _check_args
 from ..scenes._params import check_int
-from ..styles import ShadeContext, Style, style_from_spec
+from ..styles import Style, style_from_spec
 from .metrics import pair_metrics
 from .motion import DEPTH_RTOL, MOTION_CHANNELS, motion_field
 from .report import CoherenceReport
-from .strokes import frame_stroke_ends_from, stroke_pair_metrics, stroke_style
+from .strokes import _scenes, frame_stroke_ends_from, stroke_pair_metrics, stroke_style
 
 __all__ = ["measure", "render_frame"]
-
-
-def _scenes(scenes: Any) -> list[Any]:
-    if isinstance(scenes, (str, bytes)) or not isinstance(scenes, Sequence):
-        raise TypeError(
-            f"scenes: expected a sequence of still Scenes (e.g. [anim.at(f) for f in "
-            f"range(n)]), got {type(scenes).__name__}"
-        )
-    scenes = list(scenes)
-    if len(scenes) < 2:
-        raise ValueError(f"scenes: need at least two frames to measure a pair, got {len(scenes)}")
-    for i, s in enumerate(scenes):
-        if not hasattr(s, "world_meshes") or not hasattr(s, "camera"):
-            raise TypeError(f"scenes[{i}]: expected a refnpr.scenes.Scene, got {type(s).__name__}")
-    return scenes
 
 
 def render_frame(
     style: Style, scene: Any, width: int, height: int, spp: int, state: Any
 ) -> tuple[np.ndarray, Any]:
-    """One frame of a sequence through the style protocol (``refnpr.styles.base.Style``).
-
-    Rasterizes exactly ``style.requires(scene)`` with ``style.raster_options(scene)``, shades
-    with ``style.shade_frame`` from ``state`` and composites and resolves as
-    :func:`refnpr.render.render` does (bit-identical to it for a stateless style).
+    """One frame of a sequence through the style protocol (``style.shade_frame`` from
+    ``state``): :meth:`refnpr.render.RenderContext.render_frame`, bit-identical to
+    :func:`refnpr.render.render` for a stateless style.
 
     Returns
     -------
@@ -50,15 +33,9 @@ def render_frame(
     state
         The style's state for the next frame.
     """
-    channels = sorted(style.requires(scene))
-    gb = rasterize(scene, None, width, height, channels, spp, **style.raster_options(scene))
-    rgba, state = style.shade_frame(ShadeContext(gb, scene), state)
-    rgba = np.asarray(rgba, dtype=np.float32)
-    if rgba.shape != gb.sample_shape + (4,):
-        raise ValueError(
-            f"style {style.name!r} returned shape {rgba.shape}; expected {gb.sample_shape + (4,)}"
-        )
-    return composite_resolve(rgba, gb.n, scene.background, style_name=style.name), state
+    ctx = RenderContext(scene, style, width, height, spp)
+    image, state = ctx.render_frame(scene, style, state, copy=True)
+    return image.rgba, state
 
 
 def measure(
@@ -77,11 +54,10 @@ def measure(
 ) -> CoherenceReport:
     """Render ``scenes`` in order with ``style`` and measure every consecutive pair.
 
-    Frame t is shaded through the sequence protocol: ``style.for_frame(scenes[t],
-    scenes[t-1])`` (None for t = 0), then ``shade_frame`` with the state the previous frame
-    returned (``style.initial_state()`` for the first), so stateful styles see their frames in
-    order. Each frame is rendered at ``spp``; its exact motion field comes from a separate
-    pixel-resolution G-buffer (spp 1, float64, ``MOTION_CHANNELS``).
+    Frame t is shaded through the sequence protocol (``for_frame(scenes[t], scenes[t-1])``, then
+    ``shade_frame`` from the previous frame's state), so stateful styles see their frames in
+    order; its exact motion field comes from a separate G-buffer (spp 1, float64,
+    ``MOTION_CHANNELS``).
 
     Parameters
     ----------
@@ -104,18 +80,15 @@ def measure(
         Keep the rendered frames in ``report.images``.
     strokes : bool
         Also measure the strokes by stroke id (``report.strokes``; a stroke style such as
-        TAMISS, or one wrapping it): each frame's strokes come from a run of the style's
-        pipeline on a pixel-resolution G-buffer (``strokes.frame_stroke_ends_from``), in frame
-        order through the style's own state across frames (``run_frame``: aggregate history,
-        smoothed fits, hash tables), as the sequence's render does.
+        TAMISS, or one wrapping it), from runs of its pipeline on a pixel-resolution G-buffer
+        in frame order through the style's own state (``run_frame``), as a render does.
     progress : callable(done, total), optional
         Called after each frame.
     previous : Scene, optional
-        The still of the frame before ``scenes[0]`` (``anim.at(a - 1)`` when measuring frames
-        ``a, a + 1, ...`` with a > 0): given to ``style.for_frame`` for the first frame, so
-        that a style that reads the previous frame (X-Toon's optical-flow detail) renders it
-        as in the whole sequence. It is not rendered or measured. None (default): the first
-        frame has no previous frame, as frame 0 of a sequence.
+        The still of the frame before ``scenes[0]`` (``anim.at(a - 1)``), given to
+        ``style.for_frame`` for the first frame so that a style reading the previous frame
+        (X-Toon's optical flow) renders it as in the whole sequence; not rendered or measured.
+        None: the first frame has no previous frame, as frame 0 of a sequence.
 
     Returns
     -------
@@ -129,9 +102,7 @@ def measure(
             f"previous: expected the still Scene of the frame before scenes[0] (anim.at(a - 1)) "
             f"or None, got {type(previous).__name__}"
         )
-    width = check_int("width", width, minimum=1)
-    height = check_int("height", height, minimum=1)
-    spp = check_int("spp", spp, minimum=1)
+    width, height, spp = _check_args(width, height, spp)
     if frames is None:
         frames = list(range(len(scenes)))
     else:
@@ -154,13 +125,15 @@ def measure(
         )
     rows, images, stroke_rows = [], [], []
     prev_scene = prev_rgba = prev_gb = prev_ends = None
-    stroke_state = None
+    stroke_state = ctx = None
     for t, scene in enumerate(scenes):
         if own and scene.style != spec:
             spec = scene.style
             base = style_from_spec(spec or DEFAULT_STYLE)
         frame_style = base.for_frame(scene, previous if t == 0 else prev_scene)
-        rgba, state = render_frame(frame_style, scene, width, height, spp, state)
+        ctx = ctx or RenderContext(scene, frame_style, width, height, spp)
+        image, state = ctx.render_frame(scene, frame_style, state, copy=True)
+        rgba = image.rgba
         gb = rasterize(scene, None, width, height, MOTION_CHANNELS, 1, dtype=np.float64)
         if prev_scene is not None:
             motion = motion_field(gb, prev_gb, scene, prev_scene, depth_rtol=depth_rtol)
@@ -173,11 +146,8 @@ def measure(
                 stroker, scene, width, height, stroke_state
             )
             if prev_ends is not None:
-                stroke_rows.append(
-                    stroke_pair_metrics(
-                        ends, prev_ends[0], prev_ends[1], scene, prev_scene, frame=frames[t]
-                    )  # fmt: skip
-                )
+                row = stroke_pair_metrics(ends, *prev_ends, scene, prev_scene, frame=frames[t])
+                stroke_rows.append(row)
             prev_ends = (ends, sgb)
         if keep_images:
             images.append(rgba)

@@ -1,23 +1,10 @@
 """The coherence floor of a stroke image: its strokes carried exactly by the surface motion.
 
-E / D of :func:`~refnpr.coherence.pair_metrics` is not 0 for a perfectly coherent sequence: the
-bilinear warp resamples frame t-1, and how much that costs depends on the image (thin dark strokes
-of a pixel lose more to resampling than soft texture-space hatching does). So a stroke style's
-E / D is judged against the E / D of *the same strokes moving exactly with the surface*:
-
-* :func:`carry_strips` moves frame t-1's extruded strokes (TAMISS ``Strips``) to frame t: every
-  vertex through the surface point under it in frame t-1 (the camera ray cut with the triangle
-  plane of its pixel, as :func:`~refnpr.coherence.stroke_pair_metrics` finds the surface under a
-  stroke end), its object's transforms and frame t's camera. Vertices off the surface (a stroke
-  run on past a silhouette) move with the mean motion of their strip's vertices on it; a strip
-  with none stays where it was.
-* :func:`ink_floor` rasterizes the carried strips as frame t-1 was drawn (same coverage
-  sub-samples, brush and opacity) and measures both pairs on ink alone (luminance 1 - ink
-  coverage, box-resolved to pixels, so bases, paper and contours do not enter): ``actual``, frame
-  t's own ink against t-1's, and ``floor``, the carried ink against t-1's. ``floor.ratio`` is the
-  E / D that no remedy of stroke jitter can go below on this image; ``actual.ratio -
-  floor.ratio`` is the part due to the strokes moving other than the surface (refits, popping,
-  ends).
+E / D is not 0 for a perfectly coherent sequence (the bilinear warp resamples frame t-1, and thin
+strokes lose more to it than soft hatching), so a stroke style's E / D is judged against the E / D
+of the same strokes moving exactly with the surface (docs/coherence.md, "The floor of a stroke
+image"): :func:`carry_strips` moves frame t-1's extruded strokes to frame t, :func:`ink_floor`
+rasterizes them as frame t-1 was drawn and measures both pairs on ink alone.
 """
 
 from __future__ import annotations

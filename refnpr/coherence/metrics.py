@@ -1,30 +1,14 @@
 """Per frame pair: warping error, plain frame difference, their ratio, flip fraction.
 
-All numbers are computed on the luminance of the rendered linear RGB (Rec. 709 / sRGB primaries,
-``Y = 0.2126 R + 0.7152 G + 0.0722 B``; images are already composited over the scene
-background, so alpha is not used). One channel for every number keeps them comparable, and the
-ink state of the flip fraction needs a scalar anyway. Values are in [0, 1] for images in [0, 1].
-
-With M the valid mask of :func:`refnpr.coherence.motion_field` and ``Y_hat = warp(Y_{t-1})``:
-
-* ``warp_error`` E = sum(M |Y_t - Y_hat|) / sum(M): the temporal warping error E_warp of Lai
-  et al. 2018 ("Learning Blind Video Temporal Consistency", ECCV), a masked mean over pixels of
-  the difference between a frame and its warped predecessor, here in the L1 form on
-  luminance, with the exact motion field in place of estimated optical flow and the exact
-  visibility mask in place of their flow-based occlusion mask (so the values are not comparable
-  with their tables, which use estimated flow on RGB);
-* ``plain_diff`` D = sum(M |Y_t - Y_{t-1}|) / sum(M): the same-pixel difference on the same M;
-* ``ratio`` = E / D. D = 0 means the frame is unchanged on M, so there is no motion against
-  which to judge E: the ratio is undefined and reported as NaN (JSON null), never 0 or inf;
-* ``flip`` = the fraction of M whose ink state differs between Y_t and Y_hat, the ink state
-  being ``Y < 0.5`` (ink) or ``Y >= 0.5`` (paper); ``flip_plain`` the same against Y_{t-1} at
-  the same pixel;
-* ``motion_px`` = the mean length over M of the exact motion (pixels): how far the surface
-  moved, to judge the others by (at a small fraction of a pixel per frame D is small and E / D
-  says little);
-* ``n_valid`` = sum(M), ``n_covered`` = the pixels covered at frame t.
-
-E, D, flip, flip_plain and motion_px are NaN when M is empty.
+On the Rec. 709 luminance Y of the rendered linear RGB (one channel for every number; the flip's
+ink state needs a scalar), with M the valid mask of :func:`~refnpr.coherence.motion_field` and
+``Y_hat = warp(Y_{t-1})`` (docs/coherence.md, "The numbers of a pair"): ``warp_error`` E =
+sum(M |Y_t - Y_hat|) / sum(M), the E_warp of Lai et al. 2018 in L1 form with the exact motion
+field and visibility mask in place of estimated flow and occlusion; ``plain_diff`` D the same
+against Y_{t-1} at the same pixel; ``ratio`` E / D, NaN when D = 0 (no motion to judge E by);
+``flip`` / ``flip_plain`` the fraction of M whose ink state (Y < 0.5) differs from Y_hat's /
+Y_{t-1}'s; ``motion_px`` the mean exact motion in pixels. All but the counts are NaN when M is
+empty.
 """
 
 from __future__ import annotations
@@ -54,8 +38,19 @@ def luminance(rgb: np.ndarray) -> np.ndarray:
     return lighting.luminance(a)
 
 
+class _Row:
+    """A dataclass of numbers with a JSON-ready ``as_dict``."""
+
+    def as_dict(self) -> dict:
+        """JSON-ready: NaN becomes None."""
+        return {
+            k: (None if isinstance(v, float) and math.isnan(v) else v)
+            for k, v in asdict(self).items()
+        }
+
+
 @dataclass(frozen=True)
-class PairMetrics:
+class PairMetrics(_Row):
     """The numbers of one frame pair (t-1, t); see the module docstring.
 
     Attributes
@@ -76,13 +71,6 @@ class PairMetrics:
     motion_px: float
     n_valid: int
     n_covered: int
-
-    def as_dict(self) -> dict:
-        """JSON-ready: NaN becomes None."""
-        return {
-            k: (None if isinstance(v, float) and math.isnan(v) else v)
-            for k, v in asdict(self).items()
-        }
 
 
 def pair_metrics(

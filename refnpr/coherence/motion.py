@@ -1,44 +1,14 @@
 """The exact motion field of a frame pair: G-buffer world positions re-projected into frame t-1.
 
-DESIGN.md ("Frames, state and speed"): temporal coherence is measured with the exact motion
-field, never with estimated optical flow. For every pixel covered at frame t the G-buffer holds
-the world position of the surface point it shows and the object (``mesh_id``) it belongs to;
-the point is carried back to object space through the inverse of the object's transform at t,
-out to world space through the object's transform at t-1, and projected through the camera of
-frame t-1.
-
-Conventions (the rasterizer's, DESIGN.md "The rasterizer contract")
---------------------------------------------------------------------
-* Pixel coordinates are continuous, x to the right, y downward, origin at the top-left corner
-  of the image: pixel ``(i, j)`` (column i, row j) covers ``[i, i + 1) x [j, j + 1)`` and has
-  its centre at ``(i + 0.5, j + 0.5)``. A point of NDC ``(x_ndc, y_ndc)`` lies at
-  ``x = (x_ndc + 1) W / 2``, ``y = (1 - y_ndc) H / 2``.
-* ``w`` is the clip-space w of the previous camera, which for the OpenGL perspective matrix is
-  the eye-space distance along the view axis: the quantity the G-buffer's ``depth`` holds.
-
-The valid mask M
-----------------
-A pixel is valid when all of these hold:
-
-1. ``covered``: ``mesh_id >= 0`` at frame t;
-2. ``in_front``: the point is inside the previous camera's depth range, ``near <= w <= far``;
-3. ``inside``: its re-projection lands inside frame t-1, ``0 <= x < W`` and ``0 <= y < H``;
-4. ``visible``: a depth test against frame t-1's own G-buffer on the bilinear taps. The warp
-   (:mod:`refnpr.coherence.resample`) reads the 2 x 2 pixel centres around the landing point; every
-   tap with a non-zero bilinear weight must show the same object (``mesh_id``) and a depth
-   within ``depth_rtol`` of the depth the point's own surface has *at that tap*. That expected
-   depth comes from the triangle plane through the point (tangents ``dposition_dx`` and
-   ``dposition_dy`` of frame t, carried to frame t-1 by the same object transforms), cut by the
-   previous camera's ray through the tap's centre, so slanted and grazing surfaces pass while
-   an occluder in front of the point (or a surface behind it that was visible because the point
-   was hidden, i.e. disocclusion) fails. Requiring *all* weighted taps makes the warped value a
-   blend of the same surface only: the pixels whose footprint straddles a silhouette in frame
-   t-1 are left out, so M is at most one pixel narrower than the exactly visible region.
-
-Re-projected coordinates within ``SNAP_PX`` of a pixel centre are snapped to it: float rounding
-of the re-projection (about 1e-12 px with a float64 G-buffer, 1e-5 px with float32) is far below
-any meaningful motion, and snapping makes a still frame warp onto itself exactly (one tap,
-weight 1), so that every number is exactly 0 for a static scene.
+Each pixel covered at frame t shows a world point of object ``mesh_id``; the point goes back
+through the object's transform at t, out through its transform at t-1 and through frame t-1's
+camera (the rasterizer's pixel convention: pixel (i, j) covers [i, i + 1) x [j, j + 1), its
+centre at (i + 0.5, j + 0.5); ``w`` is clip w, the eye-space view-axis distance ``depth`` holds).
+The valid mask M is ``covered & in_front & inside & visible``, where ``visible`` is a depth test
+of every weighted bilinear tap against the point's own triangle plane, so a warped value blends
+one surface only (docs/coherence.md, "The motion field"). Coordinates within ``SNAP_PX`` of a
+pixel centre are snapped onto it, so a still frame warps onto itself exactly and every number is
+exactly 0 for a static scene.
 """
 
 from __future__ import annotations
@@ -64,14 +34,10 @@ __all__ = [
 #: ``mesh_id``). The driver rasterizes exactly these, at spp 1, in float64.
 MOTION_CHANNELS = ("depth", "dposition_dx", "dposition_dy", "mesh_id", "position")
 
-#: Default relative depth tolerance of the depth test. A tap passes when
-#: ``|depth_prev - w_plane| <= DEPTH_RTOL * w_plane``. Within one triangle the plane is exact
-#: (float64 rounding, ~1e-12); a tap up to one pixel away may lie on a neighbouring triangle of
-#: a curved mesh, which departs from the plane by about (pixel footprint) * sin(dihedral
-#: angle), i.e. a relative 2 tan(fov/2) / H * sin(phi) -- 1.4e-3 for fov 45 deg, H = 100 and a
-#: 10 deg crease. 1e-2 accepts that with margin while any occluder more than 1 % of the depth in
-#: front (5 cm at 5 m) is caught; creases sharper than that lose their one-pixel band, which is
-#: the conservative side.
+#: Default relative depth tolerance: a tap passes when ``|depth_prev - w_plane| <= DEPTH_RTOL *
+#: w_plane``. A tap on a neighbouring triangle of a curved mesh departs from the plane by about
+#: 2 tan(fov/2) / H * sin(crease) relative (1.4e-3 at fov 45 deg, H = 100, a 10 deg crease);
+#: 1e-2 covers that and still catches an occluder 1 % of the depth in front (5 cm at 5 m).
 DEPTH_RTOL = 1e-2
 #: Re-projected coordinates this close (pixels) to a pixel centre are snapped onto it.
 SNAP_PX = 1e-6
@@ -130,6 +96,7 @@ class MotionField:
 
 
 def _check_gbuffer(name: str, gb: Any, needed: Sequence[str]) -> None:
+    """A GBuffer at spp 1 with the ``needed`` channels, or an error naming ``name``."""
     for attr in ("channels", "width", "height", "spp", "camera", "view_projection"):
         if not hasattr(gb, attr):
             raise TypeError(
@@ -147,6 +114,18 @@ def _check_gbuffer(name: str, gb: Any, needed: Sequence[str]) -> None:
             f"{name}: lacks channels {missing} (has {sorted(gb.channels)}); rasterize it with "
             f"channels={MOTION_CHANNELS}"
         )
+
+
+def _inside(xy: np.ndarray, width: int, height: int) -> np.ndarray:
+    """(K,) bool: which pixel coordinates ``xy`` (K, 2) are finite and inside the image."""
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(xy).all(1) & (xy >= 0).all(1) & (xy < (width, height)).all(1)
+
+
+def _eye_rays(x: np.ndarray, y: np.ndarray, proj: np.ndarray, width: int, height: int):
+    """(K, 3) eye-space directions through pixel coordinates (x, y), scaled to z = -1."""
+    ndc_x, ndc_y = 2.0 * x / width - 1.0, 1.0 - 2.0 * y / height
+    return np.stack([ndc_x / proj[0, 0], ndc_y / proj[1, 1], -np.ones(np.shape(x))], axis=-1)
 
 
 def _transforms(name: str, scene: Any) -> np.ndarray:
@@ -215,14 +194,7 @@ def bilinear_taps(xy: np.ndarray, width: int, height: int) -> tuple[np.ndarray, 
     y0 = y0.astype(np.int64)
     cols = (np.clip(x0, 0, width - 1), np.clip(x0 + 1, 0, width - 1))
     rows = (np.clip(y0, 0, height - 1), np.clip(y0 + 1, 0, height - 1))
-    taps = np.stack(
-        [
-            rows[0] * width + cols[0],
-            rows[0] * width + cols[1],
-            rows[1] * width + cols[0],
-            rows[1] * width + cols[1],
-        ]
-    )
+    taps = np.stack([r * width + c for r in rows for c in cols])  # TL, TR, BL, BR
     weights = np.stack([(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay])
     return taps, weights
 
@@ -299,13 +271,7 @@ def motion_field(
     snap = np.abs(xy_k - nearest) < SNAP_PX
     xy_k = np.where(snap, nearest, xy_k)
     in_front_k = (w >= cam.near) & (w <= cam.far)
-    inside_k = (
-        np.isfinite(xy_k).all(axis=1)
-        & (xy_k[:, 0] >= 0)
-        & (xy_k[:, 0] < width)
-        & (xy_k[:, 1] >= 0)
-        & (xy_k[:, 1] < height)
-    )
+    inside_k = _inside(xy_k, width, height)
     reach = inside_k & in_front_k
     taps_k, weights_k = bilinear_taps(np.where(reach[:, None], xy_k, 0.5), width, height)
     # depth the point's own surface has at each tap: the triangle plane (tangents of frame t
@@ -322,14 +288,7 @@ def motion_field(
     for k in range(4):
         t = taps_k[k]
         col, row = t % width, t // width
-        ray = np.stack(  # eye-space direction through the tap centre, scaled to z = -1
-            [
-                (2.0 * (col + 0.5) / width - 1.0) / proj[0, 0],
-                (1.0 - 2.0 * (row + 0.5) / height) / proj[1, 1],
-                -np.ones(t.shape),
-            ],
-            axis=-1,
-        )
+        ray = _eye_rays(col + 0.5, row + 0.5, proj, width, height)  # through the tap centre
         with np.errstate(divide="ignore", invalid="ignore"):
             w_plane = np.where(flat, w, n_dot_q / np.einsum("ki,ki->k", normal, ray))
             ok = (mesh_prev[t] == ids) & (np.abs(depth_prev[t] - w_plane) <= depth_rtol * w_plane)

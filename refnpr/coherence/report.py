@@ -20,19 +20,9 @@ __all__ = ["METRICS", "STROKE_METRICS", "CoherenceReport"]
 #: The per-pair numbers the summary covers (see :mod:`refnpr.coherence.metrics`).
 METRICS = ("warp_error", "plain_diff", "ratio", "flip", "flip_plain", "motion_px", "n_valid")
 #: The per-pair stroke numbers (see :mod:`refnpr.coherence.strokes`).
-STROKE_METRICS = (
-    "jitter_mean",
-    "jitter_p95",
-    "jitter_max",
-    "appeared",
-    "vanished",
-    "n_strokes",
-    "n_ends",
+STROKE_METRICS = tuple(
+    "jitter_mean jitter_p95 jitter_max appeared vanished n_strokes n_ends".split()
 )
-
-
-def _finite(values: list[float]) -> list[float]:
-    return [float(v) for v in values if not math.isnan(float(v))]
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,7 +65,7 @@ class CoherenceReport:
         stroke metrics are included when the report has strokes."""
         out: dict[str, dict[str, float | int | None]] = {}
         for name in METRICS + (STROKE_METRICS if self.strokes else ()):
-            vals = _finite(list(self.column(name)))
+            vals = [v for v in self.column(name).tolist() if not math.isnan(v)]
             out[name] = {
                 "median": float(np.median(vals)) if vals else None,
                 "max": float(np.max(vals)) if vals else None,
@@ -100,11 +90,10 @@ class CoherenceReport:
 
     def save(self, path: str | os.PathLike) -> Path:
         """Write :meth:`to_json` to ``path`` (atomic); returns the path."""
-        path = Path(path)
         text = self.to_json()
         with atomic_file(path, suffix=".json") as tmp:
             tmp.write_text(text + "\n", encoding="utf-8")
-        return path
+        return Path(path)
 
     def plot(self, path: str | os.PathLike) -> Path:
         """Plot the numbers over frames into a PNG (matplotlib, Agg backend).

@@ -12,12 +12,9 @@ __all__ = ["warp"]
 def warp(prev_image: np.ndarray, motion: MotionField) -> np.ndarray:
     """Sample frame t-1 where each pixel of frame t was: ``warp(I_{t-1})`` of Lai et al. 2018.
 
-    Bilinear interpolation between the four pixel centres around the re-projected point
-    (``motion.taps`` and ``motion.weights``; pixel (i, j) has its centre at (i + 0.5, j + 0.5)).
-    Edge handling: a point landing in the outer half-pixel band of the image (between the edge
-    and the outermost pixel centres) reads the edge pixel for its missing taps (clamp to edge);
-    points outside the image are not in M. The result is only defined on ``motion.valid`` and is
-    0 elsewhere.
+    Bilinear between the four pixel centres around the re-projected point (``motion.taps``,
+    ``motion.weights``), clamped to the edge pixel in the outer half-pixel band; defined on
+    ``motion.valid``, 0 elsewhere.
 
     Parameters
     ----------

@@ -1,36 +1,19 @@
 """Stroke coherence by stroke id (TAMISS): endpoint jitter after removing the true motion,
-strokes appearing and vanishing.
+strokes appearing and vanishing (docs/coherence.md, "Strokes by id").
 
-Works on the public outputs of the TAMISS pipeline (:class:`refnpr.styles.tamiss.PipelineResult`:
-``stroke_ids``, ``fit``, ``segments``, ``n_segments``), reduced to plain arrays by
-:func:`stroke_ends`, so any stroke renderer that can say where each stroke's drawn ends are can
-be measured the same way.
-
-True motion of a drawn end
---------------------------
-An end drawn at pixel coordinates e (continuous, pixel centre at i + 0.5) in frame t-1 sits on
-the surface shown there. The surface point under it is found exactly on the triangle plane of
-the nearest pixel of frame t-1's G-buffer (``position`` and the tangents ``dposition_dx``,
-``dposition_dy``): the previous camera's ray through e cut with that plane. The point is carried
-to frame t by its object's transforms (``T_i(t) T_i(t-1)^-1``) and projected through frame t's
-camera: P_t. The true motion is ``P_t - e``, and the end's jitter is
-
-    | (e_t - e_{t-1}) - (P_t - e_{t-1}) | = | e_t - P_t |     (pixels)
-
-for the same end (start with start, end with end) of a stroke drawn in both frames. An end is
-not measured when its 2 x 2 bilinear neighbourhood in frame t-1 is not all one object (it lies
-on a silhouette or off the surface), or its surface point leaves frame t's depth range.
-
-This differs from the ``jitter`` section of ``benchmarks/bench_tamiss.py``, which follows the
-stroke's *texture* point at the previous t_e (and so also sees the fit's own error in t): here
-the reference is the surface under the drawn end, which is what a viewer sees the end slide on.
+Works on the public outputs of the TAMISS pipeline (``PipelineResult``), reduced to plain arrays
+by :func:`stroke_ends`, so any stroke renderer that can say where its strokes' drawn ends are can
+be measured the same way. The jitter of an end drawn at e in frame t-1 and at e_t in frame t is
+``|e_t - P_t|``, with P_t the surface point under e at t-1 (the previous camera's ray through e
+cut with the triangle plane of its pixel) carried by its object's transforms and projected
+through frame t's camera; an end whose 2 x 2 neighbourhood at t-1 is not all one object is not
+measured. The reference is the surface the end is drawn on, what a viewer sees it slide on.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -40,7 +23,8 @@ from refnpr.raster.projection import project_points
 from ..raster import rasterize
 from ..styles import ShadeContext, style_from_spec
 from ..styles.tamiss.strokes import centreline
-from .motion import _check_gbuffer, _relative_transforms
+from .metrics import _Row
+from .motion import _check_gbuffer, _eye_rays, _inside, _relative_transforms
 
 __all__ = [
     "STROKE_CHANNELS",
@@ -55,6 +39,22 @@ __all__ = [
 
 #: G-buffer channels :func:`stroke_pair_metrics` reads from the previous frame.
 STROKE_CHANNELS = ("dposition_dx", "dposition_dy", "mesh_id", "position")
+
+
+def _scenes(scenes: Any) -> list[Any]:
+    """``scenes`` checked: a sequence of at least two still Scenes."""
+    if isinstance(scenes, (str, bytes)) or not isinstance(scenes, Sequence):
+        raise TypeError(
+            f"scenes: expected a sequence of still Scenes (e.g. [anim.at(f) for f in "
+            f"range(n)]), got {type(scenes).__name__}"
+        )
+    scenes = list(scenes)
+    if len(scenes) < 2:
+        raise ValueError(f"scenes: need at least two frames to measure a pair, got {len(scenes)}")
+    for i, s in enumerate(scenes):
+        if not hasattr(s, "world_meshes") or not hasattr(s, "camera"):
+            raise TypeError(f"scenes[{i}]: expected a refnpr.scenes.Scene, got {type(s).__name__}")
+    return scenes
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,7 +118,7 @@ def stroke_ends(result: Any) -> StrokeEnds:
 
 
 @dataclass(frozen=True)
-class StrokePairMetrics:
+class StrokePairMetrics(_Row):
     """Stroke numbers of one frame pair (t-1, t).
 
     Attributes
@@ -143,22 +143,13 @@ class StrokePairMetrics:
     jitter_p95: float
     jitter_max: float
 
-    def as_dict(self) -> dict:
-        """JSON-ready: NaN becomes None."""
-        return {
-            k: (None if isinstance(v, float) and math.isnan(v) else v)
-            for k, v in asdict(self).items()
-        }
-
 
 def _surface_points(prev_gb: Any, xy: np.ndarray):
     """World points under pixel coordinates ``xy`` (K, 2) in frame t-1, their object ids, and
     which could be measured (a one-object 2 x 2 neighbourhood inside the frame)."""
     width, height = prev_gb.width, prev_gb.height
     mesh = np.asarray(prev_gb["mesh_id"])
-    k = xy.shape[0]
-    ok = np.isfinite(xy).all(1) & (xy[:, 0] >= 0) & (xy[:, 0] < width)
-    ok &= (xy[:, 1] >= 0) & (xy[:, 1] < height)
+    ok = _inside(xy, width, height)
     xs = np.where(ok, xy[:, 0], 0.5)
     ys = np.where(ok, xy[:, 1], 0.5)
     col = np.clip(np.floor(xs).astype(np.int64), 0, width - 1)
@@ -178,10 +169,7 @@ def _surface_points(prev_gb: Any, xy: np.ndarray):
     cam = prev_gb.camera
     view = cam.view_matrix()
     proj = cam.projection_matrix(width, height)
-    d_eye = np.stack(
-        [(2 * xs / width - 1) / proj[0, 0], (1 - 2 * ys / height) / proj[1, 1], -np.ones(k)], -1
-    )
-    d = d_eye @ view[:3, :3]  # eye -> world direction (rows of the rotation)
+    d = _eye_rays(xs, ys, proj, width, height) @ view[:3, :3]  # eye -> world (rotation rows)
     eye = np.asarray(cam.eye, np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
         lam = np.einsum("ki,ki->k", n, p0 - eye) / np.einsum("ki,ki->k", n, d)
@@ -344,9 +332,7 @@ def measure_strokes(
             f"style: expected a stroke style (TAMISS, with run(ctx) -> PipelineResult, or a "
             f"style wrapping one), got {base.name!r}"
         )
-    scenes = list(scenes)
-    if len(scenes) < 2:
-        raise ValueError(f"scenes: need at least two frames to measure a pair, got {len(scenes)}")
+    scenes = _scenes(scenes)
     frames = list(range(len(scenes))) if frames is None else list(frames)
     rows, prev = [], None
     state = strokes.initial_state() if run_kwargs is None else None

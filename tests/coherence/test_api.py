@@ -28,14 +28,13 @@ def test_cli_module_does_not_import_the_renderer():
     assert out.stdout.strip() == "False"
 
 
-def test_depth_rtol_default_matches_the_cli_help():
-    import argparse
+def test_depth_rtol_default_matches_the_cli_help(capsys):
+    from refnpr.cli import main
 
-    from refnpr.coherence.cli import add_parser
-
-    p = argparse.ArgumentParser()
-    add_parser(p.add_subparsers())
-    assert coherence.DEPTH_RTOL == 0.01  # the --depth-rtol help says "default 0.01"
+    with pytest.raises(SystemExit):
+        main(["coherence", "--help"])
+    assert "default 0.01, DEPTH_RTOL" in " ".join(capsys.readouterr().out.split())
+    assert coherence.DEPTH_RTOL == 0.01
 
 
 def test_function_names_are_not_shadowed_by_submodules():

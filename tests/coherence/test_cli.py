@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 
 import pytest
 
-from refnpr.coherence.cli import add_parser, parse_frames, run
+from refnpr.cli import build_parser
+from refnpr.coherence.cli import parse_frames, run
 
 SCENE = """
 name = "coherence_cli"
@@ -51,9 +51,7 @@ mesh = "icosphere"
 
 
 def parse(argv):
-    p = argparse.ArgumentParser(prog="refnpr")
-    add_parser(p.add_subparsers(dest="command", required=True))
-    return p.parse_args(["coherence", *argv])
+    return build_parser().parse_args(["coherence", *argv])
 
 
 @pytest.fixture
@@ -69,8 +67,7 @@ def test_cli_writes_json_and_plot(scene_file, tmp_path, capsys):
         [str(scene_file), "--size", "48x36", "--frames", "1:4", "--json", str(out_json),
          "--plot", str(out_png)]
     )  # fmt: skip
-    assert args.func is run
-    assert run(args) == 0
+    assert args.func(args) == 0
     data = json.loads(out_json.read_text())
     assert [p["frame"] for p in data["pairs"]] == [2, 3]
     assert data["meta"]["style"] == "toon" and data["meta"]["size"] == [48, 36]
