@@ -111,18 +111,23 @@ class Tables(NamedTuple):
     values: ObjectValues
 
 
-@njit
-def screen_coords(engraving, direction, uv, dx, dy):
-    """The screen's texture coordinates of the scaled ``uv`` and their screen derivatives ``dx``,
-    ``dy``: themselves, or along the engraving direction ``(t, 1/2)``, ``(dt, 0)`` (sec. 4.1)."""
-    if not engraving:
-        return uv, dx, dy
-    d0, d1 = direction
-    return (
-        (uv[0] * d0 + uv[1] * d1, 0.5),
-        (dx[0] * d0 + dx[1] * d1, 0.0),
-        (dy[0] * d0 + dy[1] * d1, 0.0),
-    )
+@njit(inline="always")
+def screen_at(ov, lod_offset, uv, dx, dy, rows, cols):
+    """Where the screen is read for a sample at ``uv`` with derivatives ``dx``, ``dy``: the
+    screen coordinates of the scaled uv (themselves, or along the engraving direction ``(t,
+    1/2)``, sec. 4.1), their derivatives, and the footprint's ``lod`` (plus ``lod_offset``),
+    probe count and axis (:func:`refnpr.device.sampling.footprint`)."""
+    s0, s1 = ov.scale
+    coords = (uv[0] * s0, uv[1] * s1)
+    cdx = (dx[0] * s0, dx[1] * s1)
+    cdy = (dy[0] * s0, dy[1] * s1)
+    if ov.engraving:
+        d0, d1 = ov.direction
+        coords = (coords[0] * d0 + coords[1] * d1, 0.5)
+        cdx = (cdx[0] * d0 + cdx[1] * d1, 0.0)
+        cdy = (cdy[0] * d0 + cdy[1] * d1, 0.0)
+    lod, n, axis = footprint(cdx, cdy, rows, cols, ov.anisotropy)
+    return coords, cdx, cdy, lod + lod_offset, n, axis
 
 
 @njit
@@ -292,7 +297,6 @@ def shade_object_for(show, bump, fwidth, per_level):
         m_d = _row3(materials.diffuse, obj)
         m_s = _row3(materials.specular, obj)
         shininess = materials.shininess[obj]
-        scale = ov.scale
         n_levels = pyr[1].shape[0]
         rows = np.float64(pyr[2][0, 0])
         cols = np.float64(pyr[2][0, 1])
@@ -349,16 +353,9 @@ def shade_object_for(show, bump, fwidth, per_level):
                         t, bt, valid = _tangent_frame(nrm, dpx, _vec3(dp_dy, y, x), dx, dy)
                         if not valid:
                             continue
-                        u, v = _vec2(uv, y, x)
-                        coords, cdx, cdy = screen_coords(
-                            ov.engraving,
-                            ov.direction,
-                            (u * scale[0], v * scale[1]),
-                            (dx[0] * scale[0], dx[1] * scale[1]),
-                            (dy[0] * scale[0], dy[1] * scale[1]),
+                        coords, _, _, lod, n, axis = screen_at(
+                            ov, style.lod_offset, _vec2(uv, y, x), dx, dy, rows, cols
                         )
-                        lod, n, axis = footprint(cdx, cdy, rows, cols, ov.anisotropy)
-                        lod = lod + style.lod_offset
                         valid_r[i] = 1.0
                         for k in range(3):
                             tr[k][i] = t[k]
@@ -388,15 +385,9 @@ def shade_object_for(show, bump, fwidth, per_level):
                 u, v = _vec2(uv, y, x)
                 dx = _vec2(duv_dx, y, x)
                 dy = _vec2(duv_dy, y, x)
-                coords, cdx, cdy = screen_coords(
-                    ov.engraving,
-                    ov.direction,
-                    (u * scale[0], v * scale[1]),
-                    (dx[0] * scale[0], dx[1] * scale[1]),
-                    (dy[0] * scale[0], dy[1] * scale[1]),
+                coords, cdx, cdy, lod, n, axis = screen_at(
+                    ov, style.lod_offset, (u, v), dx, dy, rows, cols
                 )
-                lod, n, axis = footprint(cdx, cdy, rows, cols, ov.anisotropy)
-                lod = lod + style.lod_offset
                 cu, cv = coords
                 if show == SHOW_SCREEN:
                     s = probes(pyr, cu, cv, lod, n, axis, np.int64(0))
