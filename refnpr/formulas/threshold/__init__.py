@@ -45,68 +45,25 @@ from .. import lighting
 from .._face import elementwise
 from .._shading_checks import broadcast, check_range, real
 from .._validate import check_int, result_dtype
-from .compose import combine_thresholds, layer_schedule, layer_whites
-from .filtering import line_coverage, mip_threshold, pcf_threshold
-from .lines import (
-    dyadic_remap,
-    dyadic_scale,
-    dyadic_scale_from_gradient,
-    line_threshold,
-    multiscale_line,
-    multiscale_line_cdf,
-    step,
-    step_any,
-    step_n,
-)
-from .stipple import (
-    StippleToneTable,
-    stipple_scales,
-    stipple_threshold,
-    stipple_tone_table,
-)
-from .strength import facing_strength, strength_blend, tone_strength
-from .textures import (
-    DotToneTable,
-    dot_dyadic_scale,
-    dot_function,
-    dot_threshold,
-    dot_tone_table,
-    hatch_coordinate,
-    hatch_threshold,
-)
+from . import compose, filtering, lines, stipple, strength, textures
+from .compose import *  # noqa: F403
+from .filtering import *  # noqa: F403
+from .lines import *  # noqa: F403
+from .lines import step_any
+from .stipple import *  # noqa: F403
+from .strength import *  # noqa: F403
+from .strength import strength_blend
+from .textures import *  # noqa: F403
 
 __all__ = [
-    "step",
-    "step_n",
     "threshold_illumination",
-    "dyadic_scale",
-    "dyadic_scale_from_gradient",
-    "dyadic_remap",
-    "multiscale_line",
-    "multiscale_line_cdf",
-    "line_threshold",
-    "hatch_coordinate",
-    "hatch_threshold",
-    "combine_thresholds",
-    "layer_whites",
-    "layer_schedule",
-    "dot_function",
-    "dot_dyadic_scale",
-    "DotToneTable",
-    "dot_tone_table",
-    "dot_threshold",
-    "stipple_scales",
-    "StippleToneTable",
-    "stipple_tone_table",
-    "stipple_threshold",
-    "pcf_threshold",
-    "mip_threshold",
-    "line_coverage",
-    "facing_strength",
-    "tone_strength",
-    "strength_blend",
+    *lines.__all__,
+    *textures.__all__,
+    *compose.__all__,
+    *stipple.__all__,
+    *filtering.__all__,
+    *strength.__all__,
 ]
-
 
 _strength_blend = strength_blend.scalar
 

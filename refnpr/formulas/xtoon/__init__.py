@@ -34,23 +34,9 @@ from refnpr.device.vectors import unit_scaled
 
 from .._face import Whole, elementwise, face
 from .._validate import as_float, check_scalar, describe, result_dtype
-from .shapes import (
-    cylinder_normals,
-    ellipsoid_normals,
-    shape_frame,
-    smoothed_normals,
-    sphere_normals,
-)
-from .textures import (
-    toon_texture_backlight,
-    toon_texture_blur,
-    toon_texture_fade,
-    toon_texture_hue,
-    toon_texture_levels,
-    toon_texture_metal,
-    toon_texture_plastic,
-    toon_texture_receding,
-)
+from . import shapes, textures
+from .shapes import *  # noqa: F403
+from .textures import *  # noqa: F403
 
 __all__ = [
     "tone",
@@ -61,19 +47,8 @@ __all__ = [
     "detail_highlight",
     "toon_lookup",
     "blend_normals",
-    "toon_texture_blur",
-    "toon_texture_levels",
-    "toon_texture_receding",
-    "toon_texture_fade",
-    "toon_texture_hue",
-    "toon_texture_backlight",
-    "toon_texture_plastic",
-    "toon_texture_metal",
-    "smoothed_normals",
-    "ellipsoid_normals",
-    "cylinder_normals",
-    "sphere_normals",
-    "shape_frame",
+    *textures.__all__,
+    *shapes.__all__,
 ]
 
 _R_HINT = (

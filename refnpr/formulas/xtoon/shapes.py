@@ -217,18 +217,8 @@ def ellipsoid_normals(positions, faces, normals, *, frame: str = "pca") -> np.nd
 def cylinder_normals(positions, faces, normals, *, frame: str = "pca") -> np.ndarray:
     """Normals of an infinite circular cylinder along the principal axis (Fig. 5d).
 
-    The axis passes through the box centre along the box axis of largest extent.
-
-    Parameters
-    ----------
-    positions : (N, 3) float
-    faces : (M, 3) int
-    normals : (N, 3) float (used where the projection is undefined)
-    frame : {"pca", "aabb"}, see :func:`shape_frame`
-
-    Returns
-    -------
-    (N, 3) unit normals
+    The axis passes through the box centre along the box axis of largest extent. Parameters
+    and result as :func:`ellipsoid_normals`.
     """
     p, f, n = _mesh(positions, faces, normals)
     c, axes, _ = shape_frame(p, f, frame=frame)
@@ -241,16 +231,8 @@ def cylinder_normals(positions, faces, normals, *, frame: str = "pca") -> np.nda
 def sphere_normals(positions, faces, normals, *, frame: str = "pca") -> np.ndarray:
     """Normals of a sphere centred on the bounding box (Fig. 5e): normalize(p - c).
 
-    Parameters
-    ----------
-    positions : (N, 3) float
-    faces : (M, 3) int
-    normals : (N, 3) float (used at the centre)
-    frame : {"pca", "aabb"}, see :func:`shape_frame` (only the centre depends on it)
-
-    Returns
-    -------
-    (N, 3) unit normals
+    Parameters and result as :func:`ellipsoid_normals` (``frame`` moves only the centre;
+    ``normals`` serve at the centre).
     """
     p, f, n = _mesh(positions, faces, normals)
     c, _, _ = shape_frame(p, f, frame=frame)
