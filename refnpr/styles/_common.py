@@ -6,8 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.formulas import lighting
-
+from ._declare import short_repr
 from ._names import warn_caller
 
 
@@ -22,26 +21,11 @@ def rgba_out(ctx: Any, shape: tuple[int, int]) -> np.ndarray:
 
 
 __all__ = [
-    "scatter_rgba",
     "rgba_from",
-    "check_choice",
-    "check_number",
-    "check_count",
     "needs_position",
-    "specular_field",
     "check_uv_scale",
-    "short_repr",
     "warn_unused",
 ]
-
-
-def scatter_rgba(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
-    """(nH, nW, 4) float32 straight-alpha RGBA from colours ``rgb (K, 3)`` of the K samples where
-    ``mask`` is true (alpha 1 there, or ``alpha (K,)``); zero elsewhere."""
-    out = np.zeros(mask.shape + (4,), dtype=np.float32)
-    out[mask, :3] = np.clip(rgb, 0.0, 1.0)
-    out[mask, 3] = 1.0 if alpha is None else np.clip(alpha, 0.0, 1.0)
-    return out
 
 
 def rgba_from(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
@@ -54,70 +38,9 @@ def rgba_from(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None
     return out
 
 
-def check_choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
-    if value not in choices:
-        raise ValueError(f"{name}: expected one of {list(choices)}, got {value!r}")
-    return value
-
-
-def check_number(
-    name: str,
-    value: Any,
-    *,
-    lo: float | None = None,
-    hi: float | None = None,
-    lo_open: bool = False,
-) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name}: expected a number, got {type(value).__name__} {value!r}")
-    v = float(value)
-    if not np.isfinite(v):
-        raise ValueError(f"{name}: expected a finite number, got {v}")
-    if lo is not None and (v <= lo if lo_open else v < lo):
-        raise ValueError(f"{name}: expected a value {'>' if lo_open else '>='} {lo}, got {v}")
-    if hi is not None and v > hi:
-        raise ValueError(f"{name}: expected a value <= {hi}, got {v}")
-    return v
-
-
-def check_count(name: str, value: Any, *, lo: int = 1, hi: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name}: expected an integer, got {type(value).__name__} {value!r}")
-    if value < lo or (hi is not None and value > hi):
-        raise ValueError(
-            f"{name}: expected an integer in [{lo}, {hi if hi else 'inf'}], got {value}"
-        )
-    return int(value)
-
-
 def needs_position(scene: Any, view_dependent: bool) -> bool:
     """Whether shading needs world positions: for the view vector or for point lights."""
     return view_dependent or any(light.kind == "point" for light in scene.lights)
-
-
-def specular_field(
-    ctx: Any,
-    n: np.ndarray,
-    light_dir: np.ndarray,
-    v: np.ndarray,
-    model: str = "blinn-phong",
-    mask: np.ndarray | None = None,
-) -> np.ndarray:
-    """f_s of Veryovka eq. 1 with each object's own shininess (needs ``mesh_id``).
-
-    Evaluated once per distinct exponent; (nH, nW) float64, 0 where empty or shininess <= 0.
-    With ``mask``, ``n``, ``v`` (and a per-sample ``light_dir``) hold only the K masked samples
-    and the result is (K,).
-    """
-    shininess = ctx.material_field("shininess", mask)
-    out = np.zeros(n.shape[:-1])
-    for p in np.unique(shininess[shininess > 0]):
-        sel = shininess == p
-        ld = light_dir[sel] if np.ndim(light_dir) > 1 else light_dir
-        out[sel] = lighting.specular(
-            n[sel], ld, v[sel], shininess=float(p), model=model, normalize=False
-        )
-    return out
 
 
 #: Range of a style's ``uv_scale`` factors: beyond it the texture LOD (log2 of the scaled uv
@@ -151,12 +74,6 @@ def check_uv_scale(name: str, value: Any) -> tuple[float, float] | None:
             f"longer finite), got {short_repr(value)}; use a factor in that range"
         )
     return (float(arr[0]), float(arr[1]))
-
-
-def short_repr(value: Any, limit: int = 80) -> str:
-    """``repr(value)``, cut to ``limit`` characters (a huge list stays readable)."""
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 5] + " ...]"
 
 
 def warn_unused(name: str, value: Any, mode: str, fix: str) -> None:

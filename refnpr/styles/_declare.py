@@ -34,7 +34,16 @@ import numpy as np
 
 from ._names import check_known, renamed_params, warn_caller
 
-__all__ = ["Param", "Params", "Values", "NOT_NONE", "markdown_table", "text_table", "DOCS_MARK"]
+__all__ = [
+    "Param",
+    "Params",
+    "check_number",
+    "Values",
+    "NOT_NONE",
+    "markdown_table",
+    "text_table",
+    "DOCS_MARK",
+]
 
 #: ``used_when={"bump": NOT_NONE}``: read only where that parameter is given (not None).
 NOT_NONE = "<not None>"
@@ -52,9 +61,15 @@ def _is_default(value: Any, default: Any) -> bool:
         return False
 
 
-def _short(value: Any, limit: int = 80) -> str:
+def short_repr(value: Any, limit: int = 80) -> str:
     text = repr(value)
     return text if len(text) <= limit else text[: limit - 5] + " ...]"
+
+
+def check_number(name: str, value: Any, *, integer: bool = False, **bounds: Any) -> float | int:
+    """``value`` as a finite float (an int with ``integer``) within ``bounds`` (``lo``, ``hi``,
+    ``lo_open``, ``hi_open``, ``hint`` of :class:`Param`), else the error a parameter gives."""
+    return Param(name, None, "", kind="int" if integer else "float", **bounds)._number(value)
 
 
 @dataclass(frozen=True)
@@ -128,7 +143,7 @@ class Param:
         name = self.name
         if self.kind == "bool":
             if not isinstance(value, (bool, np.bool_)):  # 1 and 0 are not flags
-                raise TypeError(f"{name}: expected a bool (true/false), got {_short(value)}")
+                raise TypeError(f"{name}: expected a bool (true/false), got {short_repr(value)}")
             value = bool(value)
         elif self.kind == "choice":
             if not isinstance(value, str) or value not in self.choices:
@@ -145,10 +160,12 @@ class Param:
         ok = isinstance(value, (numbers.Integral if integer else numbers.Real, np.generic))
         if isinstance(value, (bool, np.bool_)) or not ok or isinstance(value, np.complexfloating):
             what = "an integer" if integer else "a number"
-            raise TypeError(f"{name}: expected {what}, got {type(value).__name__} {_short(value)}")
+            raise TypeError(
+                f"{name}: expected {what}, got {type(value).__name__} {short_repr(value)}"
+            )
         if integer:
             if not isinstance(value, (numbers.Integral, np.integer)):
-                raise TypeError(f"{name}: expected an integer, got {_short(value)}")
+                raise TypeError(f"{name}: expected an integer, got {short_repr(value)}")
             v: float | int = int(value)
         else:
             v = float(value)
@@ -352,7 +369,7 @@ class Params:
                 value = kw[p.name]  # not read: not validated either, only warned about
                 if value is not None and not _is_default(value, p.default):
                     mode, fix = self._usage(p, values)
-                    warn_caller(f"{p.name}: {_short(value)} is ignored with {mode}; {fix}")
+                    warn_caller(f"{p.name}: {short_repr(value)} is ignored with {mode}; {fix}")
                 values[p.name] = p.check(p.default)
             else:
                 values[p.name] = p.check(kw.get(p.name, p.default))

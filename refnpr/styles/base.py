@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ._common import short_repr
+from ._declare import short_repr
 from ._names import check_known, renamed_params
 
 __all__ = [
@@ -157,31 +157,6 @@ class ShadeContext:
         if "tri_id" in self.gb:
             return self.gb["tri_id"] >= 0
         return self.gb["mesh_id"] >= 0
-
-    def view_dir(self, mask: np.ndarray | None = None) -> np.ndarray:
-        """Unit vectors from the surface towards the eye (needs ``position``): (nH, nW, 3)
-        float64, or (K, 3) at the K samples where ``mask`` is true."""
-        pos = self.gb["position"] if mask is None else self.gb["position"][mask]
-        v = np.asarray(self.scene.camera.eye, dtype=np.float64) - pos
-        length = np.linalg.norm(v, axis=-1, keepdims=True)
-        return np.divide(v, length, out=np.zeros_like(v), where=length > 0)
-
-    def light_dirs(self, mask: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Per light: (unit direction towards the light: (3,) for directional lights, (nH, nW, 3)
-        or (K, 3) with ``mask`` for point lights), colour (3,). Point lights need ``position``."""
-        out = []
-        for light in self.scene.lights:
-            color = np.asarray(light.color, dtype=np.float64)
-            if light.kind == "point":
-                pos = self.gb["position"] if mask is None else self.gb["position"][mask]
-                d = np.asarray(light.position, dtype=np.float64) - pos
-                length = np.linalg.norm(d, axis=-1, keepdims=True)
-                d = np.divide(d, length, out=np.zeros_like(d), where=length > 0)
-            else:
-                d = np.asarray(light.direction, dtype=np.float64)
-                d = d / np.linalg.norm(d)
-            out.append((d, color))
-        return out
 
     def material_field(self, attr: str, mask: np.ndarray | None = None) -> np.ndarray:
         """Material property ``attr`` of the object each sample shows (needs ``mesh_id``):

@@ -24,7 +24,7 @@ import numpy as np
 from . import _kernels as K
 from ._declare import Param, Params
 from ._names import warn_deprecated
-from .base import ShadeContext, Style, get_style, nested_style, register
+from .base import ShadeContext, Style, nested_style, register
 
 __all__ = ["EdgeTable", "ContourLayer", "CONTOURS", "Contoured", "edge_table"]
 
@@ -323,8 +323,3 @@ class Contoured(Style):
     def shade_frame(self, ctx: ShadeContext, state: Any) -> tuple[np.ndarray, Any]:
         rgba, state = self.base.shade_frame(ctx, state)
         return self._over(ctx, rgba), state
-
-
-def with_contours(style: Any, contours: Any = True) -> Style:
-    """Wrap a style (instance, name or table) with the contour layer."""
-    return get_style("contoured", base=style, contours=contours)

@@ -1,4 +1,4 @@
-"""Fidelity of the halftone figures (issue 13): stroke width in screen space on the torus knot
+"""Fidelity of the halftone figures: stroke width in screen space on the torus knot
 (Figs. 4/6), every brick outline in the room without effects (Fig. 7), anisotropic filtering
 against a naive GL oracle, tonal-art-map strokes of the hatching set, solid brick outlines at
 every level, and the raw-map views (``show``) behind the Fig. 2, 3 and 8 cases."""
@@ -42,7 +42,7 @@ def _ink_widths(gray: np.ndarray, covered: np.ndarray) -> tuple[float, float]:
 
 
 # ---------------------------------------------------------------------------------------------
-# defect 4: hatching keeps its screen-space stroke width
+# hatching keeps its screen-space stroke width
 # ---------------------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "case, scene_name",
@@ -165,7 +165,7 @@ def test_later_hatching_layers_add_density_not_width():
 
 
 # ---------------------------------------------------------------------------------------------
-# defect 5: every brick outline
+# every brick outline
 # ---------------------------------------------------------------------------------------------
 def test_brick_outlines_are_solid_ink_on_whole_texels_at_every_level():
     bricks = S.brick_set(256)

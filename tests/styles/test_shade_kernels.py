@@ -14,10 +14,11 @@ import pytest
 
 from refnpr.formulas import lighting, threshold
 from refnpr.scenes.scene import Light, Material
-from refnpr.styles._common import scatter_rgba, specular_field
 from refnpr.styles.base import ShadeContext
 from refnpr.styles.smooth import SmoothStyle
 from refnpr.styles.toon import ToonStyle
+
+from ._oracles import light_dirs, scatter_rgba, specular_field, view_dir
 
 # ------------------------------------------------------------------ oracle: the numpy shade()
 
@@ -31,8 +32,8 @@ def oracle_toon(style: ToonStyle, ctx: ShadeContext) -> np.ndarray:
     if style.mode == "lake":
         bounds = (np.arange(style.n) + style.t) / style.n
         ramp = lighting.toon_ramp_texture(bounds, np.arange(style.n + 1) / style.n, size=1024)
-    v = ctx.view_dir(mask) if style.specular else None
-    for light_dir, color in ctx.light_dirs(mask):
+    v = view_dir(ctx, mask) if style.specular else None
+    for light_dir, color in light_dirs(ctx, mask):
         f_d = lighting.diffuse(n, light_dir, normalize=False)
         if style.mode == "lake":
             tone = lighting.toon_ramp(f_d, ramp)
@@ -48,11 +49,11 @@ def oracle_toon(style: ToonStyle, ctx: ShadeContext) -> np.ndarray:
 def oracle_smooth(style: SmoothStyle, ctx: ShadeContext) -> np.ndarray:
     mask = ctx.mask
     n = ctx.gb["normal"][mask].astype(np.float64)
-    v = ctx.view_dir(mask) if style.specular else None
+    v = view_dir(ctx, mask) if style.specular else None
     m_d = ctx.material_field("diffuse", mask)
     m_s = ctx.material_field("specular", mask)
     rgb = ctx.material_field("ambient", mask) * np.asarray(ctx.scene.ambient, float)
-    for light_dir, color in ctx.light_dirs(mask):
+    for light_dir, color in light_dirs(ctx, mask):
         f_d = lighting.diffuse(n, light_dir, normalize=False)
         rgb = rgb + m_d * f_d[:, None] * color
         if style.specular:
@@ -242,8 +243,8 @@ def oracle_float64(style, ctx) -> np.ndarray:
     if mode == "lake":
         bounds = (np.arange(style.n) + style.t) / style.n
         ramp = lighting.toon_ramp_texture(bounds, np.arange(style.n + 1) / style.n, size=1024)
-    v = ctx.view_dir(mask) if style.specular else None
-    for light_dir, color in ctx.light_dirs(mask):
+    v = view_dir(ctx, mask) if style.specular else None
+    for light_dir, color in light_dirs(ctx, mask):
         f_d = lighting.diffuse(n, light_dir, normalize=False)
         if mode == "lake":
             f_d = lighting.toon_ramp(f_d, ramp)

@@ -1,5 +1,5 @@
 """Veryovka Fig. 4 fidelity: cross-hatching shows two crossing sets of dark lines; stipple dots
-are round in screen space, jittered, and keep tone (issue 13, defects 2 and 3).
+are round in screen space, jittered, and keep tone.
 
 Measured properties, each with an independent oracle: the power spectrum of a rendered
 cross-hatched plane, second moments and nearest-neighbour distances of the connected components

@@ -28,6 +28,8 @@ from refnpr.styles.threshold import ThresholdStyle
 from refnpr.styles.threshold.images import grid_offsets
 from refnpr.styles.threshold.noise import value_noise
 
+from ._oracles import light_dirs, view_dir
+
 
 class _GB(dict):
     """A dict of channels with the G-buffer's ``n`` (samples per pixel per axis)."""
@@ -148,7 +150,7 @@ def oracle(style, ctx) -> np.ndarray:
         dpdx = gb["dposition_dx"][mask].astype(np.float64)
         dpdy = gb["dposition_dy"][mask].astype(np.float64)
         n = style._bump.normals(n, fp.uv, fp.gx, fp.gy, dpdx, dpdy)
-    view = ctx.view_dir(mask) if (p.specular or p.facing_fade > 0.0) else None
+    view = view_dir(ctx, mask) if (p.specular or p.facing_fade > 0.0) else None
     st0 = np.full(n.shape[0], p.strength)
     if p.facing_fade > 0.0:
         n_dot_v = np.sum(n * view, axis=-1)
@@ -161,7 +163,7 @@ def oracle(style, ctx) -> np.ndarray:
 
     m_s = ctx.material_field("specular", mask)
     shininess = ctx.material_field("shininess", mask)
-    for l, color in ctx.light_dirs(mask):
+    for l, color in light_dirs(ctx, mask):
         f_d = lighting.diffuse(n, l)  # eq. 1
         rgb = rgb + ctx.material_field("diffuse", mask) * term(f_d, t, w)[:, None] * color
         if not p.specular:

@@ -553,12 +553,12 @@ def test_local_weights_from_the_detail_map_and_a_texture():
         (
             {"shape": "sphere", "shape_weight": 1.5},
             ValueError,
-            r"shape_weight: expected a value >= 0 and <= 1, got 1.5",
+            r"shape_weight: expected a value in \[0, 1\], got 1.5",
         ),
         (
             {"shape": "sphere", "shape_weight": -0.1},
             ValueError,
-            r"shape_weight: expected a value >= 0 and <= 1, got -0.1",
+            r"shape_weight: expected a value in \[0, 1\], got -0.1",
         ),
         (
             {"shape": "sphere", "shape_weight": np.full((4, 4), 2.0), "shape_blend": "pixel"},

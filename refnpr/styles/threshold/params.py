@@ -14,8 +14,8 @@ import numpy as np
 
 from refnpr.texture import TILINGS
 
-from .._common import check_count, check_number, check_uv_scale
-from .._declare import NOT_NONE, Param, Params
+from .._common import check_uv_scale
+from .._declare import NOT_NONE, Param, Params, check_number
 from .._names import renamed_params, warn_deprecated
 
 __all__ = ["PARAMS", "SOURCES", "FILTERS", "MIPS", "deprecated_forms", "checked", "parse_params"]
@@ -380,7 +380,7 @@ def deprecated_forms(kw: dict[str, Any]) -> tuple[dict[str, Any], float | None]:
     other style). Both with a DeprecationWarning."""
     kw = dict(kw)
     if "pcf_levels" in kw:
-        levels = check_count("pcf_levels", kw["pcf_levels"], lo=1, hi=2)
+        levels = check_number("pcf_levels", kw["pcf_levels"], integer=True, lo=1, hi=2)
         kw = renamed_params(_WHERE, kw, {"pcf_levels": "mip"})
         kw["mip"] = MIPS[0] if levels == 2 else MIPS[1]
     scale = None

@@ -9,10 +9,10 @@ from typing import Any
 import numpy as np
 
 from refnpr.raster import Camera
+from refnpr.styles._declare import NOT_NONE, Param, Params, check_number, short_repr
 
 __all__ = [
     "DETAILS",
-    "number",
     "vec3",
     "camera_spec",
     "transforms_spec",
@@ -25,32 +25,6 @@ __all__ = [
 DETAILS = ("depth", "focus", "orientation", "highlight", "flow", "map", "none")
 
 _CAMERA_KEYS = ("eye", "target", "up", "fov_y", "near", "far")
-
-
-def number(
-    name: str,
-    value: Any,
-    *,
-    lo: float | None = None,
-    lo_open: bool = False,
-    hi: float | None = None,
-    hint: str = "",
-) -> float:
-    """``value`` as a finite float in the given range, else a ValueError/TypeError naming it."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name}: expected a number, got {type(value).__name__} {value!r}")
-    v = float(value)
-    bad = not np.isfinite(v)
-    bad |= lo is not None and (v <= lo if lo_open else v < lo)
-    bad |= hi is not None and v > hi
-    if bad:
-        lo_txt = "" if lo is None else f"{'>' if lo_open else '>='} {lo:g}"
-        hi_txt = "" if hi is None else f"<= {hi:g}"
-        rng = " and ".join(t for t in (lo_txt, hi_txt) if t) or "finite"
-        raise ValueError(
-            f"{name}: expected a value {rng}, got {v!r}" + (f"; {hint}" if hint else "")
-        )
-    return v
 
 
 def vec3(name: str, value: Any) -> tuple[float, float, float]:
@@ -95,10 +69,10 @@ def transforms_spec(name: str, value: Any) -> np.ndarray:
     if a is None or isinstance(value, (str, bytes)) or a.ndim != 3 or a.shape[1:] != (4, 4):
         raise ValueError(
             f"{name}: expected one 4x4 matrix per scene object (a list of (4, 4) arrays, e.g. "
-            f"[o.transform for o in prev_scene.objects]), got {_short(value)}"
+            f"[o.transform for o in prev_scene.objects]), got {short_repr(value)}"
         )
     if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: the matrices must be finite, got {_short(value)}")
+        raise ValueError(f"{name}: the matrices must be finite, got {short_repr(value)}")
     for i, m in enumerate(a):
         if not np.array_equal(m[3], (0.0, 0.0, 0.0, 1.0)):
             raise ValueError(
@@ -108,11 +82,6 @@ def transforms_spec(name: str, value: Any) -> np.ndarray:
         if np.linalg.det(m[:3, :3]) == 0.0:
             raise ValueError(f"{name}[{i}]: the 3x3 part is singular; use a non-zero scale")
     return a
-
-
-def _short(value: Any, limit: int = 80) -> str:
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 5] + " ...]"
 
 
 def unit_map(name: str, value: Any) -> np.ndarray:
@@ -154,13 +123,8 @@ def weight_spec(value: Any) -> WeightSpec:
     a 2D array in [0, 1]."""
     name = "shape_weight"
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
-        w = number(
-            name,
-            value,
-            lo=0.0,
-            hi=1.0,
-            hint="0 keeps the mesh normals, 1 uses the abstracted shape's normals (X-Toon sec. 4)",
-        )
+        hint = "0 keeps the mesh normals, 1 uses the abstracted shape's normals (X-Toon sec. 4)"
+        w = check_number(name, value, lo=0.0, hi=1.0, hint=hint)
         return WeightSpec("global", w, summary=w)
     if isinstance(value, str):
         if value == "detail":
@@ -181,7 +145,7 @@ def weight_spec(value: Any) -> WeightSpec:
         s = (s, s) if np.isscalar(s) else tuple(s)
         if len(s) != 2:
             raise ValueError(f"{name}['uv_scale']: expected one or two numbers, got {s!r}")
-        su, sv = (number(f"{name}['uv_scale']", x, lo=0.0, lo_open=True) for x in s)
+        su, sv = (check_number(f"{name}['uv_scale']", x, lo=0.0, lo_open=True) for x in s)
         return WeightSpec("texture", texture=tex, uv_scale=(su, sv), summary=dict(value))
     if isinstance(value, (np.ndarray, Sequence)):
         arr = unit_map(name, value)
@@ -259,8 +223,6 @@ def _texture_label(spec: Any) -> Any:
         return str(spec)
     return f"array{np.shape(spec)}"
 
-
-from refnpr.styles._declare import NOT_NONE, Param, Params  # noqa: E402  (below its parsers)
 
 _SHAPED = {"shape": NOT_NONE}
 
