@@ -84,14 +84,13 @@ def _interp_parts(
 ) -> dict[str, int]:
     """Per-sample-grid buffers of the interpolation pass (mirrors ``raster/channels.py``)."""
     attrs = set(attributes)
-    need_depth = bool({"depth", "ndc_z"} & wanted)
+    need_depth = "depth" in wanted
     parts: dict[str, int] = {}
     if not needs_interpolation(wanted, attrs):
         if need_depth:
             parts["depth"] = s * f
         return parts
     need_uv_d = bool(_UV_D & wanted)
-    ndc = "ndc_z" in wanted
     d_groups: list[int] = []
     v_groups: list[int] = []
     widths = {"uv": 2, "position": 3, **attributes}
@@ -100,33 +99,17 @@ def _interp_parts(
             d_groups.append(c)
         elif name in wanted:
             v_groups.append(c)
-    if ndc:
-        v_groups.append(1)
-    dcols, vcols = sum(d_groups), sum(v_groups)
-    if dcols:  # value, d/dx and d/dy slabs
+    # every family is written into its own arrays (the channel's, or a scratch one): no copies
+    dcols, vcols = sum(d_groups), sum(v_groups) + ("ndc_z" in wanted)
+    if dcols:  # value, d/dx and d/dy
         parts["derivatives"] = 3 * dcols * s * f
     if vcols:
-        parts["values"] = vcols * s * (8 if ndc else f)
-    if "normal" in wanted:
-        parts["normal"] = 3 * s * f
+        parts["values"] = vcols * s * f
+    for name, comps in (("normal", 3), ("bary", 3)):
+        if name in wanted:
+            parts[name] = comps * s * f
     if need_depth:
-        parts["depth"] = s * (8 if ndc else f)
-    if "bary" in wanted:
-        parts["bary"] = 3 * s * f
-    # sets with ndc_z interpolate into combined slabs, then cut them into contiguous copies;
-    # other sets write each family into its own arrays (no copies)
-    copies = (3 * dcols if len(d_groups) > 1 else 0) + (vcols if len(v_groups) > 1 else 0)
-    if copies and ndc:
-        parts["channel copies"] = copies * s * f
-    # temporaries after the slabs (one at a time), in sets with ndc_z: its masks and float64
-    # quotients, or the float64 derivative copies and the lod/dyadic_scale chains
-    temp = 0
-    if ndc:
-        temp = 3 * 8 * s + s + s * f
-    if ndc and ("lod" in wanted or "dyadic_scale" in wanted):  # numpy's (else a kernel's)
-        temp = max(temp, 2 * 16 * s + 5 * 8 * s + s + s * f)
-    if temp:
-        parts["temporaries"] = temp
+        parts["depth"] = s * f
     return parts
 
 
@@ -235,23 +218,15 @@ def _cgroup_available() -> int | None:
     for _id, controllers, rel in lines:
         rel = rel.lstrip("/")
         if controllers == "":  # v2 unified
-            base = os.path.join("/sys/fs/cgroup", rel)
-            candidates.append(
-                (os.path.join(base, "memory.max"), os.path.join(base, "memory.current"))
-            )
+            candidates.append((os.path.join("/sys/fs/cgroup", rel), "max", "current"))
         elif "memory" in controllers.split(","):  # v1
             for base in (os.path.join("/sys/fs/cgroup/memory", rel), "/sys/fs/cgroup/memory"):
-                candidates.append(
-                    (
-                        os.path.join(base, "memory.limit_in_bytes"),
-                        os.path.join(base, "memory.usage_in_bytes"),
-                    )
-                )
-    for limit_file, usage_file in candidates:
+                candidates.append((base, "limit_in_bytes", "usage_in_bytes"))
+    for base, limit_name, usage_name in candidates:
         try:
-            with open(limit_file, encoding="ascii") as fh:
+            with open(os.path.join(base, f"memory.{limit_name}"), encoding="ascii") as fh:
                 limit = fh.read().strip()
-            with open(usage_file, encoding="ascii") as fh:
+            with open(os.path.join(base, f"memory.{usage_name}"), encoding="ascii") as fh:
                 usage = int(fh.read().strip())
         except (OSError, ValueError):
             continue

@@ -1,10 +1,4 @@
-"""The scene's lights as a record, and the direction from a surface point towards a light.
-
-A light is directional (``LIGHT_DIRECTIONAL``: ``vec`` is its unit direction towards the
-light, ``d / |d|`` of the scene's direction) or a point light (``LIGHT_POINT``: ``vec`` is its
-position). ``unit`` holds ``unit_scaled(vec)`` of directional lights (the normalization
-``lighting.diffuse`` applies to L), zeros for point lights.
-"""
+"""The scene's lights as a record, and the direction from a surface point towards a light."""
 
 from __future__ import annotations
 
@@ -26,8 +20,10 @@ class Lights(NamedTuple):
     """The lights of a frame (numba record).
 
     kind : (L,) int64, ``LIGHT_DIRECTIONAL`` or ``LIGHT_POINT``
-    vec : (L, 3) float64, unit direction towards a directional light, position of a point light
-    unit : (L, 3) float64, ``unit_scaled(vec)`` of directional lights, zeros for point lights
+    vec : (L, 3) float64, unit direction towards a directional light (``d / |d|`` of the
+        scene's direction), position of a point light
+    unit : (L, 3) float64, ``unit_scaled(vec)`` of directional lights (the normalization
+        ``lighting.diffuse`` applies to L), zeros for point lights
     color : (L, 3) float64, linear RGB
     """
 

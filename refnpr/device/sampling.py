@@ -101,11 +101,7 @@ def trilinear(pyr, u, v, lod, c):
     """GL_LINEAR_MIPMAP_LINEAR sample: lod clamped to [0, L - 1], bilinear in the two nearest
     levels, linear in frac(lod)."""
     texels, offsets, shapes = pyr
-    top = offsets.shape[0] - 1
-    lam = min(max(lod, 0.0), float(top))
-    k0 = np.int64(math.floor(lam))
-    k1 = min(k0 + 1, top)
-    f = lam - k0
+    k0, k1, f = level_weights(offsets.shape[0], lod)
     r = 0.0 + (1.0 - f) * bilinear(texels, offsets[k0], shapes[k0, 0], shapes[k0, 1], u, v, c)
     if f > 0.0:
         r = r + f * bilinear(texels, offsets[k1], shapes[k1, 0], shapes[k1, 1], u, v, c)

@@ -268,15 +268,9 @@ def label_scale(label: str, tile_width: int) -> int:
 
 
 def compose_grid(tiles: Sequence[tuple[str, np.ndarray]], *, columns: int = 4) -> np.ndarray:
-    """Tiles of one size in rows of ``columns``, each under a strip with its label.
-
-    Returns
-    -------
-    (H, W, 3) uint8
-        Cell ``k`` (row ``k // columns``, column ``k % columns``) starts at
-        ``(GAP + r (strip + th + GAP), GAP + c (tw + GAP))``; its label strip is
-        ``strip = 5 * 2 + 2 PAD`` pixels high, the tile below it.
-    """
+    """Tiles of one size in rows of ``columns``, each under a strip with its label: ``(H, W, 3)``
+    uint8, cell k at ``(GAP + (k // columns) (strip + th + GAP), GAP + (k % columns) (tw + GAP))``
+    with ``strip = 5 * 2 + 2 PAD`` pixels of label above the tile."""
     if not tiles:
         return np.full((16, 16, 3), FRAME, dtype=np.uint8)
     th, tw = tiles[0][1].shape[:2]

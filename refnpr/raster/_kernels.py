@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from refnpr._jit import banded, njit
+from refnpr._jit import banded, njit, specialised
 from refnpr.device.projection import clip_of, pixel_of
 
 # Clip planes as (a, b, c, d): inside where a x + b y + c z + d w >= 0. Guard band G fills d for x, y.
@@ -41,9 +41,7 @@ MAX_POLY = 3 + N_PLANES  # Sutherland-Hodgman adds at most one vertex per plane
 LOD_FLOOR = 2.0**-64
 
 
-# ---------------------------------------------------------------------------------------------
-# Records
-# ---------------------------------------------------------------------------------------------
+# --- Records
 
 
 class Grid(NamedTuple):
@@ -143,9 +141,7 @@ class Scales(NamedTuple):
     log2_period: float  # log2 of eq. 5's w (pixels)
 
 
-# ---------------------------------------------------------------------------------------------
-# Vertices, clipping, triangle setup
-# ---------------------------------------------------------------------------------------------
+# --- Vertices, clipping, triangle setup
 
 
 @njit
@@ -165,8 +161,7 @@ def _plane_dist(p, x, y, z, w, guard):
 
 @njit
 def _snap(cx, cy, w, width, height):
-    """Clip (cx, cy, ., w) -> pixels (``pixel_of``), snapped to 1/256 px (round half up):
-    ``(X, Y)`` int64, the position X / 256, Y / 256 px."""
+    """Clip (cx, cy, ., w) -> ``(X, Y)`` int64, the pixel position in 1/256 px (round half up)."""
     px, py = pixel_of(cx, cy, w, width, height)
     return np.int64(math.floor(px * 256.0 + 0.5)), np.int64(math.floor(py * 256.0 + 0.5))
 
@@ -193,19 +188,15 @@ def _lex_greater(a, b):
 
 @njit
 def _clip_polygon(v0, v1, v2, guard, poly, tmp):
-    """Sutherland-Hodgman clip of a triangle against the six planes, in homogeneous clip space.
-
-    Edge intersections are computed from the lexicographically smaller endpoint so that two
-    triangles sharing an edge produce bit-identical clipped vertices (watertight clipping).
-    Returns the vertex count of the clipped polygon stored in ``poly`` (MAX_POLY, 4).
-    """
-    for j in range(4):
-        poly[0, j] = v0[j]
-        poly[1, j] = v1[j]
-        poly[2, j] = v2[j]
+    """Sutherland-Hodgman clip of a triangle against the six planes in homogeneous clip space,
+    into ``poly`` (MAX_POLY + 1, 4); returns its vertex count. Edge intersections are computed
+    from the lexicographically smaller endpoint, so two triangles sharing an edge get
+    bit-identical clipped vertices (watertight clipping)."""
+    for k in range(4):
+        poly[0, k] = v0[k]
+        poly[1, k] = v1[k]
+        poly[2, k] = v2[k]
     count = 3
-    a = np.empty(4)
-    b = np.empty(4)
     for p in range(N_PLANES):
         if count == 0:
             return 0
@@ -220,19 +211,10 @@ def _clip_polygon(v0, v1, v2, guard, poly, tmp):
                 out += 1
             if (da >= 0.0) != (db >= 0.0):
                 # canonical order of the endpoints -> identical intersection for shared edges
-                if _lex_greater(poly[i], poly[j]):
-                    for k in range(4):
-                        a[k] = poly[j, k]
-                        b[k] = poly[i, k]
-                    dA, dB = db, da
-                else:
-                    for k in range(4):
-                        a[k] = poly[i, k]
-                        b[k] = poly[j, k]
-                    dA, dB = da, db
+                a, b, dA, dB = (j, i, db, da) if _lex_greater(poly[i], poly[j]) else (i, j, da, db)
                 s = dA / (dA - dB)
                 for k in range(4):
-                    tmp[out, k] = a[k] + s * (b[k] - a[k])
+                    tmp[out, k] = poly[a, k] + s * (poly[b, k] - poly[a, k])
                 out += 1
         count = out
         for i in range(count):
@@ -242,25 +224,11 @@ def _clip_polygon(v0, v1, v2, guard, poly, tmp):
 
 
 @njit
-def _keep(area, cull):
-    # Screen y points down, so a triangle counter-clockwise in NDC (front-facing in GL) has area < 0.
-    if area == 0:
-        return False
-    if cull == 1 and area > 0:
-        return False
-    return True
-
-
-@njit
 def _lam_rows(v0, v1, v2, nw, nh):
-    """M^-1 S for M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]], ``vi = (xi, yi, wi)`` the clip x, y,
-    w of the exact vertices.
-
-    Row i maps sample indices (sx, sy, 1) to lambda'_i = b_i / w. (ndc_x, ndc_y, 1) = S (sx, sy, 1)
-    with ndc_x = 2 sx / nW + (1/nW - 1) and ndc_y = -2 sy / nH + (1 - 1/nH) (sample centres, row 0
-    at the top). Returns (det, 9 coefficients row-major); det == 0 means the triangle's plane
-    passes through the eye.
-    """
+    """``(det, M^-1 S row-major)`` for M = [[x0 x1 x2], [y0 y1 y2], [w0 w1 w2]] (clip x, y, w of
+    the exact vertices, ``vi = (xi, yi, wi)``) and S mapping sample (sx, sy, 1) to (ndc_x, ndc_y,
+    1) = (2 sx / nW + 1/nW - 1, 1 - 1/nH - 2 sy / nH, 1): row i gives lambda'_i = b_i / w.
+    det == 0: the triangle's plane passes through the eye."""
     x0, y0, w0 = v0
     x1, y1, w1 = v1
     x2, y2, w2 = v2
@@ -297,11 +265,8 @@ def _lam_rows(v0, v1, v2, nw, nh):
 def transform_vertices(lo, hi, positions, vp, grid, guard, verts):
     """Vertex stage: clip = VP (p, 1) (``clip_of``: a fixed evaluation order, no BLAS, no FMA
     contraction), the clip-plane outcode bits, and for vertices inside every plane the position
-    snapped to 1/256 px (the same ``_snap`` the clipper uses, so shared vertices agree bitwise).
-    """
-    clip = verts.clip
-    snapped = verts.snapped
-    outcode = verts.outcode
+    snapped to 1/256 px (the same ``_snap`` the clipper uses, so shared vertices agree bitwise)."""
+    clip, snapped, outcode = verts
     width = grid.width
     height = grid.height
     for i in range(lo, hi):
@@ -315,23 +280,16 @@ def transform_vertices(lo, hi, positions, vp, grid, guard, verts):
             if _plane_dist(p, cx, cy, cz, cw, guard) < 0.0:
                 code |= 1 << p
         outcode[i] = code
-        if code == 0:
-            sx, sy = _snap(cx, cy, cw, width, height)
-            snapped[i, 0] = sx
-            snapped[i, 1] = sy
-        else:
-            snapped[i, 0] = 0
-            snapped[i, 1] = 0
+        sx, sy = _snap(cx, cy, cw, width, height) if code == 0 else (0, 0)
+        snapped[i, 0] = sx
+        snapped[i, 1] = sy
 
 
 @njit
 def _sample_bbox(c, n, nw, nh):
-    """Inclusive sample-index box ``(sx0, sx1, sy0, sy1)`` of snapped ``c = (X0, Y0, ..., Y2)``
-    (1/256 px) on the n-times grid.
-
-    In units of 1/(512 n) px a snapped coordinate X is 2 n X and sample s has its centre at
-    512 s + 256, so the first sample right of xmin is ceil((xmin - 256) / 512) (shifts floor).
-    """
+    """Inclusive sample box ``(sx0, sx1, sy0, sy1)`` of snapped ``c`` on the n-times grid. In
+    units of 1/(512 n) px, X is 2 n X and sample s is centred at 512 s + 256, so the first sample
+    right of xmin is ceil((xmin - 256) / 512) (shifts floor)."""
     c0, c1, c2, c3, c4, c5 = c
     xmin = np.int64(min(c0, min(c2, c4))) * 2 * n
     xmax = np.int64(max(c0, max(c2, c4))) * 2 * n
@@ -344,40 +302,39 @@ def _sample_bbox(c, n, nw, nh):
     return sx0, sx1, sy0, sy1
 
 
+@njit(inline="always")
+def _primitive(c, cull, n, nw, nh):
+    """``(keep, c, box)``: snapped ``c`` in canonical orientation (vertices 1 and 2 swapped where
+    needed so that the interior is where all edge functions are >= 0) and its ``_sample_bbox``;
+    keep is False for a zero-area or culled primitive, or one covering no sample centre."""
+    area = _signed_area(c)
+    # Screen y points down, so a triangle counter-clockwise in NDC (front-facing in GL) has area < 0.
+    keep = area != 0 and not (cull == 1 and area > 0)
+    c0, c1, c2, c3, c4, c5 = c
+    if area < 0:
+        c2, c3, c4, c5 = c4, c5, c2, c3
+    c = (c0, c1, c2, c3, c4, c5)
+    box = _sample_bbox(c, n, nw, nh)
+    return keep and box[0] <= box[1] and box[2] <= box[3], c, box
+
+
 # The per-primitive rows (a whole triangle's row t < M of coords / bbox, else a clipped piece's
 # row t - M of the pieces' coords / bbox) are read as scalars in the loops themselves: a row
 # view, or an array passed to a helper (inlined or not), updates the array's reference count
 # (atomically, on a cache line the threads share), which in the binning and visibility loops
-# cost 2-4x the loops' own work (benchmarks/README.md, cold start). For the same reason every
-# kernel takes its records' arrays into locals once, before its loops.
+# cost 2-4x the loops' own work (benchmarks/README.md, cold start).
 
 
 @banded("counts")
 def setup_triangles(lo, hi, verts, faces, grid, setup, tris, counts):
-    """Per triangle: trivial reject, snapped screen coordinates (fast path), the depth plane, and
-    the first binning pass (tile counts), in one pass over chunks of ``setup.chunk`` triangles.
-
-    status[t]: 0 rejected (outside a plane, zero area, culled, or covering no sample centre),
-    1 one primitive: coords[t] (1/256 px, vertices 1 and 2 swapped if needed so the signed area
-    is positive) and bbox[t] = (sx0, sx1, sy0, sy1), its inclusive sample range; 2 needs
-    clipping (counted later by ``bin_count_clipped``). qplane[t] = (a, b, c): Q = 1/w =
-    a sx + b sy + c on the sample grid (exact vertices). counts[c, tile] += 1 for every tile a
-    status-1 triangle of chunk c touches.
-    """
-    clip = verts.clip
-    snapped = verts.snapped
-    outcode = verts.outcode
-    coords = tris.coords
-    bbox = tris.bbox
-    status = tris.status
-    qplane = tris.qplane
-    n = grid.n
-    nw = grid.nw
-    nh = grid.nh
-    shift = grid.shift
-    tiles_x = grid.tiles_x
-    cull = setup.cull
-    chunk = setup.chunk
+    """Per triangle, over chunks of ``setup.chunk``: trivial reject, the depth plane qplane[t] =
+    (a, b, c) with Q = 1/w = a sx + b sy + c (exact vertices), and status[t]: 0 rejected, 1 one
+    primitive (coords[t], bbox[t] from ``_primitive``; counts[c, tile] += 1 for every tile it
+    touches), 2 needs clipping (counted later by ``bin_count_clipped``)."""
+    clip, snapped, outcode = verts
+    coords, bbox, status, qplane = tris
+    n, nw, nh, shift, tiles_x = grid.n, grid.nw, grid.nh, grid.shift, grid.tiles_x
+    _, cull, chunk = setup
     m = faces.shape[0]
     for c in range(lo, hi):
         for t in range(c * chunk, min(m, (c + 1) * chunk)):
@@ -393,30 +350,15 @@ def setup_triangles(lo, hi, verts, faces, grid, setup, tris, counts):
             clipped = (o0 | o1 | o2) != 0
             sx0 = sx1 = sy0 = sy1 = 0
             if not clipped:  # scalars, not row views (see above)
-                c0 = snapped[i0, 0]
-                c1 = snapped[i0, 1]
-                c2 = snapped[i1, 0]
-                c3 = snapped[i1, 1]
-                c4 = snapped[i2, 0]
-                c5 = snapped[i2, 1]
-                coords[t, 0] = c0
-                coords[t, 1] = c1
-                coords[t, 2] = c2
-                coords[t, 3] = c3
-                coords[t, 4] = c4
-                coords[t, 5] = c5
-                area = _signed_area((c0, c1, c2, c3, c4, c5))
-                if not _keep(area, cull):
+                x0, y0 = snapped[i0, 0], snapped[i0, 1]
+                x1, y1 = snapped[i1, 0], snapped[i1, 1]
+                x2, y2 = snapped[i2, 0], snapped[i2, 1]
+                keep, c6, box = _primitive((x0, y0, x1, y1, x2, y2), cull, n, nw, nh)
+                if not keep:
                     continue
-                if area < 0:  # canonical orientation: interior where all edge functions >= 0
-                    c2, c3, c4, c5 = c4, c5, c2, c3
-                    coords[t, 2] = c2
-                    coords[t, 3] = c3
-                    coords[t, 4] = c4
-                    coords[t, 5] = c5
-                sx0, sx1, sy0, sy1 = _sample_bbox((c0, c1, c2, c3, c4, c5), n, nw, nh)
-                if sx0 > sx1 or sy0 > sy1:
-                    continue  # covers no sample centre
+                for q in range(6):
+                    coords[t, q] = c6[q]
+                sx0, sx1, sy0, sy1 = box
             det, l00, l01, l02, l10, l11, l12, l20, l21, l22 = _lam_rows(
                 (clip[i0, 0], clip[i0, 1], clip[i0, 3]),
                 (clip[i1, 0], clip[i1, 1], clip[i1, 3]),
@@ -444,19 +386,11 @@ def setup_triangles(lo, hi, verts, faces, grid, setup, tris, counts):
 
 @njit
 def clip_triangles(clip, faces, todo, grid, setup, max_out):
-    """Clip the triangles listed in ``todo`` (status 2); fan-triangulate and snap the result.
-
-    Returns (coords (K, 6) int32 in canonical orientation, bbox (K, 4) int32, parent (K,) int64,
-    first (len(todo)+1,) int64), in the order of ``todo`` (deterministic): the fields of
-    :class:`Pieces` after ``todo``. Pieces that cover no sample centre are dropped.
-    """
-    width = grid.width
-    height = grid.height
-    n = grid.n
-    nw = grid.nw
-    nh = grid.nh
-    guard = setup.guard
-    cull = setup.cull
+    """Clip the triangles ``todo`` (status 2), fan-triangulate and snap the result: the fields
+    of :class:`Pieces` after ``todo``, in the order of ``todo`` (deterministic); pieces that
+    cover no sample centre are dropped."""
+    width, height, n, nw, nh = grid.width, grid.height, grid.n, grid.nw, grid.nh
+    guard, cull, _ = setup
     sub = np.empty((max_out, 6), dtype=np.int32)
     sub_bbox = np.empty((max_out, 4), dtype=np.int32)
     parent = np.empty(max_out, dtype=np.int64)
@@ -472,45 +406,29 @@ def clip_triangles(clip, faces, todo, grid, setup, max_out):
             clip[faces[t, 0]], clip[faces[t, 1]], clip[faces[t, 2]], guard, poly, tmp
         )
         for j in range(cnt):
-            x, y = _snap(poly[j, 0], poly[j, 1], poly[j, 3], width, height)
-            pts[2 * j] = x
-            pts[2 * j + 1] = y
+            pts[2 * j], pts[2 * j + 1] = _snap(poly[j, 0], poly[j, 1], poly[j, 3], width, height)
         for j in range(1, cnt - 1):
-            c0, c1 = pts[0], pts[1]
-            c2, c3 = pts[2 * j], pts[2 * j + 1]
-            c4, c5 = pts[2 * j + 2], pts[2 * j + 3]
-            area = _signed_area((c0, c1, c2, c3, c4, c5))
-            if not _keep(area, cull):
-                continue
-            if area < 0:
-                c2, c3, c4, c5 = c4, c5, c2, c3
-            c = (c0, c1, c2, c3, c4, c5)
-            sx0, sx1, sy0, sy1 = _sample_bbox(c, n, nw, nh)
-            if sx0 > sx1 or sy0 > sy1:
+            c = (pts[0], pts[1], pts[2 * j], pts[2 * j + 1], pts[2 * j + 2], pts[2 * j + 3])
+            keep, c, box = _primitive(c, cull, n, nw, nh)
+            if not keep:
                 continue
             for q in range(6):
                 sub[k, q] = c[q]
-            sub_bbox[k, 0] = sx0
-            sub_bbox[k, 1] = sx1
-            sub_bbox[k, 2] = sy0
-            sub_bbox[k, 3] = sy1
+            for q in range(4):
+                sub_bbox[k, q] = box[q]
             parent[k] = t
             k += 1
     first[todo.shape[0]] = k
     return sub[:k].copy(), sub_bbox[:k].copy(), parent[:k].copy(), first
 
 
-# ---------------------------------------------------------------------------------------------
-# Binning and visibility
-# ---------------------------------------------------------------------------------------------
+# --- Binning and visibility
 
 
 @njit
 def bin_count_clipped(pieces, grid, chunk, counts):
     """Add the clipped triangles' pieces to the tile counts of their triangle's chunk."""
-    todo = pieces.todo
-    first = pieces.first
-    bbox = pieces.bbox
+    todo, first, _, bbox, _ = pieces
     shift = grid.shift
     tiles_x = grid.tiles_x
     for i in range(todo.shape[0]):
@@ -527,11 +445,8 @@ def bin_fill(c_lo, c_hi, tris, pieces, grid, setup, offsets, lists):
     """Write primitive references into per-tile lists (the traversal of the counts), so every
     tile's list is in increasing triangle order whatever the thread count. ``offsets[c, k]``:
     where chunk c's references of tile k start in ``lists``."""
-    status = tris.status
-    bbox = tris.bbox
-    todo = pieces.todo
-    sub_first = pieces.first
-    sub_bbox = pieces.bbox
+    _, bbox, status, _ = tris
+    todo, sub_first, _, sub_bbox, _ = pieces
     shift = grid.shift
     tiles_x = grid.tiles_x
     chunk = setup.chunk
@@ -593,9 +508,7 @@ def _tile_rect(k, tiles_x, tile, nw, nh):
 
 @njit
 def _prim_in_tile(c, b, n, rect):
-    """Sample range clipped to the tile and the three edge functions of a primitive: vertices
-    ``c = (X0, Y0, X1, Y1, X2, Y2)`` in 1/256 px, ``b = (sx0, sx1, sy0, sy1)`` its sample box,
-    ``rect = (x0, y0, x1, y1)`` the tile's."""
+    """A primitive's sample box ``b`` clipped to the tile ``rect`` and its three edge functions."""
     c0, c1, c2, c3, c4, c5 = c
     x0, y0, x1, y1 = rect
     sx0 = max(np.int64(b[0]), x0)
@@ -613,148 +526,101 @@ def _tiles(tris, pieces, bins, *_):
     return bins.first.shape[0] - 1
 
 
-@banded(_tiles)
-def raster_visibility(lo, hi, tris, pieces, bins, grid, depth_range, out):
-    """Depth-tested visibility, one tile per task: out.tri_id (nH, nW) int32 gets the nearest
-    parent triangle index (-1 where empty). Depth is Q = 1/w of the exact vertices (larger is
-    nearer); ties keep the earlier primitive (lists are in increasing triangle order), so the
-    result is independent of the thread count and of the tile size. Samples whose exact Q lies
-    outside [q_lo, q_hi] (beyond the far/near plane, with a relative slack) are not covered.
+#: Modes of the tile kernel: depth-tested visibility, or the debug count of claims per sample.
+VISIBILITY, COUNT = 0, 1
 
-    out.depth (nH, nW) float32, or shape (0, 0): also w = 1 / Q of the winner (+inf where
-    empty), the value ``interp_depth`` computes from the same plane (so bit-identical), without
-    its second pass over the samples."""
-    coords = tris.coords
-    bbox = tris.bbox
-    qplane = tris.qplane
-    sub = pieces.coords
-    sub_bbox = pieces.bbox
-    sub_parent = pieces.parent
-    tile_first = bins.first
-    tile_lists = bins.lists
-    n = grid.n
-    nw = grid.nw
-    nh = grid.nh
-    tile = grid.tile
-    tiles_x = grid.tiles_x
-    q_lo = depth_range.q_lo
-    q_hi = depth_range.q_hi
-    tri_id = out.tri_id
-    depth = out.depth
-    m = coords.shape[0]
-    for k in range(lo, hi):
-        x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
-        qbuf = np.full((y1 - y0, x1 - x0), -np.inf)
-        ibuf = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
-        for e in range(tile_first[k], tile_first[k + 1]):
-            ref = tile_lists[e]
-            if ref < m:  # scalars, not row views (see above)
-                t = ref
-                c = (
-                    coords[ref, 0],
-                    coords[ref, 1],
-                    coords[ref, 2],
-                    coords[ref, 3],
-                    coords[ref, 4],
-                    coords[ref, 5],
+
+@specialised
+def _raster_for(mode):
+    """The tile kernel of ``mode`` (``raster_visibility`` or ``raster_count``): one coverage loop,
+    the other mode's code pruned before typing."""
+
+    @banded(_tiles)
+    def raster(lo, hi, tris, pieces, bins, grid, depth_range, out):
+        coords, bbox, _, qplane = tris
+        _, _, sub, sub_bbox, sub_parent = pieces
+        tile_first, tile_lists = bins
+        n, nw, nh, tile, tiles_x = grid.n, grid.nw, grid.nh, grid.tile, grid.tiles_x
+        q_lo, q_hi = depth_range
+        m = coords.shape[0]
+        if mode == VISIBILITY:
+            tri_id, depth = out
+        for k in range(lo, hi):
+            x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
+            if mode == VISIBILITY:
+                qbuf = np.full((y1 - y0, x1 - x0), -np.inf)
+                ibuf = np.full((y1 - y0, x1 - x0), -1, dtype=np.int32)
+            for e in range(tile_first[k], tile_first[k + 1]):
+                ref = tile_lists[e]
+                if ref < m:  # scalars, not row views (see above)
+                    t = ref
+                    c = (
+                        coords[ref, 0],
+                        coords[ref, 1],
+                        coords[ref, 2],
+                        coords[ref, 3],
+                        coords[ref, 4],
+                        coords[ref, 5],
+                    )
+                    b = (bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3])
+                else:
+                    r = ref - m
+                    t = sub_parent[r]
+                    c = (sub[r, 0], sub[r, 1], sub[r, 2], sub[r, 3], sub[r, 4], sub[r, 5])
+                    b = (sub_bbox[r, 0], sub_bbox[r, 1], sub_bbox[r, 2], sub_bbox[r, 3])
+                sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
+                    c, b, n, (x0, y0, x1, y1)
                 )
-                b = (bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3])
-            else:
-                r = ref - m
-                t = sub_parent[r]
-                c = (sub[r, 0], sub[r, 1], sub[r, 2], sub[r, 3], sub[r, 4], sub[r, 5])
-                b = (sub_bbox[r, 0], sub_bbox[r, 1], sub_bbox[r, 2], sub_bbox[r, 3])
-            sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
-                c, b, n, (x0, y0, x1, y1)
-            )
-            qa = qplane[t, 0]
-            qb = qplane[t, 1]
-            qc = qplane[t, 2]
-            for sy in range(sy0, sy1 + 1):
-                e0 = A0 * sx0 + B0 * sy + C0
-                e1 = A1 * sx0 + B1 * sy + C1
-                e2 = A2 * sx0 + B2 * sy + C2
-                for sx in range(sx0, sx1 + 1):
-                    if (e0 | e1 | e2) >= 0:
-                        q = qa * sx + qb * sy + qc
-                        # per-sample depth clip (as GL's): snapping may cover a sample whose
-                        # exact point lies beyond the near/far plane (there Q -> 0 at a horizon)
-                        if q > qbuf[sy - y0, sx - x0] and q_lo <= q <= q_hi:
-                            qbuf[sy - y0, sx - x0] = q
-                            ibuf[sy - y0, sx - x0] = t
-                    e0 += A0
-                    e1 += A1
-                    e2 += A2
-        for sy in range(y0, y1):
-            for sx in range(x0, x1):
-                tri_id[sy, sx] = ibuf[sy - y0, sx - x0]
-        if depth.shape[0] > 0:
-            for sy in range(y0, y1):
-                for sx in range(x0, x1):
-                    if ibuf[sy - y0, sx - x0] < 0:
-                        depth[sy, sx] = np.inf
-                    else:
-                        depth[sy, sx] = 1.0 / qbuf[sy - y0, sx - x0]
+                qa = qplane[t, 0]
+                qb = qplane[t, 1]
+                qc = qplane[t, 2]
+                for sy in range(sy0, sy1 + 1):
+                    e0 = A0 * sx0 + B0 * sy + C0
+                    e1 = A1 * sx0 + B1 * sy + C1
+                    e2 = A2 * sx0 + B2 * sy + C2
+                    for sx in range(sx0, sx1 + 1):
+                        if (e0 | e1 | e2) >= 0:
+                            q = qa * sx + qb * sy + qc
+                            # per-sample depth clip (as GL's): snapping may cover a sample whose
+                            # exact point lies beyond the near/far plane (there Q -> 0 at a horizon)
+                            if mode == COUNT:
+                                if q_lo <= q <= q_hi:
+                                    out[sy, sx] += 1
+                            elif q > qbuf[sy - y0, sx - x0] and q_lo <= q <= q_hi:
+                                qbuf[sy - y0, sx - x0] = q
+                                ibuf[sy - y0, sx - x0] = t
+                        e0 += A0
+                        e1 += A1
+                        e2 += A2
+            if mode == VISIBILITY:
+                for sy in range(y0, y1):
+                    for sx in range(x0, x1):
+                        tri_id[sy, sx] = ibuf[sy - y0, sx - x0]
+                if depth.shape[0] > 0:
+                    for sy in range(y0, y1):
+                        for sx in range(x0, x1):
+                            if ibuf[sy - y0, sx - x0] < 0:
+                                depth[sy, sx] = np.inf
+                            else:
+                                depth[sy, sx] = 1.0 / qbuf[sy - y0, sx - x0]
+
+    return raster
 
 
-@banded(_tiles)
-def raster_count(lo, hi, tris, pieces, bins, grid, depth_range, count):
-    """Debug: count[sy, sx] = how many primitives claim each sample: the coverage rule and the
-    per-sample near/far clip of ``raster_visibility``, without the depth test between them."""
-    coords = tris.coords
-    bbox = tris.bbox
-    qplane = tris.qplane
-    sub = pieces.coords
-    sub_bbox = pieces.bbox
-    sub_parent = pieces.parent
-    tile_first = bins.first
-    tile_lists = bins.lists
-    n = grid.n
-    nw = grid.nw
-    nh = grid.nh
-    tile = grid.tile
-    tiles_x = grid.tiles_x
-    q_lo = depth_range.q_lo
-    q_hi = depth_range.q_hi
-    m = coords.shape[0]
-    for k in range(lo, hi):
-        x0, y0, x1, y1 = _tile_rect(k, tiles_x, tile, nw, nh)
-        for e in range(tile_first[k], tile_first[k + 1]):
-            ref = tile_lists[e]
-            if ref < m:  # scalars, not row views (see above)
-                t = ref
-                c = (
-                    coords[ref, 0],
-                    coords[ref, 1],
-                    coords[ref, 2],
-                    coords[ref, 3],
-                    coords[ref, 4],
-                    coords[ref, 5],
-                )
-                b = (bbox[ref, 0], bbox[ref, 1], bbox[ref, 2], bbox[ref, 3])
-            else:
-                r = ref - m
-                t = sub_parent[r]
-                c = (sub[r, 0], sub[r, 1], sub[r, 2], sub[r, 3], sub[r, 4], sub[r, 5])
-                b = (sub_bbox[r, 0], sub_bbox[r, 1], sub_bbox[r, 2], sub_bbox[r, 3])
-            sx0, sx1, sy0, sy1, A0, B0, C0, A1, B1, C1, A2, B2, C2 = _prim_in_tile(
-                c, b, n, (x0, y0, x1, y1)
-            )
-            for sy in range(sy0, sy1 + 1):
-                for sx in range(sx0, sx1 + 1):
-                    e0 = A0 * sx + B0 * sy + C0
-                    e1 = A1 * sx + B1 * sy + C1
-                    e2 = A2 * sx + B2 * sy + C2
-                    if (e0 | e1 | e2) >= 0:
-                        q = qplane[t, 0] * sx + qplane[t, 1] * sy + qplane[t, 2]
-                        if q_lo <= q <= q_hi:
-                            count[sy, sx] += 1
+#: Depth-tested visibility, one tile per task: out.tri_id (nH, nW) int32 gets the nearest parent
+#: triangle index (-1 where empty). Depth is Q = 1/w of the exact vertices (larger is nearer);
+#: ties keep the earlier primitive (lists are in increasing triangle order), so the result is
+#: independent of the thread count and of the tile size. Samples whose exact Q lies outside
+#: [q_lo, q_hi] (beyond the far/near plane, with a relative slack) are not covered. out.depth
+#: (nH, nW) float32, or shape (0, 0): also w = 1 / Q of the winner (+inf where empty), the value
+#: ``interp_depth`` computes from the same plane (so bit-identical), without its second pass.
+raster_visibility = _raster_for(VISIBILITY)
+#: Debug: out[sy, sx] (int32) += how many primitives claim each sample: the coverage rule and the
+#: per-sample near/far clip of ``raster_visibility``, without the depth test between them.
+raster_count = _raster_for(COUNT)
 
 
-# ---------------------------------------------------------------------------------------------
-# Interpolation kernels: depth, barycentrics, and one fused pass over every requested per-vertex
-# table (zero-width tables cost nothing), so a channel that is not asked for is not computed.
-# ---------------------------------------------------------------------------------------------
+# --- Interpolation: depth, barycentrics, and one fused pass over the requested per-vertex tables
 
 
 @njit
@@ -785,15 +651,8 @@ def lam_for_marked(lo, hi, clip, faces, mark, grid, lam):
             nw,
             nh,
         )
-        lam[t, 0, 0] = r[1]
-        lam[t, 0, 1] = r[2]
-        lam[t, 0, 2] = r[3]
-        lam[t, 1, 0] = r[4]
-        lam[t, 1, 1] = r[5]
-        lam[t, 1, 2] = r[6]
-        lam[t, 2, 0] = r[7]
-        lam[t, 2, 1] = r[8]
-        lam[t, 2, 2] = r[9]
+        for i in range(9):
+            lam[t, i // 3, i % 3] = r[i + 1]
 
 
 @njit
@@ -812,10 +671,9 @@ def interp_depth(lo, hi, tri_id, qplane, depth):
     for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
             t = tri_id[sy, sx]
-            if t < 0:
-                depth[sy, sx] = np.inf
-            else:
-                depth[sy, sx] = 1.0 / (qplane[t, 0] * sx + qplane[t, 1] * sy + qplane[t, 2])
+            depth[sy, sx] = (
+                np.inf if t < 0 else 1.0 / (qplane[t, 0] * sx + qplane[t, 1] * sy + qplane[t, 2])
+            )
 
 
 @banded("tri_id")
@@ -853,151 +711,99 @@ def interp_ndc_z(lo, hi, tri_id, lam, faces, z, ndc):
             ndc[sy, sx] = zc / inv_q
 
 
-@banded("tri_id")
-def interp_fused(lo, hi, tri_id, lam, faces, n, tables, outs):
-    """All requested per-vertex quantities in one pass over the samples, so each sample gathers
-    its triangle's planes and indices once (on dense meshes these gathers dominate).
+@specialised
+def _interp_for(full):
+    """``interp_fused`` (``full`` False) or ``interp_fused_full`` (True)."""
 
-    tables.dtab (N, Cd): values with analytic per-pixel derivatives -> outs.d, outs.dx, outs.dy
-    (nH, nW, Cd); tables.vtab (N, Cv): values only -> outs.v; tables.ntab (N, 3k), k in {0, 1}:
-    normals, renormalized -> outs.normal. outs.w (nH, nW, k), k in {0, 1}: depth w = 1 / Q (+inf
-    where empty). Zero-width tables cost nothing (their loops run zero times). Empty samples get
-    0. f = P / Q and df = (dP - f dQ) / Q with d(sample)/d(pixel) = n.
-    """
-    dtab = tables.dtab
-    vtab = tables.vtab
-    ntab = tables.ntab
-    dout = outs.d
-    dxout = outs.dx
-    dyout = outs.dy
-    vout = outs.v
-    nout = outs.normal
-    wout = outs.w
-    cd = dtab.shape[1]
-    cv = vtab.shape[1]
-    k_n = ntab.shape[1] // 3
-    k_w = wout.shape[2]
-    for sy in range(lo, hi):
-        for sx in range(tri_id.shape[1]):
-            t = tri_id[sy, sx]
-            if t < 0:
+    @banded("tri_id")
+    def interp(lo, hi, tri_id, lam, faces, n, tables, outs):
+        dtab, vtab, ntab = tables
+        dout, dxout, dyout, vout, nout, wout = outs
+        if full:  # loop counts fixed at compile time (~1.5x faster)
+            cd = 2
+            cv = 0
+            k_n = 1
+            k_w = 1
+        else:
+            cd = dtab.shape[1]
+            cv = vtab.shape[1]
+            k_n = ntab.shape[1] // 3
+            k_w = wout.shape[2]
+        for sy in range(lo, hi):
+            for sx in range(tri_id.shape[1]):
+                t = tri_id[sy, sx]
+                if t < 0:
+                    for c in range(k_w):
+                        wout[sy, sx, c] = np.inf
+                    for c in range(cd):
+                        dout[sy, sx, c] = 0.0
+                        dxout[sy, sx, c] = 0.0
+                        dyout[sy, sx, c] = 0.0
+                    for c in range(cv):
+                        vout[sy, sx, c] = 0.0
+                    for c in range(3 * k_n):
+                        nout[sy, sx, c] = 0.0
+                    continue
+                l0, l1, l2 = _lambdas(lam, t, sx, sy)
+                q = l0 + l1 + l2
+                inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
                 for c in range(k_w):
-                    wout[sy, sx, c] = np.inf
-                for c in range(cd):
-                    dout[sy, sx, c] = 0.0
-                    dxout[sy, sx, c] = 0.0
-                    dyout[sy, sx, c] = 0.0
+                    wout[sy, sx, c] = inv_q
+                i0 = faces[t, 0]
+                i1 = faces[t, 1]
+                i2 = faces[t, 2]
+                if cd > 0:
+                    ax0 = lam[t, 0, 0] * n
+                    ax1 = lam[t, 1, 0] * n
+                    ax2 = lam[t, 2, 0] * n
+                    ay0 = lam[t, 0, 1] * n
+                    ay1 = lam[t, 1, 1] * n
+                    ay2 = lam[t, 2, 1] * n
+                    qx = ax0 + ax1 + ax2
+                    qy = ay0 + ay1 + ay2
+                    for c in range(cd):
+                        f0 = dtab[i0, c]
+                        f1 = dtab[i1, c]
+                        f2 = dtab[i2, c]
+                        f = (l0 * f0 + l1 * f1 + l2 * f2) * inv_q
+                        dout[sy, sx, c] = f
+                        dxout[sy, sx, c] = (ax0 * f0 + ax1 * f1 + ax2 * f2 - f * qx) * inv_q
+                        dyout[sy, sx, c] = (ay0 * f0 + ay1 * f1 + ay2 * f2 - f * qy) * inv_q
                 for c in range(cv):
-                    vout[sy, sx, c] = 0.0
-                for c in range(3 * k_n):
-                    nout[sy, sx, c] = 0.0
-                continue
-            l0, l1, l2 = _lambdas(lam, t, sx, sy)
-            q = l0 + l1 + l2
-            inv_q = 1.0 / q  # one division per sample (divisions dominate these kernels)
-            for c in range(k_w):
-                wout[sy, sx, c] = inv_q
-            i0 = faces[t, 0]
-            i1 = faces[t, 1]
-            i2 = faces[t, 2]
-            if cd > 0:
-                ax0 = lam[t, 0, 0] * n
-                ax1 = lam[t, 1, 0] * n
-                ax2 = lam[t, 2, 0] * n
-                ay0 = lam[t, 0, 1] * n
-                ay1 = lam[t, 1, 1] * n
-                ay2 = lam[t, 2, 1] * n
-                qx = ax0 + ax1 + ax2
-                qy = ay0 + ay1 + ay2
-                for c in range(cd):
-                    f0 = dtab[i0, c]
-                    f1 = dtab[i1, c]
-                    f2 = dtab[i2, c]
-                    f = (l0 * f0 + l1 * f1 + l2 * f2) * inv_q
-                    dout[sy, sx, c] = f
-                    dxout[sy, sx, c] = (ax0 * f0 + ax1 * f1 + ax2 * f2 - f * qx) * inv_q
-                    dyout[sy, sx, c] = (ay0 * f0 + ay1 * f1 + ay2 * f2 - f * qy) * inv_q
-            for c in range(cv):
-                vout[sy, sx, c] = (l0 * vtab[i0, c] + l1 * vtab[i1, c] + l2 * vtab[i2, c]) * inv_q
-            for _ in range(k_n):
-                nx = l0 * ntab[i0, 0] + l1 * ntab[i1, 0] + l2 * ntab[i2, 0]
-                ny = l0 * ntab[i0, 1] + l1 * ntab[i1, 1] + l2 * ntab[i2, 1]
-                nz = l0 * ntab[i0, 2] + l1 * ntab[i1, 2] + l2 * ntab[i2, 2]
-                length = math.sqrt(nx * nx + ny * ny + nz * nz)
-                inv_len = 1.0 / length if length > 0.0 else 0.0
-                nout[sy, sx, 0] = nx * inv_len
-                nout[sy, sx, 1] = ny * inv_len
-                nout[sy, sx, 2] = nz * inv_len
+                    vout[sy, sx, c] = (
+                        l0 * vtab[i0, c] + l1 * vtab[i1, c] + l2 * vtab[i2, c]
+                    ) * inv_q
+                for _ in range(k_n):
+                    nx = l0 * ntab[i0, 0] + l1 * ntab[i1, 0] + l2 * ntab[i2, 0]
+                    ny = l0 * ntab[i0, 1] + l1 * ntab[i1, 1] + l2 * ntab[i2, 1]
+                    nz = l0 * ntab[i0, 2] + l1 * ntab[i1, 2] + l2 * ntab[i2, 2]
+                    length = math.sqrt(nx * nx + ny * ny + nz * nz)
+                    inv_len = 1.0 / length if length > 0.0 else 0.0
+                    nout[sy, sx, 0] = nx * inv_len
+                    nout[sy, sx, 1] = ny * inv_len
+                    nout[sy, sx, 2] = nz * inv_len
+
+    return interp
 
 
-@banded("tri_id")
-def interp_fused_full(lo, hi, tri_id, lam, faces, n, tables, outs):
-    """:func:`interp_fused` specialised to the full G-buffer (one 2-column table with
-    derivatives, normals, depth; no plain values): the same operations in the same order, so
-    bit-identical results, with the loop counts fixed at compile time (~1.5x faster).
-
-    dtab (N, 2); ntab (N, 3); d, dx, dy (nH, nW, 2); normal (nH, nW, 3); w (nH, nW, 1); vtab and
-    v are not read.
-    """
-    dtab = tables.dtab
-    ntab = tables.ntab
-    dout = outs.d
-    dxout = outs.dx
-    dyout = outs.dy
-    nout = outs.normal
-    wout = outs.w
-    for sy in range(lo, hi):
-        for sx in range(tri_id.shape[1]):
-            t = tri_id[sy, sx]
-            if t < 0:
-                wout[sy, sx, 0] = np.inf
-                for c in range(2):
-                    dout[sy, sx, c] = 0.0
-                    dxout[sy, sx, c] = 0.0
-                    dyout[sy, sx, c] = 0.0
-                for c in range(3):
-                    nout[sy, sx, c] = 0.0
-                continue
-            l0, l1, l2 = _lambdas(lam, t, sx, sy)
-            q = l0 + l1 + l2
-            inv_q = 1.0 / q
-            wout[sy, sx, 0] = inv_q
-            i0 = faces[t, 0]
-            i1 = faces[t, 1]
-            i2 = faces[t, 2]
-            ax0 = lam[t, 0, 0] * n
-            ax1 = lam[t, 1, 0] * n
-            ax2 = lam[t, 2, 0] * n
-            ay0 = lam[t, 0, 1] * n
-            ay1 = lam[t, 1, 1] * n
-            ay2 = lam[t, 2, 1] * n
-            qx = ax0 + ax1 + ax2
-            qy = ay0 + ay1 + ay2
-            for c in range(2):
-                f0 = dtab[i0, c]
-                f1 = dtab[i1, c]
-                f2 = dtab[i2, c]
-                f = (l0 * f0 + l1 * f1 + l2 * f2) * inv_q
-                dout[sy, sx, c] = f
-                dxout[sy, sx, c] = (ax0 * f0 + ax1 * f1 + ax2 * f2 - f * qx) * inv_q
-                dyout[sy, sx, c] = (ay0 * f0 + ay1 * f1 + ay2 * f2 - f * qy) * inv_q
-            nx = l0 * ntab[i0, 0] + l1 * ntab[i1, 0] + l2 * ntab[i2, 0]
-            ny = l0 * ntab[i0, 1] + l1 * ntab[i1, 1] + l2 * ntab[i2, 1]
-            nz = l0 * ntab[i0, 2] + l1 * ntab[i1, 2] + l2 * ntab[i2, 2]
-            length = math.sqrt(nx * nx + ny * ny + nz * nz)
-            inv_len = 1.0 / length if length > 0.0 else 0.0
-            nout[sy, sx, 0] = nx * inv_len
-            nout[sy, sx, 1] = ny * inv_len
-            nout[sy, sx, 2] = nz * inv_len
+#: All requested per-vertex quantities in one pass over the samples, so each sample gathers its
+#: triangle's planes and indices once (on dense meshes these gathers dominate). tables.dtab
+#: (N, Cd): values with analytic per-pixel derivatives -> outs.d, outs.dx, outs.dy (nH, nW, Cd);
+#: tables.vtab (N, Cv): values only -> outs.v; tables.ntab (N, 3k), k in {0, 1}: normals,
+#: renormalized -> outs.normal; outs.w (nH, nW, k): depth w = 1 / Q (+inf where empty).
+#: Zero-width tables cost nothing (their loops run zero times). Empty samples get 0. f = P / Q
+#: and df = (dP - f dQ) / Q with d(sample)/d(pixel) = n.
+interp_fused = _interp_for(False)
+#: ``interp_fused`` for the full G-buffer: dtab (N, 2), ntab (N, 3), w (nH, nW, 1), no values
+#: (vtab, v not read); the same operations in the same order (bit-identical results).
+interp_fused_full = _interp_for(True)
 
 
 @banded("tri_id")
 def mesh_ids(lo, hi, tri_id, first_tri, mesh_id):
-    """mesh_id (nH, nW) int32: the mesh of each sample's triangle, -1 where empty.
-
-    first_tri (M + 1,) int64: cumulative face counts (0, n_0, n_0 + n_1, ...); the mesh of
-    triangle t is ``searchsorted(first_tri, t, side="right") - 1`` (by bisection: meshes without
-    faces are skipped)."""
+    """mesh_id (nH, nW) int32: the mesh of each sample's triangle, -1 where empty. first_tri
+    (M + 1,) int64: cumulative face counts; the mesh of triangle t is ``searchsorted(first_tri,
+    t, side="right") - 1`` (by bisection: meshes without faces are skipped)."""
     m = first_tri.shape[0]
     for sy in range(lo, hi):
         for sx in range(tri_id.shape[1]):
@@ -1016,17 +822,14 @@ def mesh_ids(lo, hi, tri_id, first_tri, mesh_id):
             mesh_id[sy, sx] = lo - 1
 
 
-# ---------------------------------------------------------------------------------------------
-# Screen-space scales of the uv derivatives
-# ---------------------------------------------------------------------------------------------
+# --- Screen-space scales of the uv derivatives
 
 
 @njit
 def gl_lod(dx, dy, texels_u, texels_v):
-    """The isotropic LOD of OpenGL 4.x sec. 8.14 for uv derivatives ``dx = (du/dx, dv/dx)``,
-    ``dy = (du/dy, dv/dy)`` per pixel and a ``texels_u x texels_v`` texture: lambda = log2 rho,
-    rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels (libm's hypot and log2), rho at least
-    ``LOD_FLOOR``."""
+    """OpenGL 4.x sec. 8.14 isotropic LOD lambda = log2 rho, rho = max(|d(u,v)/dx|, |d(u,v)/dy|)
+    in texels of a ``texels_u x texels_v`` texture (libm's hypot and log2), at least LOD_FLOOR;
+    ``dx = (du/dx, dv/dx)``, ``dy = (du/dy, dv/dy)`` per pixel."""
     rho = max(
         math.hypot(dx[0] * texels_u, dx[1] * texels_v),
         math.hypot(dy[0] * texels_u, dy[1] * texels_v),
@@ -1045,17 +848,10 @@ def dyadic_scale_of(gx, gy, log2_period):
 
 @banded("tri_id")
 def screen_scales(lo, hi, tri_id, duv_dx, duv_dy, scales, lod, dyadic):
-    """lod and dyadic_scale of every sample from its uv derivatives (as stored, in float64),
-    0 where empty.
-
-    duv_dx, duv_dy (nH, nW, 2) float; lod (nH, nW) or (nH, 0); dyadic (nH, nW) or (nH, 0):
-    zero-width ones are not computed. ``gl_lod`` for ``scales.texels_u x scales.texels_v``
-    texels; ``dyadic_scale_of`` of the coordinate ``scales.coord`` (0: u, 1: v).
-    """
-    tw = scales.texels_u
-    th = scales.texels_v
-    k = scales.coord
-    log2_period = scales.log2_period
+    """lod (``gl_lod``) and dyadic (``dyadic_scale_of`` of the coordinate ``scales.coord``),
+    (nH, nW) each or (nH, 0): not computed, of every sample from its uv derivatives duv_dx,
+    duv_dy (nH, nW, 2) as stored (in float64); 0 where empty."""
+    tw, th, k, log2_period = scales
     do_lod = lod.shape[1] > 0
     do_dyadic = dyadic.shape[1] > 0
     for sy in range(lo, hi):

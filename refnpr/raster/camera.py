@@ -150,23 +150,20 @@ class Camera:
 
     def orbit(self, azimuth_deg: float = 0.0, elevation_deg: float = 0.0) -> Camera:
         """A copy rotated about ``target``: azimuth about ``up``, then elevation (degrees)."""
-        off = self.eye - self.target
+
+        def rotate(v, axis, a):  # Rodrigues' formula about a unit axis
+            return (
+                v * math.cos(a)
+                + np.cross(axis, v) * math.sin(a)
+                + axis * np.dot(axis, v) * (1 - math.cos(a))
+            )
+
         up = self.up / np.linalg.norm(self.up)
-        a = math.radians(_real("azimuth_deg", azimuth_deg))
-        off = (
-            off * math.cos(a)
-            + np.cross(up, off) * math.sin(a)
-            + up * np.dot(up, off) * (1 - math.cos(a))
-        )
+        off = rotate(self.eye - self.target, up, math.radians(_real("azimuth_deg", azimuth_deg)))
         right = np.cross(off, up)
         if np.linalg.norm(right) > 0:
-            right /= np.linalg.norm(right)
             e = math.radians(_real("elevation_deg", elevation_deg))
-            off = (
-                off * math.cos(e)
-                + np.cross(right, off) * math.sin(e)
-                + right * np.dot(right, off) * (1 - math.cos(e))
-            )
+            off = rotate(off, right / np.linalg.norm(right), e)
         return Camera.look_at(
             self.target + off, self.target, self.up, self.fov_y, self.near, self.far
         )

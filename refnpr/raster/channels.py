@@ -49,9 +49,8 @@ def check_vertex_data(meshes: Sequence[Mesh], wanted: set[str]) -> None:
 
 
 def frozen(a: np.ndarray) -> np.ndarray:
-    """A read-only view of ``a``: kernel inputs are always passed read-only, so numba compiles
-    one specialisation per kernel instead of one per writeable flag (a mesh's own arrays are
-    read-only, concatenations and copies are not; every variant costs a cold-start compile)."""
+    """A read-only view of ``a``: kernel inputs are always read-only, so numba compiles one
+    specialisation per kernel instead of one per writeable flag (each a cold-start compile)."""
     v = a.view()
     v.flags.writeable = False
     return v
@@ -98,17 +97,12 @@ def interpolated_channels(
     scales: K.Scales,
     depth_done: bool = False,
 ) -> None:
-    """depth, ndc_z, bary, position, normal, uv and their derivatives, lod, dyadic_scale and
-    vertex attributes (those in ``wanted``) for the samples of ``tri_id`` (nH, nW), written into
-    the arrays of ``dest`` (one per channel of ``wanted``: the arrays of ``out``, or fresh ones).
-
-    The first family with derivatives and the first without go through one fused pass with
-    the normals and the depth, every further family through a pass of its own (each column is
-    computed alone: the same values as in one table); ``lod`` and ``dyadic_scale`` from the uv
-    derivatives as stored. ``scratch.get(key, shape, dtype)`` gives work buffers: the derivatives
-    of uv when only ``lod`` or ``dyadic_scale`` asks for them, the per-triangle planes.
-    ``depth_done``: the visibility pass wrote ``depth``.
-    """
+    """The interpolated channels of ``wanted`` for the samples of ``tri_id`` (nH, nW), written
+    into the arrays of ``dest`` (those of ``out``, or fresh ones). Families after the first with
+    derivatives and the first without get a pass each (each column is computed alone: the same
+    values as in one table); ``lod`` and ``dyadic_scale`` come from the uv derivatives as
+    stored. ``scratch.get(key, shape, dtype)`` gives work buffers (uv derivatives nobody asked
+    for, the per-triangle planes). ``depth_done``: the visibility pass wrote ``depth``."""
     nh, nw = tri_id.shape
     attrs = attribute_names(meshes)
     if not needs_interpolation(wanted, attrs):
@@ -123,8 +117,6 @@ def interpolated_channels(
             v_parts.append(name)
 
     def values(name):
-        if name == "uv":
-            return _concat(meshes, "uv", "uv")
         if name == "position":
             return frozen(np.ascontiguousarray(positions, dtype=np.float64))
         return _concat(meshes, name, name)

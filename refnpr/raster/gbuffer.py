@@ -90,8 +90,7 @@ class GBuffer(Mapping):
     _scratch: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
 
     def _refill(self, **frame) -> GBuffer:
-        """Point this G-buffer at a new frame after ``rasterize(..., out=self)`` wrote its
-        channels in place (camera, matrices, parameters, timings). Private."""
+        """Point this G-buffer at the frame ``rasterize(..., out=self)`` wrote in place."""
         for key, value in frame.items():
             if key not in _FRAME_FIELDS:
                 raise TypeError(f"_refill: unknown field {key!r}")
@@ -143,14 +142,8 @@ class GBuffer(Mapping):
         return int(sum(a.nbytes for a in self.channels.values()))
 
     def display_grid(self, *, max_tile: int = 256, columns: int = 4) -> np.ndarray:
-        """Every channel as a labelled tile, in a grid: ``(H', W', 3)`` uint8.
-
-        Depth normalised (near bright), normals as colour, uv as (R, G), derivatives, ``lod``
-        and ``dyadic_scale`` in a symmetric colour map (blue < 0 < red), ``tri_id`` and
-        ``mesh_id`` false-coloured by a hash, empty samples as a grey checkerboard; each tile
-        at most ``max_tile`` pixels on its long side, under its channel name. See
-        :mod:`refnpr.raster._display`.
-        """
+        """Every channel as a labelled tile at most ``max_tile`` pixels on its long side, in a
+        grid of ``columns``: ``(H', W', 3)`` uint8 (the encodings: :mod:`refnpr.raster._display`)."""
         from ._display import gbuffer_grid
 
         return gbuffer_grid(self, max_tile=max_tile, columns=columns)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -74,10 +75,10 @@ def _as_float_array(name: str, value, ncols: int | None, nverts: int | None) -> 
             "give one value per vertex of `positions`"
         )
     if not np.all(np.isfinite(arr)):
-        bad = np.argwhere(~np.isfinite(arr))[0]
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
         raise ValueError(
-            f"{name}: contains NaN or inf (first at index {tuple(int(i) for i in bad)}, "
-            f"value {arr[tuple(bad)]}); remove or repair non-finite vertices"
+            f"{name}: contains NaN or inf (first at index {bad}, value {arr[bad]}); "
+            "remove or repair non-finite vertices"
         )
     return arr
 
@@ -239,14 +240,5 @@ class Mesh:
         return Mesh(pos, faces, normals, self.uv, self.attributes, self.name)
 
     def with_(self, **changes) -> Mesh:
-        """Copy with some fields replaced (``mesh.with_(uv=...)``)."""
-        fields = dict(
-            positions=self.positions,
-            faces=self.faces,
-            normals=self.normals,
-            uv=self.uv,
-            attributes=self.attributes,
-            name=self.name,
-        )
-        fields.update(changes)
-        return Mesh(**fields)
+        """Copy with some fields replaced (``mesh.with_(uv=...)``), validated as a new Mesh."""
+        return dataclasses.replace(self, **changes)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Iterable, Sequence
@@ -49,13 +50,13 @@ def _meshes_of(obj) -> list[Mesh]:
     return meshes
 
 
+def _channel_names(attr_names: Iterable[str]) -> set[str]:
+    return set(BUILTIN_CHANNELS).union(*({a, f"d{a}_dx", f"d{a}_dy"} for a in attr_names))
+
+
 def valid_channels(meshes: Mesh | Sequence[Mesh] | None = None) -> list[str]:
     """Channel names ``rasterize`` accepts (built-ins plus the meshes' common vertex attributes)."""
-    names = set(BUILTIN_CHANNELS)
-    if meshes is not None:
-        for a in attribute_names(_meshes_of(meshes)):
-            names |= {a, f"d{a}_dx", f"d{a}_dy"}
-    return sorted(names)
+    return sorted(_channel_names(() if meshes is None else attribute_names(_meshes_of(meshes))))
 
 
 def _check_int(name: str, value, lo: int) -> int:
@@ -99,9 +100,7 @@ def _parse_channels(channels: Iterable[str], attr_names: set[str]) -> set[str]:
         wanted = list(channels)
     except TypeError:
         raise TypeError(f"channels: expected a sequence of names, got {channels!r}") from None
-    valid = set(BUILTIN_CHANNELS)
-    for a in attr_names:
-        valid |= {a, f"d{a}_dx", f"d{a}_dy"}
+    valid = _channel_names(attr_names)
     for c in wanted:
         if not isinstance(c, str):
             raise TypeError(f"channels: names must be strings, got {c!r}")
@@ -171,14 +170,12 @@ def _check_out(out, layout, width, height, spp, dtype) -> None:
                 f"out[{name!r}]: must be a writeable C-contiguous array (got a read-only or "
                 f"strided view); {fix}"
             )
-    names = sorted(layout)
-    for i, a in enumerate(names):
-        for b in names[i + 1 :]:
-            if np.may_share_memory(out.channels[a], out.channels[b]):
-                raise ValueError(
-                    f"out: channels {a!r} and {b!r} share memory, so writing one would "
-                    f"overwrite the other; {fix}"
-                )
+    for a, b in itertools.combinations(sorted(layout), 2):
+        if np.may_share_memory(out.channels[a], out.channels[b]):
+            raise ValueError(
+                f"out: channels {a!r} and {b!r} share memory, so writing one would "
+                f"overwrite the other; {fix}"
+            )
 
 
 class _Scratch:
@@ -311,20 +308,11 @@ def rasterize(
             out, _layout(wanted, meshes, n, width, height, dtype), width, height, n * n, dtype
         )
     scratch = _Scratch(None if out is None else out._scratch)
-    _memory.check_fits(
-        width,
-        height,
-        n * n,
-        _memory.rasterize_bytes(
-            width,
-            height,
-            n * n,
-            wanted,
-            attributes=attribute_widths(meshes),
-            itemsize=dtype.itemsize,
-            tile=tile,
-        ),
+    widths = attribute_widths(meshes)
+    need = _memory.rasterize_bytes(
+        width, height, n * n, wanted, attributes=widths, itemsize=dtype.itemsize, tile=tile
     )
+    _memory.check_fits(width, height, n * n, need)
     nw, nh = n * width, n * height
     guard = min(_MAX_GUARD, 2.0 * _FIXED_LIMIT / (max(nw, nh) * 512.0) - 1.0)
     if guard < 1.5:
@@ -416,10 +404,7 @@ def rasterize(
         and dtype == np.float32
         and not _memory.needs_interpolation(wanted, attribute_names(meshes))
     ):
-        if out is not None:
-            depth_here = out.channels["depth"]
-        else:
-            depth_here = np.empty((nh, nw), dtype=np.float32)
+        depth_here = out.channels["depth"] if out is not None else np.empty((nh, nw), np.float32)
     run(K.raster_visibility, tris, pieces, bins, grid, depth_range, K.Visible(tri_id, depth_here))
     timings["visibility"] = time.perf_counter() - t0
 
@@ -433,11 +418,8 @@ def rasterize(
     if depth_done:
         res["depth"] = depth_here
     if "coverage_count" in wanted:
-        if "coverage_count" in dest:
-            cc = dest["coverage_count"]
-            cc.fill(0)
-        else:
-            cc = np.zeros((nh, nw), dtype=np.int32)
+        cc = dest["coverage_count"] if "coverage_count" in dest else np.empty((nh, nw), np.int32)
+        cc.fill(0)
         run(K.raster_count, tris, pieces, bins, grid, depth_range, cc)
         res["coverage_count"] = cc
     if "mesh_id" in wanted:
@@ -475,23 +457,9 @@ def rasterize(
         for key, arr in res.items():
             if arr is not dest[key]:
                 np.copyto(dest[key], arr)
-        timings["channels"] = time.perf_counter() - t0
-        timings["total"] = time.perf_counter() - t_start
-        return out._refill(
-            camera=camera,
-            view_projection=vp,
-            mesh_first_tri=first_tri,
-            texture_size=texture_size if "lod" in wanted else None,
-            line_period=float(line_period),
-            timings=timings,
-        )
     timings["channels"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
-    return GBuffer(
-        channels={k: res[k] for k in sorted(res)},
-        width=width,
-        height=height,
-        spp=n * n,
+    frame = dict(
         camera=camera,
         view_projection=vp,
         mesh_first_tri=first_tri,
@@ -499,3 +467,7 @@ def rasterize(
         line_period=float(line_period),
         timings=timings,
     )
+    if out is not None:
+        return out._refill(**frame)
+    channels = {k: res[k] for k in sorted(res)}
+    return GBuffer(channels=channels, width=width, height=height, spp=n * n, **frame)

@@ -37,15 +37,7 @@ def _peak(f):
         ("depth", "tri_id"),
         ("uv",),
         ("dyadic_scale",),
-        pytest.param(
-            ("depth", "ndc_z", "bary"),
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="refnpr._memory._interp_parts still counts the float64 slabs, copies "
-                "and temporaries of sets with ndc_z; the rasterizer now writes ndc_z (a kernel) "
-                "and every other channel of such sets straight into their arrays",
-            ),
-        ),
+        ("depth", "ndc_z", "bary"),
         ("uv", "dyadic_scale", "position", "normal", "mesh_id"),
         ("uv", "duv_dx", "duv_dy", "position", "dposition_dx"),
     ],
