@@ -18,12 +18,20 @@ from refnpr.styles import get_style
 from refnpr.styles.tamiss import StrokeField, field_inputs, layer_scale
 from refnpr.styles.tamiss.charts import (
     SYMMETRIES,
-    chart_adjacency,
+    _shared_vertices,
+    _unit_columns,
     chart_layout,
     vertex_frames,
 )
 from refnpr.styles.tamiss.compose import field_channels
 from refnpr.styles.tamiss.gather import scene_charts
+
+
+def chart_adjacency(mesh, labels) -> np.ndarray:
+    """(E, 2) int64 pairs of charts (a < b) that share a border, as chart_layout finds them."""
+    pa, pb, v_chart = _shared_vertices(mesh, labels, _unit_columns(vertex_frames(mesh)))
+    ca, cb = v_chart[pa], v_chart[pb]
+    return np.unique(np.stack([np.minimum(ca, cb), np.maximum(ca, cb)], axis=1), axis=0)
 
 
 def _quad(corners, uv) -> Mesh:

@@ -13,11 +13,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from refnpr.styles.tamiss.field import (
+from refnpr.formulas.tamiss.field import (
     KX,
     MAX_LEVEL,
-    SALT_TONE,
-    StrokeField,
     born_at,
     fade_in,
     hash01,
@@ -26,9 +24,9 @@ from refnpr.styles.tamiss.field import (
     salt_offset,
     seed_set,
     splitmix64,
-    stroke_geometry,
     unpack_id,
 )
+from refnpr.styles.tamiss.field import SALT_TONE, StrokeField, stroke_geometry
 
 BASE = {(int(KX[r]), r) for r in range(7)}  # S_0 in sevenths
 

@@ -7,16 +7,14 @@ import math
 import numpy as np
 import pytest
 
+from refnpr.formulas.tamiss.field import KX, hash01, pack_id
 from refnpr.raster import Camera, Mesh, rasterize
 from refnpr.scenes import Material, Scene, SceneObject, load_scene, teapot, uv_sphere
 from refnpr.styles.tamiss.field import (
-    KX,
     SALT_LENGTH,
     SALT_TONE,
     SALT_WIDTH,
     StrokeField,
-    hash01,
-    pack_id,
     stroke_geometry,
 )
 from refnpr.styles.tamiss.gather import (

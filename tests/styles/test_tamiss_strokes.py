@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from refnpr.formulas.tamiss import StrokeStrip, extrude_stroke, fit_fragments
-from refnpr.styles.tamiss.field import StrokeField, pack_id
+from refnpr.formulas.tamiss import StrokeStrip, extrude_stroke, fit_fragments, pack_id
+from refnpr.styles.tamiss.field import StrokeField
 from refnpr.styles.tamiss.raster import BRUSHES, brush_texture, rasterize_strips
 from refnpr.styles.tamiss.strokes import (
     Strips,

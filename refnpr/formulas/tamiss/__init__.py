@@ -21,99 +21,30 @@ Pipeline: ``fit_fragments(ids, t, x, y)`` = min/max of t, x, y per stroke -> ``n
 renderer calls) -> ``StrokeFit.visible_segments`` -> ``extrude_stroke``. The GPU's double-hashed
 routing of fragments to aggregate texels is modelled separately by :class:`StrokeHashTable`.
 
-The package is split by stage: ``field`` (the RPTAM stroke field the fragments are gathered
-from: ids, hashes, levels, the TAM baseline's coverage, the darkness), ``moments`` (regressors,
-aggregation), ``solve`` (CG, visibility prior), ``curve`` (the cubic and its slope), ``fit``
-(fits), ``segments`` (visible segments, extrusion) and ``hashing`` (double hashing); this
-module re-exports their public API. Per-sample formulas are scalar device functions
-(``f.scalar``) that the ``tam`` and ``tamiss`` kernels call, ``f`` their numpy faces; the
-per-stroke solves (CG, visibility prior, visible segments) are batched numpy host steps.
+The package is split by stage (``field``: the RPTAM stroke field the fragments are gathered
+from; ``moments``, ``solve``, ``curve``, ``fit``, ``segments``, ``hashing``); this module
+re-exports their public API. Per-sample formulas are scalar device functions (``f.scalar``) that
+the ``tam`` and ``tamiss`` kernels call, ``f`` their numpy faces; the per-stroke solves (CG,
+visibility prior, visible segments) are batched numpy host steps.
 """
 
 from __future__ import annotations
 
-from .curve import cubic, cubic_slope
-from .field import (
-    born_at,
-    darkness,
-    dyadic_scale,
-    fade_in,
-    hash01,
-    ink_over,
-    key32,
-    layer_density,
-    layer_frame,
-    level_rule,
-    pack_id,
-    row_distance,
-    splitmix64,
-    stroke_length,
-    stroke_param,
-    stroke_start,
-    tam_coverage,
-    tam_opacity,
-    unpack_id,
-    width_factor,
-)
-from .fit import LEGENDRE, StrokeFit, fit_fragments, fit_stroke, fit_strokes
-from .hashing import (
-    CLAIM,
-    EMPTY,
-    FOUND,
-    LOST,
-    RouteResult,
-    StrokeHashTable,
-    hash_slot,
-    probe_table,
-)
-from .moments import N_REGRESSORS, aggregate, fragment_regressors, normalize_t
-from .segments import StrokeStrip, extrude_stroke, visible_segments
-from .solve import cg_solve, moment_matrix, visibility_prior
+from . import curve, field, fit, hashing, moments, segments, solve
+from .curve import *  # noqa: F403
+from .field import *  # noqa: F403
+from .fit import *  # noqa: F403
+from .hashing import *  # noqa: F403
+from .moments import *  # noqa: F403
+from .segments import *  # noqa: F403
+from .solve import *  # noqa: F403
 
 __all__ = [
-    "N_REGRESSORS",
-    "fragment_regressors",
-    "normalize_t",
-    "aggregate",
-    "moment_matrix",
-    "cg_solve",
-    "visibility_prior",
-    "StrokeFit",
-    "LEGENDRE",
-    "fit_strokes",
-    "fit_fragments",
-    "fit_stroke",
-    "visible_segments",
-    "StrokeStrip",
-    "extrude_stroke",
-    "hash_slot",
-    "probe_table",
-    "StrokeHashTable",
-    "RouteResult",
-    "EMPTY",
-    "FOUND",
-    "CLAIM",
-    "LOST",
-    "cubic",
-    "cubic_slope",
-    "splitmix64",
-    "hash01",
-    "key32",
-    "pack_id",
-    "unpack_id",
-    "born_at",
-    "layer_frame",
-    "dyadic_scale",
-    "level_rule",
-    "fade_in",
-    "layer_density",
-    "row_distance",
-    "stroke_length",
-    "stroke_start",
-    "stroke_param",
-    "width_factor",
-    "tam_opacity",
-    "tam_coverage",
-    "ink_over",
-    "darkness",
+    *moments.__all__,
+    *solve.__all__,
+    *fit.__all__,
+    *segments.__all__,
+    *hashing.__all__,
+    *curve.__all__,
+    *field.__all__,
 ]

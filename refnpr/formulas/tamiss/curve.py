@@ -23,11 +23,13 @@ def _cubic(c, s):
     return ((c[3] * s + c[2]) * s + c[1]) * s + c[0]  # Horner: c0 + c1 s + c2 s^2 + c3 s^3
 
 
-def _coefficients(c) -> np.ndarray:
+def _arguments(c, s) -> tuple:
+    """The float type, the coefficients' columns and ``s`` of a face's arguments."""
     arr = as_float("c", c)
     if arr.ndim < 1 or arr.shape[-1] != 4:
         raise ValueError(f"c: expected shape (..., 4) (cubic coefficients), got {describe(arr)}")
-    return arr
+    dt = result_dtype(arr, s)
+    return dt, tuple(arr[..., k] for k in range(4)), as_float("s", s).astype(dt)
 
 
 @face(_cubic)
@@ -35,10 +37,8 @@ def cubic(c, s) -> np.ndarray:
     """c0 + c1 s + c2 s^2 + c3 s^3 (Horner's order) of coefficients ``c`` (..., 4) at ``s``
     (broadcasting against ``c[..., 0]``); float32 arithmetic where both are float32.
     ``cubic.scalar(c, s)`` takes the coefficients as a 4-tuple."""
-    arr = _coefficients(c)
-    dt = result_dtype(arr, s)
-    cols = tuple(arr[..., k] for k in range(4))
-    return elementwise(cubic.scalar, dt, cols, as_float("s", s).astype(dt), compute=dt)
+    dt, cols, s_ = _arguments(c, s)
+    return elementwise(cubic.scalar, dt, cols, s_, compute=dt)
 
 
 @njit
@@ -51,8 +51,6 @@ def _cubic_slope(c, s, k):
 def cubic_slope(c, s) -> np.ndarray:
     """dr/ds = c1 + 2 c2 s + 3 c3 s^2, as the cubic of (c1, 2 c2, 3 c3, 0) (Horner's order).
     ``cubic_slope.scalar(c, s, k)`` takes ``k = (2, 3, 0)`` in the curve's float type."""
-    arr = _coefficients(c)
-    dt = result_dtype(arr, s)
-    cols = tuple(arr[..., k] for k in range(4))
+    dt, cols, s_ = _arguments(c, s)
     k = (dt.type(2), dt.type(3), dt.type(0))
-    return elementwise(cubic_slope.scalar, dt, cols, as_float("s", s).astype(dt), k, compute=dt)
+    return elementwise(cubic_slope.scalar, dt, cols, s_, k, compute=dt)

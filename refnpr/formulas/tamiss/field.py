@@ -87,6 +87,10 @@ def _ints(name: str, value) -> np.ndarray:
     return arr.astype(np.int64)
 
 
+def _floats(**named) -> tuple[np.ndarray, ...]:
+    return tuple(as_float(k, v) for k, v in named.items())
+
+
 # ---------------------------------------------------------------------- hashes and ids
 
 
@@ -161,15 +165,11 @@ def pack_id(chart, layer, level, gx, gy, r) -> np.ndarray:
 def unpack_id(ids) -> dict[str, np.ndarray]:
     """Inverse of :func:`pack_id`: dict of int64 arrays chart, layer, level, gx, gy, row."""
     v = np.asarray(ids, dtype=np.int64)
-    r = v & 7
-    v = v >> 3
-    gy = (v & _MASK22) - _CELL_OFF
-    v = v >> CELL_BITS
-    gx = (v & _MASK22) - _CELL_OFF
-    v = v >> CELL_BITS
-    level = v & 15
-    v = v >> 4
-    return {"chart": v >> 2, "layer": v & 3, "level": level, "gx": gx, "gy": gy, "row": r}
+    gy = ((v >> 3) & _MASK22) - _CELL_OFF
+    gx = ((v >> (3 + CELL_BITS)) & _MASK22) - _CELL_OFF
+    top = v >> (3 + 2 * CELL_BITS)  # chart 10 | layer 2 | level 4
+    chart, layer, level = top >> 6, (top >> 4) & 3, top & 15
+    return {"chart": chart, "layer": layer, "level": level, "gx": gx, "gy": gy, "row": v & 7}
 
 
 @njit
@@ -306,14 +306,8 @@ def _row_distance(q, ry, rows, d_q):
 def row_distance(q, ry, rows, d_q) -> np.ndarray:
     """|q - ry / rows| d_q: pixels across from q to row ry of a level with ``rows`` rows per
     unit of q (7 2^level)."""
-    return elementwise(
-        row_distance.scalar,
-        np.float64,
-        as_float("q", q),
-        _ints("ry", ry),
-        rows,
-        as_float("d_q", d_q),
-    )
+    args = as_float("q", q), _ints("ry", ry), rows, as_float("d_q", d_q)
+    return elementwise(row_distance.scalar, np.float64, *args)
 
 
 # ---------------------------------------------------------------------- one stroke
@@ -341,11 +335,8 @@ def stroke_start(gx, r, level, length) -> np.ndarray:
     """p_start = (gx + KX[r] / 7) 2^-level - length / 2: where the stroke of seed (gx, r) of
     ``level`` starts along p (centred on its seed). ``stroke_start.scalar(gx, kx7, 2^-level,
     length)`` takes the row's KX[r] / 7."""
-    inv = np.ldexp(1.0, -_ints("level", level))
-    kx7 = KX7[_ints("r", r)]
-    return elementwise(
-        stroke_start.scalar, np.float64, _ints("gx", gx), kx7, inv, as_float("length", length)
-    )
+    args = _ints("gx", gx), KX7[_ints("r", r)], np.ldexp(1.0, -_ints("level", level))
+    return elementwise(stroke_start.scalar, np.float64, *args, as_float("length", length))
 
 
 @njit
@@ -358,8 +349,8 @@ def _stroke_param(p, p_start, length, d_p):
 def stroke_param(p, p_start, length, d_p) -> np.ndarray:
     """(..., 2): the stroke parameter t = (p - p_start) / length and the signed pixel distance
     past the nearer end, max(-t, t - 1) length d_p (negative inside the stroke)."""
-    named = {"p": p, "p_start": p_start, "length": length, "d_p": d_p}
-    return elementwise(stroke_param.scalar, np.float64, *(as_float(k, v) for k, v in named.items()))
+    args = _floats(p=p, p_start=p_start, length=length, d_p=d_p)
+    return elementwise(stroke_param.scalar, np.float64, *args)
 
 
 @njit
@@ -400,8 +391,8 @@ def tam_coverage(width, wf, dist, beyond) -> np.ndarray:
     """clip(w f / 2 - d + 0.5, 0, 1) clip(0.5 - e, 0, 1): the TAM baseline's anti-aliased
     coverage of a stroke of ``width`` pixels and width factor f at d pixels across and e pixels
     past its nearer end (signed)."""
-    named = {"width": width, "wf": wf, "dist": dist, "beyond": beyond}
-    return elementwise(tam_coverage.scalar, np.float64, *(as_float(k, v) for k, v in named.items()))
+    args = _floats(width=width, wf=wf, dist=dist, beyond=beyond)
+    return elementwise(tam_coverage.scalar, np.float64, *args)
 
 
 @njit

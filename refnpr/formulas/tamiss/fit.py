@@ -68,12 +68,8 @@ class StrokeFit:
         return elementwise(normalize_t.scalar, dt, t_, lo, hi, dt.type(0.5), compute=dt)
 
     def _poly(self, c: np.ndarray, s: np.ndarray, slope: bool = False) -> np.ndarray:
-        dt = self.c_x.dtype
-        cols = tuple(self._expand(c[..., k]) for k in range(4))
-        if slope:
-            k = (dt.type(2), dt.type(3), dt.type(0))
-            return elementwise(cubic_slope.scalar, dt, cols, s, k, compute=dt)
-        return elementwise(cubic.scalar, dt, cols, s, compute=dt)  # r(t) = c^T (1, t, t^2, t^3)
+        c = c if self.batch_shape == () else c[..., None, :]
+        return (cubic_slope if slope else cubic)(c, s)  # r(t) = c^T (1, t, t^2, t^3)
 
     def evaluate(self, t):
         """Screen position (x, y) at stroke parameter t."""

@@ -12,7 +12,7 @@ from refnpr._jit import njit
 from .._face import elementwise, face
 from .._validate import as_float, describe, result_dtype
 
-__all__ = ["N_REGRESSORS", "fragment_regressors", "normalize_t", "aggregate", "group_ids"]
+__all__ = ["N_REGRESSORS", "fragment_regressors", "normalize_t", "aggregate"]
 
 #: Per-fragment regressors: s^0..s^6 (7), s^0..s^3 x (4), s^0..s^3 y (4).
 N_REGRESSORS = 15

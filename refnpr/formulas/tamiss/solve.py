@@ -9,7 +9,7 @@ import numpy as np
 
 from .._validate import as_float, check_int, check_scalar, describe, result_dtype
 
-__all__ = ["cg_solve", "cg_kernel", "visibility_prior", "moment_matrix"]
+__all__ = ["cg_solve", "visibility_prior", "moment_matrix"]
 
 
 def moment_matrix(power_sums) -> np.ndarray:

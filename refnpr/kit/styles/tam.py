@@ -165,5 +165,5 @@ def export(
     return StyleExport(
         params=jsonable(params, where="style 'tam' params"),
         derived=dict(DERIVED),
-        vertex_attributes=_vertex_attributes(scene, style.orient_charts),
+        vertex_attributes=_vertex_attributes(scene, style.values.orient_charts),
     )

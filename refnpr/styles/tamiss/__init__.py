@@ -24,31 +24,25 @@ to frame (:class:`TamissState`: hash table, aggregate window, previous curves fo
 
 from __future__ import annotations
 
-from .aggregate import (
-    AggregateHistory,
-    Aggregates,
-    HashStats,
-    aggregate_exact,
-    aggregate_hashed,
-    recentre,
-)
+from refnpr.formulas.tamiss.field import key32, pack_id, seed_set, unpack_id
+
+from . import aggregate, pipeline, raster, state, style, tam
+from .aggregate import *  # noqa: F403
 from .charts import ChartLayout, chart_layout, vertex_frames
-from .field import StrokeField, StrokeGeometry, key32, pack_id, seed_set, stroke_geometry, unpack_id
+from .field import StrokeField, StrokeGeometry, stroke_geometry
 from .gather import FieldInputs, Fragments, field_inputs, gather_fragments, layer_scale, tam_ink
-from .pipeline import PipelineResult, TamissParams, run_pipeline
-from .raster import BRUSHES, brush_texture, rasterize_strips
+from .pipeline import *  # noqa: F403
+from .raster import *  # noqa: F403
 from .show import show_layers
-from .state import StrokeCoefficients, TamissState, reexpress, smooth_fit
+from .state import *  # noqa: F403
 from .strokes import EXTENTS, Strips, centreline, drawn_segments, extrude, keep_mask
-from .style import TamissStyle
-from .tam import TamStyle
+from .style import *  # noqa: F403
+from .tam import *  # noqa: F403
 
 __all__ = [
-    "TamissStyle",
-    "TamStyle",
-    "TamissParams",
-    "PipelineResult",
-    "run_pipeline",
+    *style.__all__,
+    *tam.__all__,
+    *pipeline.__all__,
     "StrokeField",
     "StrokeGeometry",
     "stroke_geometry",
@@ -62,27 +56,17 @@ __all__ = [
     "gather_fragments",
     "tam_ink",
     "layer_scale",
-    "Aggregates",
-    "HashStats",
-    "aggregate_exact",
-    "aggregate_hashed",
-    "recentre",
-    "AggregateHistory",
+    *aggregate.__all__,
     "EXTENTS",
     "Strips",
     "keep_mask",
     "drawn_segments",
     "centreline",
     "extrude",
-    "BRUSHES",
-    "brush_texture",
-    "rasterize_strips",
+    *raster.__all__,
     "ChartLayout",
     "chart_layout",
     "vertex_frames",
     "show_layers",
-    "TamissState",
-    "StrokeCoefficients",
-    "smooth_fit",
-    "reexpress",
+    *state.__all__,
 ]

@@ -6,21 +6,6 @@ diffuse colour); the kernels compose them. Kernels take records: the frame recor
 (:class:`refnpr.styles._frame.Frame`) where they read the G-buffer, the style record
 (``params.PARAMS.record`` / ``TAM_PARAMS.record``) for the parameters, and tuples of arrays for
 the rest, unpacked into locals before their loops.
-
-* ``chart_labels``: connected components of a mesh's faces through shared vertex indices.
-* ``sample_inputs``: the per-sample field inputs straight from the G-buffer (compaction, smooth
-  derivatives, chart orientation, darkness) in one pass.
-* ``tam_pass``: per sample, the anti-aliased TAM/RPTAM ink of the strokes over it
-  (``_enumerate``: the strokes enumerated and accumulated in one loop).
-* ``field_gather`` / ``finish_fragments``: TAMISS fragments in one pass over sample chunks, then
-  copied to their places in chunk order.
-* ``group_keys`` / ``group_sums``: grouping of fragments by stroke id (a stable argsort by
-  hashing and a counting pass) and the per-stroke min/max and regressor sums, parallel over
-  strokes, each summed in a fixed order (bits do not depend on the thread count).
-* ``mean_speeds``: the fitted curves' polyline length per unit t; ``centrelines``: points and
-  unit tangents of the drawn curves; ``strip_sides``: a strip's left / right vertices.
-* ``raster_strips_for(aa)``: anti-aliased rasterization of image-space triangle strips, composited
-  in order with "over"; ``strip_bbox``: the pieces' clipped sample bboxes it takes.
 """
 
 from __future__ import annotations

@@ -16,10 +16,8 @@ s = normalize_t(t, t_min, t_max) and relative to the centre of the stroke's frag
 summed in the fit dtype (float32 sums model GPU blending).
 
 :class:`AggregateHistory` averages aggregates over the last frames (the paper's proposal against
-jitter, sec. 4.1). Each frame's sums are in its own normalization (t range, origin), so before
-averaging they are re-expressed in a common one by :func:`recentre` (the binomial expansion of the
-affine change of parameter s' = alpha s + beta, benign because the normalizations of consecutive
-frames are close); the history works in float64.
+jitter, sec. 4.1), in float64, each frame's sums :func:`recentre`-d to a common normalization
+first (benign: the normalizations of consecutive frames are close).
 """
 
 from __future__ import annotations
@@ -31,12 +29,12 @@ from typing import Any
 
 import numpy as np
 
-from refnpr.formulas.tamiss import N_REGRESSORS, StrokeHashTable, aggregate
+from refnpr.formulas.tamiss import N_REGRESSORS, StrokeHashTable, aggregate, key32
 
 from . import _kernels as K
-from .field import key32
 from .gather import Fragments
 from .motion import transport
+from .state import rescale
 
 __all__ = [
     "Aggregates",
@@ -122,12 +120,8 @@ _SUMS = ("t_min", "t_max", "origin", "moments")
 
 
 def _sums(keys, t, x, y, dtype):
-    """Aggregates over groups of ``keys`` (int): (keys, count, lo, hi, origin, M).
-
-    One grouping pass (stable, as a stable sort by key) and one parallel pass over the groups
-    (min/max blending, then the 15 regressors summed in fragment order) in ``dtype``; the same
-    arithmetic as the formula layer's ``normalize_t``, ``fragment_regressors`` and ``aggregate``.
-    """
+    """(keys, count, lo, hi, origin, M) over groups of ``keys`` (int), summed in fragment order
+    in ``dtype`` (the formula layer's ``normalize_t``, ``fragment_regressors``, ``aggregate``)."""
     keys = np.ascontiguousarray(keys, dtype=np.int64)
     uid, starts, perm = K.group_keys(keys)
     S = uid.shape[0]
@@ -210,13 +204,7 @@ def recentre(moments, t_min, t_max, origin, new_t_min, new_t_max, new_origin) ->
     (S, 15) float64
     """
     M = np.asarray(moments, dtype=np.float64)
-    c = 0.5 * (np.asarray(t_min, np.float64) + np.asarray(t_max, np.float64))
-    h = 0.5 * (np.asarray(t_max, np.float64) - np.asarray(t_min, np.float64))
-    c2 = 0.5 * (np.asarray(new_t_min, np.float64) + np.asarray(new_t_max, np.float64))
-    h2 = 0.5 * (np.asarray(new_t_max, np.float64) - np.asarray(new_t_min, np.float64))
-    ok = h2 > 0
-    alpha = np.where(ok, h / np.where(ok, h2, 1.0), 0.0)
-    beta = np.where(ok, (c - c2) / np.where(ok, h2, 1.0), 0.0)
+    alpha, beta = rescale(t_min, t_max, new_t_min, new_t_max)
     do = np.asarray(origin, np.float64) - np.asarray(new_origin, np.float64)
     out = np.zeros_like(M)
 
@@ -305,10 +293,7 @@ class AggregateHistory:
         self._window.append(agg)
         ids = agg.stroke_ids
         n = ids.size
-        hits = np.zeros(n)
-        acc_lo = np.zeros(n)
-        acc_hi = np.zeros(n)
-        acc_o = np.zeros((n, 2))
+        hits, acc_lo, acc_hi, acc_o = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros((n, 2))
         found = []
         entries = moved[max(0, len(moved) - self.frames + 1) :] + [(agg, None)]
         for past, ok in entries:

@@ -1,26 +1,20 @@
 """uv charts of the stroke field: a smooth tangent frame per vertex, chart orientation.
 
 TAMISS "needs an overlap-free UV mapping, oriented on object features" (Szécsi et al., sec. 4.1):
-the hatching direction is the uv direction (sec. 2: "direction of hatching on surfaces is defined
-by the UV mapping"). Two properties of a patch-wise mapping such as the Newell teapot's 32 Bezier
-patches break it, and this module repairs both without touching the mesh:
-
-* **Orientation.** Neighbouring patches may have u and v swapped or reversed (the teapot's spout
-  runs u around the tube on its base patches and along it at the tip), so strokes "along u"
-  turn by 90 degrees at the border. :func:`chart_layout` gives every chart a signed
-  permutation M of (u, v) (u' = M u) chosen so that the oriented tangent frames agree across
-  shared borders: the direction field of each layer is continuous wherever the surface is.
-* **Flat derivatives.** A triangle's uv is affine, so the rasterizer's analytic d(uv)/d(x, y) is
-  one value per triangle plane and jumps at every edge: the level of the stroke field (the
-  dyadic scale, from |grad q|) is decided per triangle and density boundaries follow the
-  tessellation in steps. :func:`vertex_frames` gives each vertex the area-weighted mean of its
-  triangles' dP/du, dP/dv; interpolated with the barycentrics and applied to the pixel footprint
-  on the plane of the shading normal (``_kernels.smooth_duv``), it gives a d(uv)/d(x, y) that is
-  continuous across edges (``derivatives="smooth"``).
+the hatching direction is the uv direction. A patch-wise mapping such as the Newell teapot's 32
+Bezier patches breaks it twice, and this module repairs both without touching the mesh
+(``docs/tamiss.md``, "uv charts"): neighbouring patches may have u and v swapped or reversed, so
+:func:`chart_layout` gives every chart a signed permutation M of (u, v) (u' = M u) under which the
+oriented tangent frames agree across shared borders; and the rasterizer's d(uv)/d(x, y) is one
+value per triangle, so levels and density boundaries would follow the tessellation:
+:func:`vertex_frames` gives each vertex the area-weighted mean of its triangles' dP/du, dP/dv,
+from which the kernels (``_kernels._smooth_duv``) make a d(uv)/d(x, y) continuous across edges
+(``derivatives="smooth"``).
 """
 
 from __future__ import annotations
 
+import functools
 import weakref
 from dataclasses import dataclass
 
@@ -31,7 +25,6 @@ __all__ = [
     "UV_CONTINUITY_TOL",
     "ChartLayout",
     "vertex_frames",
-    "chart_adjacency",
     "chart_layout",
 ]
 
@@ -46,10 +39,21 @@ SYMMETRIES = np.array(
     dtype=np.float64,
 )
 
-_FRAME_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-_ORIENT_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+def per_mesh(fn):
+    """``fn(mesh, ...)`` computed once per mesh (kept while the mesh lives)."""
+    cache: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+    @functools.wraps(fn)
+    def cached(mesh, *args, **kwargs):
+        if mesh not in cache:
+            cache[mesh] = fn(mesh, *args, **kwargs)
+        return cache[mesh]
+
+    return cached
 
 
+@per_mesh
 def vertex_frames(mesh) -> np.ndarray:
     """(V, 3, 2) float64 tangent frame [dP/du, dP/dv] per vertex of ``mesh``.
 
@@ -57,9 +61,6 @@ def vertex_frames(mesh) -> np.ndarray:
     the mean of its triangles' frames weighted by their area (triangles with a degenerate uv
     map are left out; a vertex with none gets zeros). Needs ``mesh.uv``.
     """
-    cached = _FRAME_CACHE.get(mesh)
-    if cached is not None:
-        return cached
     pos = np.asarray(mesh.positions, dtype=np.float64)
     faces = np.asarray(mesh.faces, dtype=np.int64)
     uv = np.asarray(mesh.uv, dtype=np.float64)
@@ -82,7 +83,6 @@ def vertex_frames(mesh) -> np.ndarray:
         np.add.at(frames[:, :, 1], faces[:, j], t_v * w[:, None])
         np.add.at(wsum, faces[:, j], w)
     frames /= np.where(wsum > 0, wsum, 1.0)[:, None, None]
-    _FRAME_CACHE[mesh] = frames
     return frames
 
 
@@ -120,17 +120,6 @@ def _shared_vertices(mesh, labels: np.ndarray, unit: np.ndarray):
     return np.array(pair_a, dtype=np.int64), np.array(pair_b, dtype=np.int64), v_chart
 
 
-def chart_adjacency(mesh, labels: np.ndarray) -> np.ndarray:
-    """(E, 2) int64 pairs of charts (a < b) of ``mesh`` that share a border (vertex positions
-    bitwise equal, as :func:`chart_layout` uses them), sorted."""
-    labels = np.asarray(labels, dtype=np.int64)
-    pa, pb, v_chart = _shared_vertices(mesh, labels, _unit_columns(vertex_frames(mesh)))
-    if pa.size == 0:
-        return np.zeros((0, 2), dtype=np.int64)
-    ca, cb = v_chart[pa], v_chart[pb]
-    return np.unique(np.stack([np.minimum(ca, cb), np.maximum(ca, cb)], axis=1), axis=0)
-
-
 @dataclass(frozen=True, eq=False)
 class ChartLayout:
     """How each chart of a mesh enters the stroke field (all indexed by chart).
@@ -154,6 +143,7 @@ class ChartLayout:
 UV_CONTINUITY_TOL = 1e-6
 
 
+@per_mesh
 def chart_layout(mesh, labels: np.ndarray) -> ChartLayout:
     """Orientation, offset and id group of every chart of ``mesh`` (``labels``: chart per face).
 
@@ -168,10 +158,8 @@ def chart_layout(mesh, labels: np.ndarray) -> ChartLayout:
     :data:`UV_CONTINUITY_TOL` and the child's uv box does not overlap the boxes already in the
     parent's group, it joins the group (its strokes continue the parent's), else it starts a
     group of its own (offset 0). Deterministic; charts touching nothing keep the identity.
+    Computed once per mesh.
     """
-    cached = _ORIENT_CACHE.get(mesh)
-    if cached is not None:
-        return cached
     labels = np.asarray(labels, dtype=np.int64)
     n_charts = int(labels.max()) + 1 if labels.size else 0
     unit = _unit_columns(vertex_frames(mesh))
@@ -188,9 +176,7 @@ def chart_layout(mesh, labels: np.ndarray) -> ChartLayout:
     np.minimum.at(lo, labels, fv.min(axis=1))
     np.maximum.at(hi, labels, fv.max(axis=1))
     if pa.size == 0:
-        out = ChartLayout(sym, offset, group)
-        _ORIENT_CACHE[mesh] = out
-        return out
+        return ChartLayout(sym, offset, group)
     ca, cb = v_chart[pa], v_chart[pb]
     swap = ca > cb
     ca, cb = np.where(swap, cb, ca), np.where(swap, ca, cb)
@@ -231,6 +217,10 @@ def chart_layout(mesh, labels: np.ndarray) -> ChartLayout:
         corners = np.array([[lo[c, 0], lo[c, 1]], [hi[c, 0], hi[c, 1]]]) @ SYMMETRIES[sym[c]].T
         return corners.min(axis=0) + offset[c], corners.max(axis=0) + offset[c]
 
+    def overlap(b: int, c: int) -> bool:
+        (b_lo, b_hi), (c_lo, c_hi) = box(b), box(c)
+        return bool(np.all(np.minimum(b_hi, c_hi) - np.maximum(b_lo, c_lo) > UV_CONTINUITY_TOL))
+
     for root in range(n_charts):
         if seen[root]:
             continue
@@ -257,21 +247,11 @@ def chart_layout(mesh, labels: np.ndarray) -> ChartLayout:
                     members[b] = [b]
                     continue
                 offset[b] = o_b
-                b_lo, b_hi = box(b)
                 g = group[a]
-                overlap = False
-                for c in members[g]:
-                    c_lo, c_hi = box(c)
-                    ext = np.minimum(b_hi, c_hi) - np.maximum(b_lo, c_lo)
-                    if np.all(ext > UV_CONTINUITY_TOL):
-                        overlap = True
-                        break
-                if overlap:
+                if any(overlap(b, c) for c in members[g]):
                     offset[b] = 0.0
                     members[b] = [b]
                 else:
                     group[b] = g
                     members[g].append(b)
-    out = ChartLayout(sym, offset, group)
-    _ORIENT_CACHE[mesh] = out
-    return out
+    return ChartLayout(sym, offset, group)

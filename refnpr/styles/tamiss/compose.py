@@ -73,26 +73,21 @@ def composite_ink(
 
     ink = np.asarray(ink, dtype=np.float64)
     shape = ink.shape
-    under = None
+    no_rgba, no_mask, no_rgb = np.zeros((1, 1, 4), np.float32), np.zeros((1, 1), bool), np.zeros(3)
     if base is not None:
         under = np.broadcast_to(np.asarray(base.shade(ctx), dtype=np.float32), shape + (4,))
-    colors = np.asarray(ink_color, dtype=np.float64)
-    if colors.shape != (3,):
-        colors = np.broadcast_to(colors, shape + (3,))
-    if under is not None:
-        base_of = Under(
-            UNDER_RGBA, np.ascontiguousarray(under), np.zeros((1, 1), bool), np.zeros(3)
-        )
+        base_of = Under(UNDER_RGBA, np.ascontiguousarray(under), no_mask, no_rgb)
     elif paper is not None:
         # as rgba_from stores it: clipped, rounded to float32
         paper_rgb = np.clip(np.asarray(paper, dtype=np.float64), 0.0, 1.0)
         paper_rgb = paper_rgb.astype(np.float32).astype(np.float64)
         mask = np.ascontiguousarray(ctx.mask, dtype=np.bool_)
-        base_of = Under(UNDER_PAPER, np.zeros((1, 1, 4), np.float32), mask, paper_rgb)
+        base_of = Under(UNDER_PAPER, no_rgba, mask, paper_rgb)
     else:
-        base_of = Under(
-            UNDER_NONE, np.zeros((1, 1, 4), np.float32), np.zeros((1, 1), bool), np.zeros(3)
-        )
+        base_of = Under(UNDER_NONE, no_rgba, no_mask, no_rgb)
+    colors = np.asarray(ink_color, dtype=np.float64)
+    if colors.shape != (3,):
+        colors = np.broadcast_to(colors, shape + (3,))
     out = rgba_out(ctx, shape)  # written in full by the kernel
     ink_rgb = np.ascontiguousarray(colors.reshape(-1, 3))
     ink_composite(base_of, (np.ascontiguousarray(ink), ink_rgb), out)
@@ -106,10 +101,11 @@ class FieldStyle(Style):
 
     base: Style | None = None
     paper: tuple[float, float, float] | None = None
+    values: Any  # the validated parameters
 
     def stroke_channels(self, scene: Any) -> set[str]:
-        """The channels the style reads for its strokes (:func:`field_channels` and more)."""
-        raise NotImplementedError
+        """The channels the style reads for its strokes (:func:`field_channels`)."""
+        return field_channels(scene, self.values.constant_tone, self.values.derivatives)
 
     def requires(self, scene: Any) -> frozenset[str]:
         req = self.stroke_channels(scene)

@@ -2,8 +2,8 @@
 
 TAMISS (Szécsi et al.) gathers its fragments from an RPTAM (Szécsi and Szirányi 2014), which the
 paper only cites; DESIGN.md's notes fix what is needed. Its per-sample formulas are the scalar
-functions of :mod:`refnpr.formulas.tamiss.field` (re-exported here with their numpy faces), which
-the ``_kernels`` call per G-buffer sample; this module holds the field's parameters
+functions of :mod:`refnpr.formulas.tamiss.field` (with their numpy faces), which the
+``_kernels`` call per G-buffer sample; this module holds the field's parameters
 (:class:`StrokeField`) and the geometry of strokes from their ids.
 
 Coordinates. Per hatching layer with angle ``a`` (0: strokes along u, 90: along v), the scaled
@@ -60,16 +60,8 @@ import numpy as np
 
 from refnpr.formulas.tamiss.field import (
     KX,
-    MAX_LEVEL,
     N_ROWS,
-    born_at,
-    fade_in,
     hash01,
-    key32,
-    pack_id,
-    salt_offset,
-    seed_set,
-    splitmix64,
     stroke_length,
     stroke_start,
     unpack_id,
@@ -82,25 +74,14 @@ from .params import DEFAULT_DENSITY, FIELD, FIELD_PARAMS, SALTS, resolve_field
 __all__ = [
     "KX",
     "N_ROWS",
-    "MAX_LEVEL",
     "MAX_CHARTS",
     "TILE_LIMIT",
     "SALT_TONE",
     "SALT_LENGTH",
     "SALT_WIDTH",
-    "DEFAULT_DENSITY",
     "StrokeField",
-    "seed_set",
-    "born_at",
-    "pack_id",
-    "unpack_id",
-    "splitmix64",
-    "salt_offset",
-    "hash01",
-    "key32",
     "StrokeGeometry",
     "stroke_geometry",
-    "fade_in",
 ]
 
 #: Charts (objects x uv charts) an id can hold (10 bits).

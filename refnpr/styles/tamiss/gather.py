@@ -16,7 +16,6 @@ darkness to reproduce and the chart (object and uv chart) of the triangle.
 from __future__ import annotations
 
 import warnings
-import weakref
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -29,7 +28,7 @@ from .._declare import Params, Values
 from .._frame import frame_record
 from ..base import ShadeContext
 from . import _kernels as K
-from .charts import SYMMETRIES, chart_layout, vertex_frames
+from .charts import SYMMETRIES, chart_layout, per_mesh, vertex_frames
 from .field import MAX_CHARTS, TILE_LIMIT, StrokeField
 from .params import DERIVATIVES, PARAMS, TAM_PARAMS, salts
 
@@ -48,18 +47,12 @@ __all__ = [
 #: Candidates the TAM pass keeps per sample and layer (in enumeration order).
 CANDIDATE_CAP = K._CAP
 
-_CHART_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
 _SMOOTH_CHANNELS = frozenset({"bary", "normal", "position", "dposition_dx", "dposition_dy"})
 
 
+@per_mesh
 def _mesh_charts(mesh) -> np.ndarray:
-    labels = _CHART_CACHE.get(mesh)
-    if labels is None:
-        faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
-        labels = K.chart_labels(faces, mesh.positions.shape[0])
-        _CHART_CACHE[mesh] = labels
-    return labels
+    return K.chart_labels(np.ascontiguousarray(mesh.faces, dtype=np.int64), mesh.positions.shape[0])
 
 
 def chart_meshes(scene) -> Iterator[tuple[int, Any, np.ndarray, int]]:
@@ -321,13 +314,7 @@ _ROOM = 2 * K._CHUNK
 
 def _fragment_arrays(n: int) -> tuple[np.ndarray, ...]:
     """Empty (id int64, t float64, layer int8, level int8, sample-in-inputs int32) of length n."""
-    return (
-        np.empty(n, dtype=np.int64),
-        np.empty(n),
-        np.empty(n, dtype=np.int8),
-        np.empty(n, dtype=np.int8),
-        np.empty(n, dtype=np.int32),
-    )
+    return tuple(np.empty(n, dtype=d) for d in (np.int64, np.float64, np.int8, np.int8, np.int32))
 
 
 def _gather(inp, field, width_px, chunks, dst_off, dst_cap, count, outs) -> None:

@@ -9,9 +9,11 @@ the number of layers) are :func:`resolve_field`'s.
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import Any
 
 from .._declare import Param, Params, Values
+from .compose import base_style, check_color
 
 __all__ = [
     "DEFAULT_DENSITY",
@@ -59,6 +61,8 @@ DERIVATIVES = ("smooth", "flat")
 #: along the exact surface motion first (refnpr's; no lag), "none" averages them where they
 #: were (the paper's proposal as written; lags (k - 1) / 2 frames).
 AVERAGE_MOTIONS = ("exact", "none")
+#: The built-in brushes (``raster.brush_texture``).
+BRUSHES = ("solid", "pen", "pencil", "dry")
 #: Salts of the per-stroke hashes: tone threshold, length, width factor.
 SALTS = {"tone": 1, "length": 2, "width": 3}
 
@@ -98,28 +102,12 @@ def _tones(name: str, value: Any) -> tuple[float, ...]:
     return tuple(_TONE.check(v) for v in vals)
 
 
-def _color(name: str, value: Any) -> Any:
-    from .compose import check_color
-
-    return check_color(name, value)
-
-
-def _ink(name: str, value: Any) -> Any:
-    from .compose import check_color
-
-    return check_color(name, value, optional=False)
-
-
 def _base(name: str, value: Any) -> Any:
-    from .compose import base_style
-
     return base_style(value)
 
 
 def _brush(name: str, value: Any) -> Any:
     if not isinstance(value, str):
-        from .raster import BRUSHES
-
         raise TypeError(f"{name}: expected None, {list(BRUSHES)} or a texture name, got {value!r}")
     return value
 
@@ -218,7 +206,7 @@ COLOURS = (
         (0.0, 0.0, 0.0),
         "colour of the strokes (linear RGB, or one grey)",
         kind="any",
-        parse=_ink,
+        parse=partial(check_color, optional=False),
         accepts="3 floats or float",
     ),
     Param(
@@ -226,7 +214,7 @@ COLOURS = (
         None,
         "colour of the paper under the strokes on the objects (none: the background shows)",
         kind="any",
-        parse=_color,
+        parse=check_color,
         accepts="3 floats or float",
     ),
     Param(

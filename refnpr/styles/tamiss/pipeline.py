@@ -24,7 +24,7 @@ from .aggregate import (
 )
 from .field import StrokeField
 from .gather import FieldInputs, Fragments, field_inputs, gather_fragments
-from .params import AVERAGE_MOTIONS, PARAMS, SHOW, resolve_field
+from .params import PARAMS, resolve_field
 from .raster import rasterize_strips
 from .state import StrokeCoefficients, smooth_fit
 from .strokes import (
@@ -36,7 +36,7 @@ from .strokes import (
     mean_speed,
 )
 
-__all__ = ["AVERAGE_MOTIONS", "SHOW", "TamissParams", "PipelineResult", "run_pipeline"]
+__all__ = ["TamissParams", "PipelineResult", "run_pipeline"]
 
 
 class TamissParams:
@@ -78,6 +78,10 @@ class TamissParams:
     def as_dict(self) -> dict:
         """Every parameter as ``params()`` shows it (None values kept), in declaration order."""
         return self.values.as_dict(keep_none=True)
+
+    def pick(self, *names: str) -> dict[str, Any]:
+        """``{name: value}`` of the parameters ``names`` (a phase's keyword arguments)."""
+        return {name: self.values[name] for name in names}
 
     def __repr__(self) -> str:
         return f"TamissParams({self.values!r})"
@@ -181,13 +185,7 @@ def run_pipeline(
             f"gather_gb: expected the pixel size of gb ({gb.width}x{gb.height}), got "
             f"{src.width}x{src.height}; rasterize the gather grid at the image size, more spp"
         )
-    inp = field_inputs(
-        src,
-        scene,
-        constant_tone=p.constant_tone,
-        derivatives=p.derivatives,
-        orient_charts=p.orient_charts,
-    )
+    inp = field_inputs(src, scene, **p.pick("constant_tone", "derivatives", "orient_charts"))
     frags = gather_fragments(inp, p.field, gather_width=p.gather_width)
     t1 = time.perf_counter()
     timings["gather"] = t1 - t0
@@ -212,47 +210,21 @@ def run_pipeline(
     keep = keep_mask(
         agg,
         fit,
-        min_fragments=p.min_fragments,
-        min_t_span=p.min_t_span,
-        max_stretch=p.max_stretch,
+        **p.pick("min_fragments", "min_t_span", "max_stretch"),
         px_per_fragment=1.0 / (p.gather_width * inp.n * inp.n),
         speed=speed,
     )
     t3 = time.perf_counter()
     timings["fit"] = t3 - t2
-    S = len(agg)
-    segments = np.full((S, 2, 2), np.nan)
-    n_seg = np.zeros(S, dtype=np.int64)
-    kept = np.flatnonzero(keep)
-    if kept.size:
-        seg_k, n_k = drawn_segments(
-            fit.take(kept),
-            p.extent,
-            threshold=p.visibility_threshold,
-            overdraw=p.overdraw,
-            speed=speed[kept],
-        )
-        segments[kept] = seg_k
-        n_seg[kept] = n_k
-    strips = extrude(
-        fit,
-        agg.stroke_ids,
-        segments,
-        p.field,
-        width=p.width,
-        taper=p.taper,
-        wobble=p.wobble,
-        wobble_frequency=p.wobble_frequency,
-        end_jitter=p.end_jitter,
-        samples=p.samples,
-        speed=speed,
+    segments, n_seg = drawn_segments(
+        fit, p.extent, keep=keep, threshold=p.visibility_threshold, overdraw=p.overdraw, speed=speed
     )
+    look = p.pick("width", "taper", "wobble", "wobble_frequency", "end_jitter", "samples")
+    strips = extrude(fit, agg.stroke_ids, segments, p.field, **look, speed=speed)
     t4 = time.perf_counter()
     timings["extrude"] = t4 - t3
     out_shape = tuple(gb.sample_shape) if src is not gb else inp.shape
-    ink, pieces = rasterize_strips(
-        strips, out_shape, gb.n, aa=p.aa, brush=p.brush, opacity=p.opacity
-    )
+    ink, pieces = rasterize_strips(strips, out_shape, gb.n, **p.pick("aa", "brush", "opacity"))
     t5 = time.perf_counter()
     timings["raster"] = t5 - t4
     timings["total"] = t5 - t0

@@ -17,12 +17,10 @@ from __future__ import annotations
 import numpy as np
 
 from . import _kernels as K
-from .params import PARAMS
+from .params import BRUSHES, PARAMS
 from .strokes import Strips
 
 __all__ = ["BRUSHES", "brush_texture", "rasterize_strips"]
-
-BRUSHES = ("solid", "pen", "pencil", "dry")
 
 
 def _smooth(a: np.ndarray, axis: int, k: int) -> np.ndarray:
@@ -101,13 +99,9 @@ def rasterize_strips(
     bbox = np.empty((left.shape[0], 4), dtype=np.int64)
     K.strip_bbox(left, right, nh, nw, bbox)
     tex, wrap = brush_texture(brush)
-    pieces = K.Strips(
-        left,
-        right,
-        np.ascontiguousarray(strips.strip.t, dtype=np.float64),
-        np.full(left.shape[0], float(opacity)),
-        colors if colors is not None else np.zeros((0, 3)),
-    )
+    tv = np.ascontiguousarray(strips.strip.t, dtype=np.float64)
+    rgb_in = colors if colors is not None else np.zeros((0, 3))
+    pieces = K.Strips(left, right, tv, np.full(left.shape[0], float(opacity)), rgb_in)
     brush_tex = (np.ascontiguousarray(tex), bool(wrap))
     K.raster_strips_for(aa)(pieces, bbox, (nh, nw), brush_tex, (alpha, touched, rgb))
     return (alpha, touched) if colors is None else (alpha, touched, rgb)

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .field import hash01, unpack_id
+from refnpr.formulas.tamiss import hash01, unpack_id
+
 from .pipeline import PipelineResult
 from .raster import rasterize_strips
 from .strokes import drawn_segments, extrude
@@ -94,12 +95,7 @@ def show_layers(result: PipelineResult) -> tuple[np.ndarray, np.ndarray]:
     if p.show in ("strokes", "levels"):
         return _strip_view(result, result.strips, by_level=p.show == "levels")
     if p.show == "fits":
-        S = len(result.aggregates)
-        segments = np.full((S, 2, 2), np.nan)
-        kept = np.flatnonzero(result.keep)
-        if kept.size:
-            seg_k, _ = drawn_segments(result.fit.take(kept), "range")
-            segments[kept] = seg_k
+        segments, _ = drawn_segments(result.fit, "range", keep=result.keep)
         strips = extrude(
             result.fit, result.stroke_ids, segments, p.field, width=1.0, taper=0.0,
             samples=p.samples,

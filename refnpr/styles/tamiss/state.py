@@ -3,16 +3,8 @@
 A still is frame 0 of a one-frame sequence (DESIGN, "Frames, state and speed"): the ``tamiss``
 style's ``initial_state()`` is a :class:`TamissState` of frame 0 and ``shade_frame(ctx, state)``
 returns the state of the next frame as a *new* object, so a state may be reused (shading it twice
-gives the same frame twice) and nothing is kept in globals. A state holds
-
-* ``table``: for ``aggregation="hashed"``, the read-only hash table of the paper (sec. 4) after
-  the last frame routed (the write-only table of that frame, swapped), None before the first
-  frame (which then warms a fresh table up with ``warmup_frames`` routings of its own ids). New
-  strokes that collide on an empty slot appear one frame later, as the pipeline models it;
-* ``window``: for ``average_frames`` k > 1, the float64 aggregates of the last k - 1 frames
-  (:class:`~refnpr.styles.tamiss.aggregate.AggregateHistory`, the paper's sec. 4.1 proposal);
-* ``coefficients``: for ``smooth`` > 0, the previous frame's fitted (smoothed) curves by stroke
-  id (:class:`StrokeCoefficients`).
+gives the same frame twice) and nothing is kept in globals. What a state holds and why:
+:class:`TamissState` and ``docs/tamiss.md``, "Sequences".
 
 Coefficient smoothing (refnpr's remedy, not the paper's): a stroke present in the previous frame
 draws the blend (1 - w) r(t) + w r_prev(t) of this frame's fit r and the previous frame's
@@ -59,13 +51,32 @@ class StrokeCoefficients:
     def from_fit(cls, stroke_ids: np.ndarray, fit: StrokeFit) -> StrokeCoefficients:
         """The finite fits of ``fit`` (batch (S,), centred basis) for ``stroke_ids`` (S,) sorted."""
         ids = np.asarray(stroke_ids, dtype=np.int64).reshape(-1)
-        cs = [np.asarray(c, dtype=np.float64).reshape(-1, 4) for c in (fit.c_x, fit.c_y, fit.c_v)]
-        lo = np.asarray(fit.t_min, dtype=np.float64).reshape(-1)
-        hi = np.asarray(fit.t_max, dtype=np.float64).reshape(-1)
-        ok = np.isfinite(lo) & np.isfinite(hi)
-        for c in cs:
-            ok &= np.all(np.isfinite(c), axis=1)
+        cs, lo, hi, ok = _curves(fit)
         return cls(ids[ok], cs[0][ok], cs[1][ok], cs[2][ok], lo[ok], hi[ok])
+
+
+def _curves(fit: StrokeFit) -> tuple[list[np.ndarray], np.ndarray, np.ndarray, np.ndarray]:
+    """c_x, c_y, c_v (S, 4), t_min, t_max (S,) of a batch of fits in float64, and which are finite."""
+    cs = [np.asarray(c, dtype=np.float64).reshape(-1, 4) for c in (fit.c_x, fit.c_y, fit.c_v)]
+    lo = np.asarray(fit.t_min, dtype=np.float64).reshape(-1)
+    hi = np.asarray(fit.t_max, dtype=np.float64).reshape(-1)
+    ok = np.isfinite(lo) & np.isfinite(hi)
+    for c in cs:
+        ok &= np.all(np.isfinite(c), axis=1)
+    return cs, lo, hi, ok
+
+
+def rescale(t_min, t_max, new_t_min, new_t_max) -> tuple[np.ndarray, np.ndarray]:
+    """(alpha, beta), float64, of s' = alpha s + beta for s normalized over [t_min, t_max] and s'
+    over [new_t_min, new_t_max]: alpha = h / h', beta = (c - c') / h' (c, h: centre and
+    half-width); 0 where h' = 0."""
+    lo, hi = np.asarray(t_min, np.float64), np.asarray(t_max, np.float64)
+    lo2, hi2 = np.asarray(new_t_min, np.float64), np.asarray(new_t_max, np.float64)
+    c, h = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    c2, h2 = 0.5 * (lo2 + hi2), 0.5 * (hi2 - lo2)
+    ok = h2 > 0
+    alpha = np.where(ok, h / np.where(ok, h2, 1.0), 0.0)
+    return alpha, np.where(ok, (c - c2) / np.where(ok, h2, 1.0), 0.0)
 
 
 def reexpress(c, t_min, t_max, new_t_min, new_t_max) -> np.ndarray:
@@ -86,13 +97,7 @@ def reexpress(c, t_min, t_max, new_t_min, new_t_max) -> np.ndarray:
     (S, 4) float64 coefficients in s'
     """
     a = np.asarray(c, dtype=np.float64)
-    lo, hi = np.asarray(t_min, np.float64), np.asarray(t_max, np.float64)
-    lo2, hi2 = np.asarray(new_t_min, np.float64), np.asarray(new_t_max, np.float64)
-    c0, h = 0.5 * (lo + hi), 0.5 * (hi - lo)
-    c1, h1 = 0.5 * (lo2 + hi2), 0.5 * (hi2 - lo2)
-    ok = h > 0
-    alpha = np.where(ok, h1 / np.where(ok, h, 1.0), 0.0)
-    beta = np.where(ok, (c1 - c0) / np.where(ok, h, 1.0), 0.0)
+    alpha, beta = rescale(new_t_min, new_t_max, t_min, t_max)
     out = np.zeros_like(a)
     for j in range(4):
         for m in range(j, 4):
@@ -121,12 +126,7 @@ def smooth_fit(
         return fit
     pos = np.minimum(np.searchsorted(previous.stroke_ids, ids), len(previous) - 1)
     hit = previous.stroke_ids[pos] == ids
-    lo = np.asarray(fit.t_min, dtype=np.float64)
-    hi = np.asarray(fit.t_max, dtype=np.float64)
-    cur = [np.asarray(c, dtype=np.float64) for c in (fit.c_x, fit.c_y, fit.c_v)]
-    finite = np.isfinite(lo) & np.isfinite(hi)
-    for c in cur:
-        finite &= np.all(np.isfinite(c), axis=1)
+    cur, lo, hi, finite = _curves(fit)
     sel = np.flatnonzero(hit & finite)
     if sel.size == 0:
         return fit
@@ -143,13 +143,14 @@ def smooth_fit(
 
 @dataclass(frozen=True, eq=False)
 class TamissState:
-    """What one frame of TAMISS hands to the next (see the module docstring). Never mutated:
-    the style copies the table before routing a frame through it.
+    """What one frame of TAMISS hands to the next. Never mutated: the style copies the table
+    before routing a frame through it.
 
     Attributes
     ----------
     frame : int, frames shaded before the one this state is for (0: a still / frame 0)
-    table : StrokeHashTable or None (hashed aggregation after frame 0)
+    table : StrokeHashTable or None, the paper's read-only table for this frame (hashed
+        aggregation after frame 0; frame 0 warms a fresh one up with ``warmup_frames`` routings)
     window : tuple of Aggregates (float64), the last ``average_frames - 1`` frames' sums
     anchors : tuple of StrokeAnchors, one per ``window`` entry (``average_motion="exact"``):
         where that frame's strokes lay on the surface, to move its sums to a later frame

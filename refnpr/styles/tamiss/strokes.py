@@ -3,9 +3,7 @@
 Fit: ``refnpr.formulas.tamiss.fit_strokes`` on the aggregates (four CG iterations, t centred and
 scaled, float32 or float64), giving x(t), y(t) and the visibility v(t) with the zero prior.
 
-Drop rule (:func:`keep_mask`): a stroke is drawn only if it has at least ``min_fragments``
-fragments (never fewer than 4, the cubic's unknowns) and its fragments span at least
-``min_t_span`` of the stroke (t_max - t_min), and its fitted coefficients are finite.
+Drop rule: :func:`keep_mask`.
 
 Extent (:func:`drawn_segments`), in stroke parameter t:
 
@@ -32,11 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from refnpr.formulas.tamiss import StrokeFit, StrokeStrip, fit_strokes, width_factor
+from refnpr.formulas.tamiss import StrokeFit, StrokeStrip, fit_strokes, hash01, width_factor
 
 from . import _kernels as kernels
 from .aggregate import Aggregates
-from .field import SALT_WIDTH, StrokeField, hash01
+from .field import SALT_WIDTH, StrokeField
 from .params import EXTENTS
 
 __all__ = [
@@ -115,14 +113,10 @@ def _fit_arrays(fit: StrokeFit) -> tuple[np.ndarray, ...]:
             f"fit: expected a batch (S,) of centred-basis fits (fit_strokes' legendre or "
             f"monomial bases), got basis {fit.basis!r} with batch shape {fit.batch_shape}"
         )
+    shapes = (fit.c_x.shape, fit.c_x.shape, fit.batch_shape, fit.batch_shape)
     out = tuple(
         np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=dt), shape))
-        for a, shape in (
-            (fit.c_x, fit.c_x.shape),
-            (fit.c_y, fit.c_x.shape),
-            (fit.t_min, fit.batch_shape),
-            (fit.t_max, fit.batch_shape),
-        )
+        for a, shape in zip((fit.c_x, fit.c_y, fit.t_min, fit.t_max), shapes, strict=True)
     )
     if not (np.all(np.isfinite(out[2])) and np.all(np.isfinite(out[3]))):
         raise ValueError("fit: t_min, t_max: expected finite values")
@@ -137,15 +131,8 @@ def mean_speed(fit: StrokeFit) -> np.ndarray:
     lo = arrays[2].astype(np.float64)[:, None]
     hi = arrays[3].astype(np.float64)[:, None]
     ts = lo + (hi - lo) * np.linspace(0.0, 1.0, 17)
-    out = np.empty(ts.shape[0])
-    kernels.mean_speeds(
-        ts.astype(dt),
-        arrays,
-        np.full(1, 0.5, dtype=dt),
-        np.ascontiguousarray((hi - lo)[:, 0]),
-        np.empty((ts.shape[0], 16)),
-        out,
-    )
+    span, half, out = np.ascontiguousarray((hi - lo)[:, 0]), np.full(1, 0.5, dt), np.empty(len(ts))
+    kernels.mean_speeds(ts.astype(dt), arrays, half, span, np.empty((len(ts), 16)), out)
     return out
 
 
@@ -156,12 +143,23 @@ def drawn_segments(
     threshold: float | None = None,
     overdraw: float = 6.0,
     speed: np.ndarray | None = None,
+    keep: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Drawn t intervals per stroke: ``(S, 2, 2)`` float64 (start, end), NaN if absent, and
     ``(S,)`` int64 counts (see module docstring for the extents). ``overdraw`` (pixels) bounds
     how far ``"overdraw"`` runs the outer ends on (converted to t with :func:`mean_speed`;
-    ``speed`` (S,): its values if already known)."""
+    ``speed`` (S,): its values if already known). ``keep`` (S,) bool: only those strokes get
+    intervals (:func:`keep_mask`; the others' fits need not be finite)."""
     S = fit.batch_shape[0] if fit.batch_shape else 1
+    if keep is not None:
+        seg, count = np.full((S, 2, 2), np.nan), np.zeros(S, dtype=np.int64)
+        kept = np.flatnonzero(keep)
+        if kept.size:
+            sub_speed = None if speed is None else np.asarray(speed)[kept]
+            seg[kept], count[kept] = drawn_segments(
+                fit.take(kept), extent, threshold=threshold, overdraw=overdraw, speed=sub_speed
+            )
+        return seg, count
     lo = np.asarray(fit.t_min, dtype=np.float64).reshape(S)
     hi = np.asarray(fit.t_max, dtype=np.float64).reshape(S)
     seg = np.full((S, 2, 2), np.nan)
@@ -202,18 +200,13 @@ def centreline(fit: StrokeFit, t, *, speed: np.ndarray | None = None) -> tuple[n
     hi = arrays[3].astype(np.float64)[:, None]
     speed = mean_speed(fit) if speed is None else np.asarray(speed, dtype=np.float64)
     dt = arrays[0].dtype
-    out = tuple(np.empty(t.shape) for _ in range(4))
-    kernels.centrelines(
-        t,
-        arrays,
-        np.array([0.5, 2.0, 3.0, 0.0], dtype=dt),
-        (
-            np.ascontiguousarray(np.broadcast_to(speed, lo.shape[:1])),
-            bool(np.any((t < lo) | (t > hi))),
-        ),
-        np.empty(t.shape, dtype=dt),
-        out,
+    consts = np.array([0.5, 2.0, 3.0, 0.0], dtype=dt)
+    ext = (
+        np.ascontiguousarray(np.broadcast_to(speed, lo.shape[:1])),
+        bool(np.any((t < lo) | (t > hi))),
     )
+    out = tuple(np.empty(t.shape) for _ in range(4))
+    kernels.centrelines(t, arrays, consts, ext, np.empty(t.shape, dtype=dt), out)
     return out
 
 

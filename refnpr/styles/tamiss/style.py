@@ -14,7 +14,7 @@ from refnpr.raster import rasterize
 
 from ..base import ShadeContext, register
 from .aggregate import AggregateHistory, aggregate_exact
-from .compose import FieldStyle, field_channels
+from .compose import FieldStyle
 from .motion import MOTION_CHANNELS, stroke_anchors
 from .params import PARAMS
 from .pipeline import PipelineResult, TamissParams, run_pipeline
@@ -45,12 +45,13 @@ class TamissStyle(FieldStyle):
 
     def __init__(self, **params: Any) -> None:
         self.pipeline_params = p = TamissParams(PARAMS.validate(params))
+        self.values = p.values
         self.ink, self.paper, self.base = p.ink, p.paper, p.base
         self._params = p.as_dict()
 
     def stroke_channels(self, scene: Any) -> set[str]:
         p = self.pipeline_params
-        req = field_channels(scene, p.constant_tone, p.derivatives)
+        req = super().stroke_channels(scene)
         if p.average_frames > 1 and p.average_motion == "exact":
             req |= MOTION_CHANNELS  # what motion-compensated averaging reads
         return req
@@ -109,16 +110,15 @@ class TamissStyle(FieldStyle):
             )
         p = self.pipeline_params
         table = None
-        if p.aggregation == "hashed" and state.table is not None:
-            if not isinstance(state.table, StrokeHashTable) or (
-                state.table.size,
-                state.table.max_probes,
-            ) != (p.table_size, p.max_probes):
+        old = state.table
+        if p.aggregation == "hashed" and old is not None:
+            kind = (old.size, old.max_probes) if isinstance(old, StrokeHashTable) else None
+            if kind != (p.table_size, p.max_probes):
                 raise ValueError(
                     f"state: its hash table does not match table_size={p.table_size}, "
                     f"max_probes={p.max_probes}; start the sequence from initial_state()"
                 )
-            table = copy.deepcopy(state.table)  # routed in place below; the state stays as is
+            table = copy.deepcopy(old)  # routed in place below; the state stays as is
         gather_gb = self.gather_gbuffer(ctx)
         moving = p.average_motion == "exact"
         anchors = tuple(state.anchors) if moving else ()
@@ -127,14 +127,10 @@ class TamissStyle(FieldStyle):
             past, anchors = (), ()  # a window without anchors (plain averaging before): restart
         history = None
         if p.average_frames > 1 and past:
+            size = (ctx.gb.width, ctx.gb.height)
+            carried = anchors if moving else None
             history = AggregateHistory(
-                p.average_frames,
-                window=past,
-                **(
-                    {"anchors": anchors, "scene": ctx.scene, "size": (ctx.gb.width, ctx.gb.height)}
-                    if moving
-                    else {}
-                ),
+                p.average_frames, past, anchors=carried, scene=ctx.scene, size=size
             )
         previous = state.coefficients if p.smooth > 0.0 else None
         result = self.run(ctx, table=table, history=history, previous=previous, gather_gb=gather_gb)

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..base import ShadeContext, register
-from .compose import FieldStyle, field_channels
+from .compose import FieldStyle
 from .field import StrokeField
 from .gather import field_inputs, tam_ink
 from .params import TAM_PARAMS, resolve_field
@@ -40,30 +40,22 @@ class TamStyle(FieldStyle):
     PARAMS = TAM_PARAMS
 
     def __init__(self, **params: Any) -> None:
-        p = resolve_field(TAM_PARAMS.validate(params))
-        self.values = p
+        self.values = p = resolve_field(TAM_PARAMS.validate(params))
         self.field = StrokeField.of(p)
-        self.width, self.density_mode, self.fade = p.width, p.density_mode, p.fade
-        self.constant_tone, self.derivatives = p.constant_tone, p.derivatives
-        self.orient_charts = p.orient_charts
         self.ink, self.paper, self.base = p.ink, p.paper, p.base
         self._params = p.as_dict(keep_none=True)
 
-    def stroke_channels(self, scene: Any) -> set[str]:
-        return field_channels(scene, self.constant_tone, self.derivatives)
-
     def ink_coverage(self, ctx: ShadeContext) -> np.ndarray:
         """(nH, nW) float64 ink coverage of the texture-space strokes."""
+        v = self.values
         inp = field_inputs(
             ctx.gb,
             ctx.scene,
-            constant_tone=self.constant_tone,
-            derivatives=self.derivatives,
-            orient_charts=self.orient_charts,
+            constant_tone=v.constant_tone,
+            derivatives=v.derivatives,
+            orient_charts=v.orient_charts,
         )
-        return tam_ink(
-            inp, self.field, width=self.width, density_mode=self.density_mode, fade=self.fade
-        )
+        return tam_ink(inp, self.field, width=v.width, density_mode=v.density_mode, fade=v.fade)
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:
         return self.composite(ctx, self.ink_coverage(ctx), self.ink)
