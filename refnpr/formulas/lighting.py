@@ -275,10 +275,8 @@ def illumination(f_d, f_s=None, *, m_a=0.0, l_a=0.0, m_d=1.0, m_s=1.0, l=1.0) ->
         )
     arrays = [*terms_d, *(terms_s or []), m_a, l_a, m_d, m_s, *colours_l]
     dt = result_dtype(*arrays)
-    m_a, l_a, m_d, m_s = (
-        _colour(k, v, dt)
-        for k, v in zip(("m_a", "l_a", "m_d", "m_s"), (m_a, l_a, m_d, m_s), strict=True)
-    )
+    named = (("m_a", m_a), ("l_a", l_a), ("m_d", m_d), ("m_s", m_s))
+    m_a, l_a, m_d, m_s = (_colour(k, v, dt) for k, v in named)
     cl = [_colour(f"l[{i}]", c, dt) for i, c in enumerate(colours_l)]
     sizes = {c.shape[0] for c in (m_a, l_a, m_d, m_s, *cl) if c.ndim == 1}
     if len(sizes) > 1:

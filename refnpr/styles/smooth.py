@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from .base import register
 from .lit.params import SMOOTH
 from .lit.shading import LitStyle
@@ -22,7 +20,3 @@ class SmoothStyle(LitStyle):
     description = "continuous ambient + diffuse + specular shading (Veryovka eq. 1)"
     PARAMS = SMOOTH
     smooth = True
-
-    def __init__(self, **params: Any) -> None:
-        super().__init__(**params)
-        self.specular, self.model = self.p.specular, self.p.model

@@ -26,9 +26,6 @@ class ToonStyle(LitStyle):
     description = "n-tone toon shading (Veryovka eqs. 2-4 step, or Lake et al. 2000 ramp)"
     PARAMS = TOON
 
-    def __init__(self, **params: Any) -> None:
-        super().__init__(**params)
-        if self.p.mode != "step":
-            self.p = self.p.replace(specular=False)  # Lake's ramp has no specular term
-            self._params = self.p.as_dict()
-        self.n, self.t, self.mode, self.specular = self.p.n, self.p.t, self.p.mode, self.p.specular
+    @staticmethod
+    def _settled(p: Any) -> Any:
+        return p if p.mode == "step" else p.replace(specular=False)  # Lake's ramp: no specular

@@ -39,11 +39,12 @@ def oracle(style: XToonStyle, ctx: ShadeContext) -> np.ndarray:
         return rgba_from(grey[..., None], ev.mask)
     rgb = np.zeros(ev.mask.shape + (3,))
     alpha = np.zeros(ev.mask.shape)
-    col = ev.rgba[:, :3]
+    rgba = np.asarray(fx.toon_lookup(style._cfg.texture, ev.tone, ev.detail), dtype=np.float64)
+    col = rgba[:, :3]
     if style._cfg.p.modulate:
         col = col * ctx.material_field("diffuse")[ev.mask]
     rgb[ev.mask] = col
-    alpha[ev.mask] = ev.rgba[:, 3]
+    alpha[ev.mask] = rgba[:, 3]
     return rgba_from(rgb, ev.mask, alpha)
 
 

@@ -3,23 +3,12 @@
 Barla, Thollot, Markosian, *X-Toon: An Extended Toon Shader*, NPAR 2006. Section 3 extends the 1D
 toon texture with a second "detail" axis D in [0, 1] chosen per fragment by an attribute map
 (depth, focus, orientation, highlight); section 4 blends the shading normal towards the normal of
-an abstracted shape.
-
-Conventions used throughout (see ``docs/paper-notes.md``, "Barla et al. 2006 (X-Toon)"):
-
-- ``detail_depth`` takes the **view-axis distance** (the G-buffer ``depth`` channel: distance along
-  the focal axis, sec. 3.1 and Fig. 2b); ``detail_focus`` takes the **Euclidean distance to the
-  eye** (Fig. 2a), as the paper prefers for depth-of-field. Both clamp D to [0, 1] (the paper
-  assumes z_min <= z <= z_max, footnote 1).
-- A 2D toon texture is an array ``(rows, cols)`` or ``(rows, cols, C)``: the **row index grows with
-  D** (row 0 holds D = 0, the most abstract tone ramp; the last row holds D = 1, full detail) and the
-  **column index grows with tone** (column 0 is the darkest tone). The paper's figures draw D = 1 at
-  the top; to use such a picture stored with row 0 on top, pass ``image[::-1]``.
-- Texels are sampled at their centres, (j + 0.5) / cols along tone and (i + 0.5) / rows along D,
-  bilinearly and clamped to the edge (OpenGL ``GL_LINEAR`` + ``GL_CLAMP_TO_EDGE``).
-
-The texture builders (paper's recipes, Figs. 7-11) live in ``textures`` and the abstracted normal
-fields (Fig. 5) in ``shapes``; both are re-exported here.
+an abstracted shape. Conventions (``docs/paper-notes.md``, "Barla et al. 2006 (X-Toon)"): a 2D
+toon texture ``(rows, cols[, C])`` has its **row index growing with D** (row 0: D = 0, the most
+abstract ramp) and its **column index growing with tone**, texels at their centres; the paper's
+figures draw D = 1 at the top (``image[::-1]`` reads such a picture). The texture builders (Figs.
+7-11) live in ``textures`` and the abstracted normal fields (Fig. 5) in ``shapes``, both
+re-exported here.
 """
 
 from __future__ import annotations

@@ -1,15 +1,13 @@
 """Builders of 2D X-Toon textures from a 1D toon ramp (Barla et al. 2006, sec. 3, Figs. 7-11).
 
 The paper gives its textures as pictures and one-line recipes ("we progressively blurred an input
-1D toon texture", "sliding the darker tones to the left", ...). Each builder here is one recipe
-made precise; the exact profiles are refnpr's choices and are documented per function.
+1D toon texture", "sliding the darker tones to the left", ...); each builder here is one recipe
+made precise (the exact profiles are refnpr's choices, documented per function).
 
-Layout (as :func:`refnpr.formulas.xtoon.toon_lookup` reads it): the result has shape
-``(rows, cols)`` or ``(rows, cols, C)`` like the ramp plus a leading row axis; row i holds the
-recipe evaluated at D_i = (i + 0.5) / rows (the texel centre the lookup uses) and column j is the
-ramp's texel j, at tone (j + 0.5) / cols. Row index grows with D: high rows are full detail (the
-ramp itself, or nearly so), row 0 is the most abstract. The abstraction amount of a row is
-a = 1 - D_i. float32 ramps give float32 textures.
+Layout (as :func:`refnpr.formulas.xtoon.toon_lookup` reads it): the ramp's shape with a leading
+row axis; row i holds the recipe at D_i = (i + 0.5) / rows, with abstraction a = 1 - D_i (high
+rows: the ramp itself or nearly so), and column j is the ramp's texel j, at tone (j + 0.5) /
+cols. float32 ramps give float32 textures.
 """
 
 from __future__ import annotations
@@ -62,16 +60,18 @@ def _tone_weight(tone_weight, cols: int) -> np.ndarray:
     return w.astype(np.float64)
 
 
-def _color(name: str, color, channels: int) -> np.ndarray:
+def _color(name: str, color, like: np.ndarray):
+    """``color`` as one value per channel of the ramp ``like`` (a scalar for a (cols,) ramp)."""
+    channels = 1 if like.ndim == 1 else like.shape[1]
     c = as_float(name, color, finite=True).astype(np.float64)
     if c.ndim == 0:
-        return np.full(channels, float(c))
-    if c.shape != (channels,):
+        c = np.full(channels, float(c))
+    elif c.shape != (channels,):
         raise ValueError(
             f"{name}: expected a scalar or {channels} values (one per ramp channel), got "
             f"{describe(c)}; match the ramp's channel count"
         )
-    return c
+    return c[0] if like.ndim == 1 else c
 
 
 def _smoothstep(e0: float, e1, x):
@@ -103,6 +103,11 @@ def _sample_ramp(ramp: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 def _finish(out: np.ndarray, ramp: np.ndarray) -> np.ndarray:
     return out.astype(ramp.dtype, copy=False)
+
+
+def _towards(r: np.ndarray, color, m: np.ndarray) -> np.ndarray:
+    """The ramp ``r`` blended towards ``color`` by ``m (rows, cols)``, in the ramp's dtype."""
+    return _finish(_lerp(r.astype(np.float64)[None], _color("color", color, r), m), r)
 
 
 def toon_texture_blur(ramp, rows: int, *, max_sigma: float) -> np.ndarray:
@@ -202,17 +207,6 @@ def toon_texture_receding(ramp, rows: int, *, shift: float = 0.5, lighten: float
     return _finish(out, r)
 
 
-def _alpha_split(r: np.ndarray, alpha: bool | None):
-    channels = 1 if r.ndim == 1 else r.shape[1]
-    has_alpha = channels in (2, 4) if alpha is None else bool(alpha)
-    if has_alpha and r.ndim == 1:
-        raise ValueError(
-            "alpha: a ramp of shape (cols,) has no alpha channel; pass (cols, 2) or (cols, 4) "
-            "with alpha last, or alpha=False"
-        )
-    return has_alpha
-
-
 def toon_texture_fade(
     ramp,
     rows: int,
@@ -246,7 +240,12 @@ def toon_texture_fade(
     n, D = _rows(rows)
     contrast = check_scalar("contrast", contrast, lo=0.0)
     opacity = check_scalar("opacity", opacity, lo=0.0)
-    has_alpha = _alpha_split(r, alpha)
+    has_alpha = (r.ndim == 2 and r.shape[1] in (2, 4)) if alpha is None else bool(alpha)
+    if has_alpha and r.ndim == 1:
+        raise ValueError(
+            "alpha: a ramp of shape (cols,) has no alpha channel; pass (cols, 2) or (cols, 4) "
+            "with alpha last, or alpha=False"
+        )
     if opacity > 0 and not has_alpha:
         raise ValueError(
             f"opacity: a fade of {opacity} needs an alpha channel, but the ramp has shape "
@@ -256,10 +255,7 @@ def toon_texture_fade(
     a = (1.0 - D)[:, None] * w[None, :]
     rf = r.astype(np.float64)
     colour = rf[:, :-1] if has_alpha else rf
-    tgt = colour.mean(axis=0) if target is None else target
-    tgt = _color("target", tgt, 1 if colour.ndim == 1 else colour.shape[1])
-    if colour.ndim == 1:
-        tgt = tgt[0]
+    tgt = _color("target", colour.mean(axis=0) if target is None else target, colour)
     out_colour = _lerp(colour[None], tgt, np.clip(contrast * a, 0.0, 1.0))  # contrast loss
     if not has_alpha:
         return _finish(out_colour, r)
@@ -299,11 +295,11 @@ def toon_texture_hue(
     n, D = _rows(rows)
     amount = check_scalar("amount", amount, lo=0.0)
     desaturate = check_scalar("desaturate", desaturate, lo=0.0)
-    tgt = _color("target", target, 3)
-    w = _tone_weight(tone_weight, r.shape[0])
-    a = (1.0 - D)[:, None] * w[None, :]
     rf = r.astype(np.float64)
     rgb = rf[:, :3]
+    tgt = _color("target", target, rgb)
+    w = _tone_weight(tone_weight, r.shape[0])
+    a = (1.0 - D)[:, None] * w[None, :]
     luma = luminance(rgb)[:, None]
     out = _lerp(rgb[None], luma[None], np.clip(desaturate * a, 0.0, 1.0))  # desaturation
     out = _lerp(out, tgt, np.clip(amount * a, 0.0, 1.0))  # shift towards the target hue
@@ -340,12 +336,10 @@ def toon_texture_backlight(
     width = check_scalar("width", width, lo=0.0, hi=1.0)
     thinning = check_scalar("thinning", thinning, lo=0.0, hi=1.0)
     softness = check_scalar("softness", softness, lo=0.0)
-    c = _color("color", color, 1 if r.ndim == 1 else r.shape[1])
-    c = c[0] if r.ndim == 1 else c
     wt = width * (1.0 - thinning * (1.0 - _tone_axis(r.shape[0])))  # thinner in dark tones
-    m = 1.0 - _smoothstep(0.0, 2 * softness, D[:, None] - wt[None, :] + softness)
-    out = _lerp(r.astype(np.float64)[None], c, m)
-    return _finish(out, r)
+    return _towards(
+        r, color, 1.0 - _smoothstep(0.0, 2 * softness, D[:, None] - wt[None, :] + softness)
+    )
 
 
 def toon_texture_plastic(ramp, rows: int, *, color=1.0, size: float = 0.3) -> np.ndarray:
@@ -364,11 +358,8 @@ def toon_texture_plastic(ramp, rows: int, *, color=1.0, size: float = 0.3) -> np
     r = _ramp(ramp)
     n, D = _rows(rows)
     size = check_scalar("size", size, lo=0.0, hi=1.0)
-    c = _color("color", color, 1 if r.ndim == 1 else r.shape[1])
-    c = c[0] if r.ndim == 1 else c
     m = (_tone_axis(r.shape[0])[None, :] > 1.0 - size * D[:, None]).astype(np.float64)
-    out = _lerp(r.astype(np.float64)[None], c, m)
-    return _finish(out, r)
+    return _towards(r, color, m)
 
 
 def toon_texture_metal(
@@ -392,9 +383,6 @@ def toon_texture_metal(
     n, D = _rows(rows)
     onset = check_scalar("onset", onset, lo=0.0, hi=1.0, hi_open=True)
     spread = check_scalar("spread", spread, lo=0.0, hi=1.0, lo_open=True)
-    c = _color("color", color, 1 if r.ndim == 1 else r.shape[1])
-    c = c[0] if r.ndim == 1 else c
     glow = _smoothstep(onset, 1.0, D)[:, None]  # sudden flare near the mirror direction
     profile = _smoothstep(1.0 - spread, 1.0, _tone_axis(r.shape[0]))[None, :]
-    out = _lerp(r.astype(np.float64)[None], c, glow * profile)
-    return _finish(out, r)
+    return _towards(r, color, glow * profile)

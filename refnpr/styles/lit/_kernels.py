@@ -58,8 +58,7 @@ class Tables(NamedTuple):
 
 
 class Row(NamedTuple):
-    """Per-row float64 scratch of the lit kernels: V, one light's L, and per light f_d, the
-    specular base and the tone of f_d, over the sample columns."""
+    """Per-row float64 scratch of the lit kernels, over the sample columns."""
 
     v: np.ndarray  # (3, nW)
     l: np.ndarray  # (3, nW)
@@ -81,8 +80,7 @@ def _scratch(n_lights, nw):
 
 @njit
 def _covered_span(cover_row):
-    """``(x0, x1)``: the row's covered samples (``cover >= 0``) lie in ``[x0, x1)``; x0 == x1
-    where the row has none. The row passes run over that span only."""
+    """``(x0, x1)`` enclosing the row's covered samples (``cover >= 0``); x0 == x1 if none."""
     nw = cover_row.shape[0]
     x0 = 0
     while x0 < nw and cover_row[x0] < 0:
@@ -95,8 +93,7 @@ def _covered_span(cover_row):
 
 @njit
 def _towards_row(target, prow, o):
-    """``o[:, x] = towards(target, position[x])`` over one row span (``prow (n * 3,)``; ``o``
-    a tuple of three (n,) float64 views)."""
+    """``o[:, x] = towards(target, position[x])`` for the positions ``prow (n * 3,)``."""
     ox, oy, oz = o
     for x in range(ox.shape[0]):
         p = (np.float64(prow[3 * x]), np.float64(prow[3 * x + 1]), np.float64(prow[3 * x + 2]))
@@ -105,9 +102,8 @@ def _towards_row(target, prow, o):
 
 @njit
 def _light_row(nrow, light, flags, v, l, out):
-    """One light's f_d and specular base over one row span, on 1D views (they vectorize):
-    ``light = (point, vec)``, ``flags = (specular, phong)``; ``v``, ``l`` tuples of three (n,)
-    views (V, and L where the light is a point light); ``out = (f_d, base)`` (n,) views."""
+    """One light ``(point, vec)``'s ``out = (f_d, base)`` over one row span, on 1D views (they
+    vectorize); ``flags = (specular, phong)``, ``v``, ``l``: V and a point light's L."""
     point, vec = light
     specular, phong = flags
     f_d, base = out
@@ -126,11 +122,9 @@ def _light_row(nrow, light, flags, v, l, out):
 
 @njit(inline="always")
 def _row_terms(frame, arrays, y, flags, row):
-    """f_d and the specular base of every light at row y's covered span (returned as ``(x0,
-    x1)``, ``x0 == x1`` where the row is empty), into ``row``; ``arrays = (cover, nrm, pos)``,
-    the frame's coverage and its normals and positions as (nH, nW * 3) views. Uncovered samples
-    inside the span get values nobody reads. The passes get views of the span and loop from 0
-    (a loop from x0, a signed start, compiled without SIMD)."""
+    """f_d and the specular base of every light over row y's covered span ``(x0, x1)``
+    (returned) into ``row``; ``arrays``: :func:`_grids`. The passes get views of the span and
+    loop from 0 (a loop from x0, a signed start, compiled without SIMD)."""
     cover, nrm, pos = arrays
     specular = flags[0]
     lights = frame.lights
@@ -158,8 +152,7 @@ def _row_terms(frame, arrays, y, flags, row):
 
 @njit
 def _row_step_tones(f_d, t, n, tone):
-    """``tone[x] = T_n(f_d[x], t)`` (eq. 4 in eq. 2) over a row span, in a pass that vectorizes
-    (floor, ceil and the division by n as SIMD)."""
+    """``tone[x] = T_n(f_d[x], t)`` (eq. 4 in eq. 2) over a row span, vectorized."""
     for x in range(f_d.shape[0]):
         tone[x] = _step_n(f_d[x], t, n)
 
@@ -179,8 +172,7 @@ def _spec_term(nonzero, rgb):
 
 @njit
 def _add(rgb, m, mi, f, color, i):
-    """``rgb`` plus one light's term m f l (eq. 1), channel by channel: ``m[mi]`` the
-    object's material colour, ``color[i]`` the light's."""
+    """``rgb`` plus light i's term m f l (eq. 1) for object mi, channel by channel."""
     return (
         _term(rgb[0], m[mi, 0], f, color[i, 0]),
         _term(rgb[1], m[mi, 1], f, color[i, 1]),
@@ -204,8 +196,7 @@ def _clear(out, y, x):
 
 @njit
 def _grids(frame):
-    """``(cover, nrm, pos)``: the frame's coverage, and its normals and positions as
-    (nH, nW * 3) views (positions of any shape when unread)."""
+    """``(cover, nrm, pos)``: the frame's coverage, normals and positions as (nH, nW * 3) views."""
     nh, nw = frame.cover.shape
     pos = frame.position
     return (
@@ -226,25 +217,16 @@ def shade_toon(lo, hi, frame, style, tables, out):
     empty): eq. 2 with both terms through T_n(., t, n) of eq. 4 (``style.mode`` STEP), or
     ``m_a l_a + sum m_d ramp(N.L) l_i`` (LAKE, Lake et al. 2000, nearest texel), from the frame
     record (cover, mesh_id, normal, position where read, eye, lights, materials), the toon
-    style record (n, t, mode, specular) and :class:`Tables`.
-
-    Specular T_n without pow: ``tables.edge_lo``, ``edge_hi (O, B)`` and ``tones (B + 1,)``: B
-    breakpoints c_j of T_n in f_s (ascending), mapped to base = f_s ** (1 / shininess) and
-    widened per object; a base in [edge_hi[j - 1], edge_lo[j]] has f_s strictly inside
-    (c_{j - 1}, c_j), far (relative 1e-11 or more) from both, so T_n(f_s) = tones[j]; elsewhere,
-    or where tones[j] < 0, pow is evaluated as the formula does.
+    style record (n, t, mode, specular) and :class:`Tables`. The specular T_n takes
+    ``tables.tones[j]`` where the base lies in [edge_hi[j - 1], edge_lo[j]] (its tone is certain
+    there, see ``shading._step_edges``), elsewhere pow as the formula does.
     """
     mesh_id = frame.mesh_id
     m = frame.materials
     ambient, m_d, m_s, shininess = m.ambient, m.diffuse, m.specular, m.shininess
     color = frame.lights.color
-    ramp, edge_lo, edge_hi, tones, spec_on = (
-        tables.ramp,
-        tables.edge_lo,
-        tables.edge_hi,
-        tables.tones,
-        tables.spec_on,
-    )
+    ramp, edge_lo, edge_hi = tables.ramp, tables.edge_lo, tables.edge_hi
+    tones, spec_on = tables.tones, tables.spec_on
     arrays = _grids(frame)
     cover = arrays[0]
     n_lights = color.shape[0]

@@ -91,15 +91,9 @@ def _out(ctx: Any, out: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray
 def lit_rgba(
     ctx: Any, record: Any, *, smooth: bool, pow_int: bool = True, out: np.ndarray | None = None
 ) -> np.ndarray:
-    """Toon or smooth shading of every sample in one numba pass: (nH, nW, 4) float32 RGBA.
-
-    ``smooth``: Veryovka eq. 1, ``m_a l_a + sum m_d f_d l_i + sum m_s f_s l_i`` with the smooth
-    style's ``record`` (specular, model); else the toon style's ``record`` (n, t, mode,
-    specular): eq. 2 with both terms through T_n(., t, n) of eq. 4 (step), or ``m_a l_a + sum
-    m_d ramp(N.L) l_i`` (lake, Lake et al. 2000, nearest texel). f_s has each object's
-    shininess (``specular``; needs ``position``); point lights need ``position`` too. Colours
-    are clipped to [0, 1], alpha is 1 where covered (``ctx.mask``) and everything is 0
-    elsewhere.
+    """Smooth (Veryovka eq. 1; ``record`` of the smooth style) or toon shading (eqs. 2-4 or Lake
+    et al.'s ramp; ``record`` of the toon style) of every sample in one numba pass: (nH, nW, 4)
+    float32 RGBA, colours clipped to [0, 1], alpha 1 where covered and everything 0 elsewhere.
 
     ``pow_int``: smooth shading forms f_s of an integer shininess by multiplications, checked
     against pow's float32 result (False: pow everywhere; a float64 ``out`` is pow too).
@@ -108,7 +102,7 @@ def lit_rgba(
     """
     scene = ctx.scene
     specular = bool(record.specular)
-    need_pos = specular or any(light.kind == "point" for light in scene.lights)
+    need_pos = needs_position(scene, specular)
     frame = frame_record(ctx, ("normal", "position") if need_pos else ("normal",))
     shape = frame.cover.shape
     out = _out(ctx, out, shape)
@@ -152,14 +146,22 @@ def lit_rgba(
 
 class LitStyle(Style):
     """What the toon and smooth styles share: their parameters ``self.p`` (validated by the
-    subclass's ``PARAMS``), the channels they read and one numba pass (:func:`lit_rgba`)."""
+    subclass's ``PARAMS``; also attributes, ``style.n``), the channels they read and one numba
+    pass (:func:`lit_rgba`)."""
 
     #: Smooth shading (eq. 1) rather than toon (eqs. 2-4, Lake's ramp).
     smooth: bool = False
 
     def __init__(self, **params: Any) -> None:
-        self.p = self.PARAMS.validate(params)
+        self.p = self._settled(self.PARAMS.validate(params))
         self._params = self.p.as_dict()
+        for name in self.PARAMS.names:
+            setattr(self, name, self.p[name])
+
+    @staticmethod
+    def _settled(p: Any) -> Any:
+        """``p`` with the values the chosen modes fix."""
+        return p
 
     def requires(self, scene: Any) -> frozenset[str]:
         req = {"normal", "mesh_id"}

@@ -8,9 +8,7 @@ attribute images of ``show``. The lookup runs as a second, branch-free pass over
 (without the first pass's branches and calls it took the 1080p kernel from 12.8 to 8.6 ms).
 
 Where the normals or D come from elsewhere (shape abstraction, per-vertex detail, flow, a user
-map) the caller gives the tone and D of the covered samples as flat arrays in row-major mask
-order (:class:`Tables`), ``offsets[y]`` the index of row y's first covered sample; they come from
-the same functions (:func:`sample_terms` through ``elementwise``, the formulas' numpy faces).
+map) the caller gives the tone and D of the covered samples (:class:`Tables`).
 """
 
 from __future__ import annotations
@@ -37,23 +35,17 @@ from refnpr.formulas.xtoon import (
 
 from .params import PARAMS
 
-_detail_depth = detail_depth.scalar
-_detail_focus = detail_focus.scalar
-_detail_orientation = detail_orientation.scalar
-_detail_highlight = detail_highlight.scalar
-_tone = tone.scalar
-_toon_lookup = toon_lookup.scalar
+_detail_depth, _detail_focus = detail_depth.scalar, detail_focus.scalar
+_detail_orientation, _detail_highlight = detail_orientation.scalar, detail_highlight.scalar
+_tone, _toon_lookup = tone.scalar, toon_lookup.scalar
 
 #: Codes of the style record (the declaration's choices).
-DEPTH = PARAMS.code("detail", "depth")
-FOCUS = PARAMS.code("detail", "focus")
-ORIENTATION = PARAMS.code("detail", "orientation")
-HIGHLIGHT = PARAMS.code("detail", "highlight")
+DEPTH, FOCUS, ORIENTATION, HIGHLIGHT = (
+    PARAMS.code("detail", c) for c in ("depth", "focus", "orientation", "highlight")
+)
 AXIS = PARAMS.code("distance", "axis")
 HALF_LAMBERT = PARAMS.code("tone", "half_lambert")
-COLOR = PARAMS.code("show", "color")
-DETAIL = PARAMS.code("show", "detail")
-INVERSE = PARAMS.code("show", "inverse_detail")
+COLOR, DETAIL, INVERSE = (PARAMS.code("show", c) for c in ("color", "detail", "inverse_detail"))
 
 
 class Tables(NamedTuple):
@@ -117,14 +109,6 @@ def sample_terms(style, eye, light, p, n, z_axis):
 
 
 @njit
-def style_light(lights, style):
-    """``(point, vec)`` of the style's light among the frame's ``lights``."""
-    i = style.light
-    vec = lights.vec
-    return lights.kind[i] == LIGHT_POINT, (vec[i, 0], vec[i, 1], vec[i, 2])
-
-
-@njit
 def _vec3(a, y, x):
     return np.float64(a[y, x, 0]), np.float64(a[y, x, 1]), np.float64(a[y, x, 2])
 
@@ -138,11 +122,9 @@ def _shown(show, t, d):
 
 @njit
 def _lookup_row(style, texels, rows, mrow, diffuse, orow, span):
-    """The straight-alpha RGBA of the samples ``span = (xs, xe)`` of one row into ``orow`` (the
-    row's ``(nW * 4,)`` float32 view), 0 where ``mrow < 0``: the toon texture ``texels``
-    at ``(tone, D) = rows[0][x], rows[1][x]``, times the object's diffuse
-    colour where ``style.modulate``. Branch-free over the span (an uncovered sample's lookup is
-    computed and dropped)."""
+    """The RGBA of the toon ``texels`` at ``(tone, D) = rows[0][x], rows[1][x]`` (times the
+    diffuse colour with ``style.modulate``) for ``x`` in ``span = (xs, xe)`` into ``orow``, the
+    row's ``(nW * 4,)`` view; 0 where ``mrow < 0`` (branch-free: that lookup is dropped)."""
     tone_row, d_row = rows
     tex_rows = style.rows
     tex_cols = style.cols
@@ -180,7 +162,9 @@ def shade_xtoon(lo, hi, frame, style, tables, out, bad_rows):
     given_detail = tables.detail
     nh, nw = mesh_id.shape
     eye = (frame.eye[0], frame.eye[1], frame.eye[2])
-    light = style_light(frame.lights, style)
+    vec = frame.lights.vec
+    i = style.light
+    light = (frame.lights.kind[i] == LIGHT_POINT, (vec[i, 0], vec[i, 1], vec[i, 2]))
     has_position = position.shape[0] == nh and position.shape[1] == nw  # else a stand-in
     has_depth = depth.shape[0] == nh and depth.shape[1] == nw
     color = style.show == COLOR

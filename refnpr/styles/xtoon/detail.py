@@ -1,14 +1,9 @@
 """X-Toon attribute maps -> detail D (Barla et al. 2006, sec. 3.1, 3.2 and 5), evaluated on flat
-arrays of samples or of vertices.
-
-Which depth (Fig. 2): by default ``depth`` (levels of abstraction, aerial perspective) uses the
-**view-axis distance** (Fig. 2b; the G-buffer ``depth`` channel, w_clip) and ``focus`` (depth of
-field) the **Euclidean distance to the eye** (Fig. 2a), with z_c that distance of the focus
-point, as the paper prefers; ``distance="axis"`` or ``"eye"`` picks either for either map.
-"""
+arrays of samples or of vertices, and the style record of a frame."""
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import numpy as np
@@ -19,22 +14,10 @@ from refnpr.raster import Camera
 
 from . import _kernels as K
 from .geometry import view_axis_depth
-from .params import DISTANCES, PARAMS
+from .params import PARAMS
 
-__all__ = [
-    "DISTANCES",
-    "TINY",
-    "FLOW_BEHIND",
-    "DEFAULT_DISTANCE",
-    "style_record",
-    "texels",
-    "detail_values",
-    "flow_detail",
-    "distances",
-]
+__all__ = ["TINY", "FLOW_BEHIND", "DEFAULT_DISTANCE", "style_record", "detail_values", "distances"]
 
-#: Distances are clamped to at least this before the log of sec. 3.1 (vertices at or behind
-#: the eye get D = 1 in the per-vertex mode instead of a NaN).
 TINY = xtoon.TINY
 #: Flow length given to vertices behind the previous or current camera (no screen position).
 FLOW_BEHIND = 1e6
@@ -51,25 +34,15 @@ def distances(points: np.ndarray, camera: Camera, distance: str) -> np.ndarray:
 
 
 def _box_depths(scene: Any, camera: Camera, distance: str) -> tuple[float, float]:
-    lo, hi = scene.bounds()
-    corners = np.array(
-        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
-    )
+    corners = np.array(list(itertools.product(*zip(*scene.bounds(), strict=True))))
     z = distances(corners, camera, distance)
     near = max(float(z.min()), camera.near)
     return near, max(float(z.max()), near)
 
 
 def _resolved(p: Any, scene: Any, camera: Camera) -> tuple[float, float, float]:
-    """``(z_min, r, z_c)`` after the defaults that depend on the frame, with the checks that
-    need the camera.
-
-    ``depth``: z_min defaults to the nearest depth (``p.distance``) of the scene's bounding box
-    corners (at least the near plane) and r to (farthest corner depth) / z_min (at least 1.01).
-    ``focus``: z_c is the focus point's depth (``p.distance``), z_min defaults to 0.1 z_c and r
-    to 4; the focus point must lie in front of the camera and z_c - r z_min > 0 (footnote 2).
-    ``orientation``: r defaults to 1.
-    """
+    """``(z_min, r, z_c)`` with the frame's defaults (see ``params.PARAMS``) and the checks
+    that need the camera (the focus point ahead, z_c - r z_min > 0: footnote 2)."""
     if p.detail == "depth":
         near, far = _box_depths(scene, camera, p.distance)
         z_min = near if p.z_min is None else p.z_min
@@ -118,21 +91,9 @@ def style_record(p: Any, texture: np.ndarray, scene: Any, camera: Camera) -> Any
     )
 
 
-def texels(texture: np.ndarray) -> np.ndarray:
-    """The toon ``texture (rows, cols, 4)``'s float32 values as a flat float64 array (exact:
-    the kernel's loads need no conversion)."""
-    tex32 = np.asarray(texture, dtype=np.float32)
-    return np.ascontiguousarray(tex32, dtype=np.float64).reshape(-1)
-
-
-def flow_detail(length: np.ndarray, flow_min: float, flow_max: float) -> np.ndarray:
-    """D from the optical-flow length in pixels (X-Toon sec. 5): 1 up to ``flow_min``, falling
-    linearly to 0 at ``flow_max`` (refnpr's choice; the paper only says the length assigns D)."""
-    t = (np.asarray(length, dtype=np.float64) - flow_min) / (flow_max - flow_min)
-    return 1.0 - np.clip(np.nan_to_num(t, nan=1.0, posinf=1.0), 0.0, 1.0)
-
-
-def _rows(a: np.ndarray | None, count: int) -> tuple[np.ndarray, ...]:
+def columns(a: np.ndarray | None, count: int = 0) -> tuple[np.ndarray, ...]:
+    """The three columns of ``a (K, 3)`` float64, a ``(3,)`` vector repeated ``count`` times, or
+    zeros (``a`` None): a vector argument of ``elementwise``."""
     if a is None:
         z = np.zeros(count)
         return z, z, z
@@ -159,7 +120,7 @@ def detail_values(
 
     Parameters
     ----------
-    p : the style's parameter values; record : its :func:`style_record` for the frame
+    p, record : the style's parameter values and its :func:`style_record` for the frame
     positions : (K, 3) world positions (focus, orientation, highlight; depth if ``depth`` is None)
     depth : (K,) view-axis distances (depth and focus with ``distance="axis"``), optional
     normals : (K, 3) unit shading normals (orientation, highlight)
@@ -180,13 +141,16 @@ def detail_values(
             np.float64,
             record,
             eye,
-            _rows(positions, k),
-            _rows(normals, k),
-            _rows(light, k),
+            columns(positions, k),
+            columns(normals, k),
+            columns(light, k),
             z,
         )
     if kind == "flow":
-        return flow_detail(np.linalg.norm(flow, axis=-1), p.flow_min, p.flow_max)  # sec. 5
+        # sec. 5: D = 1 up to flow_min, falling linearly to 0 at flow_max (refnpr's choice; the
+        # paper only says that the flow's length assigns D)
+        t = (np.linalg.norm(flow, axis=-1) - p.flow_min) / (p.flow_max - p.flow_min)
+        return 1.0 - np.clip(np.nan_to_num(t, nan=1.0, posinf=1.0), 0.0, 1.0)
     if kind == "map":
         return np.asarray(user, dtype=np.float64)
     return np.ones(count)

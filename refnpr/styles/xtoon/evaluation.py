@@ -1,7 +1,6 @@
 """Evaluation of the X-Toon style on a G-buffer: which channels a configuration needs (the plan),
-per-vertex quantities (the paper's vertex shader) and per-sample tone, detail and normals.
-
-Everything is computed on the covered samples only, as flat float64 arrays ``(K, ...)``.
+per-vertex quantities (the paper's vertex shader) and per-sample tone, detail and normals, as
+flat float64 arrays ``(K, ...)`` over the covered samples.
 
 Per-vertex quantities are interpolated perspective-correctly at the samples, either by the
 rasterizer (when the scene's meshes carry them as vertex attributes, see
@@ -13,6 +12,7 @@ rasterizer (when the scene's meshes carry them as vertex attributes, see
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -20,15 +20,14 @@ import numpy as np
 from refnpr.device.lights import LIGHT_POINT, light_dir, lights_record
 from refnpr.formulas import xtoon
 from refnpr.formulas._face import elementwise
+from refnpr.raster.projection import project_points
 from refnpr.texture import sample_level
 
-from .detail import FLOW_BEHIND, detail_values, style_record
-from .geometry import VertexGeometry, project_pixels
+from .detail import FLOW_BEHIND, columns, detail_values, style_record
+from .geometry import VertexGeometry
 from .shape import AbstractedNormals, abstract_normals, unit_rows
 
 __all__ = ["Config", "Plan", "plan", "vertex_values", "evaluate", "Evaluated"]
-
-_POSITION_MAPS = ("orientation", "highlight", "flow")
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,20 +50,16 @@ class Plan:
     carried: frozenset[str]  # vertex quantities the meshes carry as attributes
 
 
-def _map_channels(p: Any) -> set[str]:
+def map_channels(p: Any) -> set[str]:
     """G-buffer channels the attribute map reads per sample: the view-axis ``depth`` for the
     focal-axis distance (Fig. 2b), ``position`` for the eye distance and the other maps."""
     if p.detail in ("depth", "focus"):
         return {"depth"} if p.distance == "axis" else {"position"}
-    return {"position"} if p.detail in _POSITION_MAPS else set()
+    return {"position"} if p.detail in ("orientation", "highlight", "flow") else set()
 
 
-def _light_index(cfg: Config, scene: Any) -> int:
-    _light_of(cfg, scene)
-    return cfg.p.light
-
-
-def _light_of(cfg: Config, scene: Any):
+def light_of(cfg: Config, scene: Any) -> Any:
+    """The scene light the tone is lit by (``light``), checked against the scene."""
     if not scene.lights:
         raise ValueError(
             "light: X-Toon's tone is n.l of one light, but the scene has no lights; add a "
@@ -89,15 +84,15 @@ def plan(cfg: Config, scene: Any) -> Plan:
         names.append("xtoon_normal")
     else:
         channels.add("normal")
-    if _light_of(cfg, scene).kind == "point":
+    if light_of(cfg, scene).kind == "point":
         channels.add("position")
     if cfg.p.detail_mode == "pixel":
-        channels |= _map_channels(cfg.p)
+        channels |= map_channels(cfg.p)
     elif kind not in ("map", "none"):
         names.append("xtoon_flow" if kind == "flow" else "xtoon_d")
     bary = shaped and not vertex_blend  # the abstracted normal, interpolated per pixel
     if bary and cfg.p.shape_weight.kind == "detail":
-        channels |= _map_channels(cfg.p)
+        channels |= map_channels(cfg.p)
     if bary and cfg.p.shape_weight.kind == "texture":
         channels.add("uv")
     meshes = scene.world_meshes()
@@ -127,36 +122,32 @@ def _abstract(cfg: Config, scene: Any) -> list[np.ndarray | None]:
     return list(hit[1].normals)
 
 
-def _cols(v: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The columns of ``v (N, 3)``: a vector argument of ``elementwise``."""
-    return v[:, 0], v[:, 1], v[:, 2]
+def _abstract_rows(cfg: Config, scene: Any, geom: VertexGeometry, n_v: np.ndarray) -> np.ndarray:
+    """(N, 3) abstracted normals of every vertex; ``n_v`` for objects left unabstracted."""
+    parts = zip(_abstract(cfg, scene), geom.split(n_v), strict=True)
+    return np.concatenate([b if a is None else a for a, b in parts])
 
 
 def _light_dirs(cfg: Config, scene: Any, points: np.ndarray | None) -> np.ndarray:
     """Unit directions towards the style's light: (3,) for a directional light, (K, 3) at
     ``points (K, 3)`` for a point light (``refnpr.device.lights.light_dir``, as the kernel)."""
+    light_of(cfg, scene)
     lights = lights_record(scene.lights)
-    i = _light_index(cfg, scene)
+    i = cfg.p.light
     if lights.kind[i] != LIGHT_POINT:
         return lights.vec[i]
     v = tuple(float(c) for c in lights.vec[i])
-    return elementwise(light_dir, np.float64, True, v, _cols(points))
+    return elementwise(light_dir, np.float64, True, v, columns(points, len(points)))
 
 
-def _flow(
-    points: np.ndarray,
-    cfg: Config,
-    camera: Any,
-    width: int,
-    height: int,
-    before: np.ndarray | None = None,
-) -> np.ndarray:
+def _flow(points, cfg: Config, camera: Any, width: int, height: int, before=None) -> np.ndarray:
     """(K, 2) screen displacement in pixels since the previous frame (X-Toon sec. 5): world
     ``points (K, 3)`` through ``camera`` minus their previous world positions ``before`` (default:
     the same points, a still object) through the previous camera (default: ``camera``)."""
     prev_camera = camera if cfg.p.prev_camera is None else cfg.p.prev_camera
-    now, _ = project_pixels(points, camera, width, height)
-    then, _ = project_pixels(points if before is None else before, prev_camera, width, height)
+    before = points if before is None else before
+    now, _ = project_points(points, camera.view_projection(width, height), width, height)
+    then, _ = project_points(before, prev_camera.view_projection(width, height), width, height)
     f = now - then
     bad = ~np.all(np.isfinite(f), axis=1)
     f[bad] = (FLOW_BEHIND, 0.0)  # behind either camera: no screen position, coarsest detail
@@ -164,7 +155,7 @@ def _flow(
 
 
 def _prev_transforms(cfg: Config, scene: Any) -> np.ndarray | None:
-    """The previous object transforms ``(M, 4, 4)``, checked against the scene (or None)."""
+    """``prev_transforms`` (or None), checked against the scene's objects."""
     prev = cfg.p.prev_transforms
     if prev is not None and len(prev) != len(scene.objects):
         raise ValueError(
@@ -176,8 +167,7 @@ def _prev_transforms(cfg: Config, scene: Any) -> np.ndarray | None:
 
 
 def _prev_vertices(cfg: Config, scene: Any) -> np.ndarray | None:
-    """Every vertex's previous world position ``(N, 3)``: its object-space position through the
-    previous object transform (as ``Mesh.transformed`` maps it); None without prev_transforms."""
+    """Every vertex's previous world position ``(N, 3)`` (as ``Mesh.transformed`` maps it)."""
     prev = _prev_transforms(cfg, scene)
     if prev is None:
         return None
@@ -191,9 +181,7 @@ def _prev_vertices(cfg: Config, scene: Any) -> np.ndarray | None:
 
 
 def _prev_pixels(cfg: Config, scene: Any, points: np.ndarray, mesh_id: np.ndarray) -> Any:
-    """Previous world positions ``(K, 3)`` of the world ``points`` seen at samples of objects
-    ``mesh_id (K,)``: back to object space through the current transform, then through the
-    previous one; None without prev_transforms."""
+    """Previous world positions ``(K, 3)`` of world ``points`` on objects ``mesh_id (K,)``."""
     prev = _prev_transforms(cfg, scene)
     if prev is None:
         return None
@@ -218,49 +206,33 @@ def vertex_values(
     geom = VertexGeometry.of(scene.world_meshes()) if geom is None else geom
     p = geom.positions
     n_v = unit_rows(geom.normals())
-    light = _light_dirs(cfg, scene, p)
-    record = style_record(cfg.p, cfg.texture, scene, camera)
-    out: dict[str, np.ndarray] = {}
-
-    flow_v = None
+    flow = None
     if cfg.p.detail == "flow":
-        flow_v = _flow(p, cfg, camera, width, height, _prev_vertices(cfg, scene))
-
-    def d_at_vertices(normals: np.ndarray) -> np.ndarray:
-        flow = flow_v
-        return detail_values(
-            cfg.p,
-            record,
-            camera,
-            positions=p,
-            normals=normals,
-            light=light,
-            flow=flow,
-            count=len(p),
-        )
-
+        flow = _flow(p, cfg, camera, width, height, _prev_vertices(cfg, scene))
+    record = style_record(cfg.p, cfg.texture, scene, camera)
+    light = _light_dirs(cfg, scene, p)
+    d_at = partial(
+        detail_values, cfg.p, record, camera, positions=p, light=light, flow=flow, count=len(p)
+    )
+    out: dict[str, np.ndarray] = {}
     n_shade = n_v
     if cfg.p.shape is not None:
-        parts = _abstract(cfg, scene)
-        n_abs = np.concatenate(
-            [a if a is not None else b for a, b in zip(parts, geom.split(n_v), strict=True)]
-        )
-        w: Any = cfg.p.shape_weight.value
-        if cfg.p.shape_weight.kind == "detail":
-            w = (1.0 - d_at_vertices(n_v))[:, None]  # local weight from the same attribute map
-        elif cfg.p.shape_weight.kind != "global":
-            w = 0.0  # per-pixel weights: vertex D uses the mesh normals
-        weight = w[:, 0] if np.ndim(w) else float(w)
+        kind = cfg.p.shape_weight.kind
+        # per-pixel weights (texture, map): the vertex D uses the mesh normals
+        weight = cfg.p.shape_weight.value if kind == "global" else 0.0
+        if kind == "detail":
+            weight = 1.0 - d_at(normals=n_v)  # local weight from the same attribute map
+        n_abs = _abstract_rows(cfg, scene, geom, n_v)
         blend = elementwise(  # sec. 4: the linear blend, in the vertex shader
-            xtoon.blend_normals.scalar, np.float64, _cols(n_v), _cols(n_abs), weight, False
+            xtoon.blend_normals.scalar, np.float64, columns(n_v), columns(n_abs), weight, False
         )
         if "xtoon_normal" in names:
             out["xtoon_normal"] = blend
         n_shade = unit_rows(blend)
     if "xtoon_flow" in names:
-        out["xtoon_flow"] = flow_v
+        out["xtoon_flow"] = flow
     if "xtoon_d" in names:
-        out["xtoon_d"] = d_at_vertices(n_shade)  # sec. 3.1: D per vertex, then interpolated
+        out["xtoon_d"] = d_at(normals=n_shade)  # sec. 3.1: D per vertex, then interpolated
     return out
 
 
@@ -273,7 +245,6 @@ class Evaluated:
     detail: np.ndarray  # (K,)
     normal: np.ndarray  # (K, 3) unit shading normals
     weight: np.ndarray | None  # (K,) shape weight where it varies, else None
-    rgba: np.ndarray | None  # (K, 4) texture value (straight alpha); None without lookup
 
 
 def _sample_grid(arr: np.ndarray, gb: Any, name: str) -> np.ndarray:
@@ -288,19 +259,20 @@ def _sample_grid(arr: np.ndarray, gb: Any, name: str) -> np.ndarray:
     )
 
 
-def _fresh(name: str, carried: np.ndarray, fresh: np.ndarray, mesh: Any) -> None:
-    a = np.asarray(carried, dtype=np.float64).reshape(fresh.shape)
-    if not np.allclose(a, fresh, rtol=1e-7, atol=1e-9):
-        raise ValueError(
-            f"{name}: the vertex attribute carried by mesh {mesh.name!r} does not match this "
-            "frame (camera, image size or style parameters changed); rebuild the scene with "
-            "XToonStyle.prepare_scene(scene, width=..., height=..., camera=...)"
-        )
+def _check_carried(name: str, values: np.ndarray, meshes: list[Any]) -> None:
+    """Refuse vertex attributes ``name`` that the meshes carry from another frame."""
+    for mesh, fresh in zip(meshes, VertexGeometry.of(meshes).split(values), strict=True):
+        a = np.asarray(mesh.attributes[name], dtype=np.float64).reshape(fresh.shape)
+        if not np.allclose(a, fresh, rtol=1e-7, atol=1e-9):
+            raise ValueError(
+                f"{name}: the vertex attribute carried by mesh {mesh.name!r} does not match this "
+                "frame (camera, image size or style parameters changed); rebuild the scene with "
+                "XToonStyle.prepare_scene(scene, width=..., height=..., camera=...)"
+            )
 
 
-def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
-    """Tone, detail, shading normals and (``lookup``) the 2D toon texture value at the covered
-    samples."""
+def evaluate(cfg: Config, ctx: Any) -> Evaluated:
+    """Tone, detail and shading normals at the covered samples."""
     gb, scene = ctx.gb, ctx.scene
     camera = scene.camera
     pl = plan(cfg, scene)
@@ -318,10 +290,7 @@ def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
     interp: dict[str, np.ndarray] = {}
     for name, v in vals.items():
         if name in pl.carried:
-            meshes = scene.world_meshes()
-            split = VertexGeometry.of(meshes).split(v)
-            for mesh, fresh in zip(meshes, split, strict=True):
-                _fresh(name, mesh.attributes[name], fresh, mesh)
+            _check_carried(name, v, scene.world_meshes())
             interp[name] = at(name)
         else:
             interp[name] = geom.interpolate(v, tri, bary)
@@ -333,25 +302,15 @@ def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
     if cfg.p.detail == "map":
         user = _sample_grid(cfg.p.detail_map, gb, "detail_map")[mask]
 
+    d_at = partial(detail_values, cfg.p, record, camera, positions=pos, light=light, count=k)
+
     def d_at_pixels(normals: np.ndarray) -> np.ndarray:
-        kind = cfg.p.detail
         flow = None
-        if kind == "flow":
+        if cfg.p.detail == "flow":
             before = _prev_pixels(cfg, scene, pos, gb["mesh_id"][mask])
             flow = _flow(pos, cfg, camera, gb.width, gb.height, before)
-        depth = at("depth") if "depth" in _map_channels(cfg.p) else None
-        return detail_values(
-            cfg.p,
-            record,
-            camera,
-            positions=pos,
-            depth=depth,
-            normals=normals,
-            light=light,
-            flow=flow,
-            user=user,
-            count=k,
-        )
+        depth = at("depth") if "depth" in map_channels(cfg.p) else None
+        return d_at(depth=depth, normals=normals, flow=flow, user=user)
 
     weight = None
     if cfg.p.shape is None:
@@ -360,12 +319,9 @@ def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
         n = unit_rows(interp["xtoon_normal"])  # renormalized per pixel (sec. 4)
     else:
         n0 = unit_rows(at("normal"))
-        parts = _abstract(cfg, scene)
-        n_v = unit_rows(geom.normals())
-        n_abs = np.concatenate(
-            [a if a is not None else b for a, b in zip(parts, geom.split(n_v), strict=True)]
+        na = geom.interpolate(
+            _abstract_rows(cfg, scene, geom, unit_rows(geom.normals())), tri, bary
         )
-        na = geom.interpolate(n_abs, tri, bary)
         w = _pixel_weight(cfg, gb, mask, n0, d_at_pixels, at)
         weight = None if np.ndim(w) == 0 else w
         ok = np.linalg.norm(na, axis=1) > 0
@@ -377,17 +333,13 @@ def evaluate(cfg: Config, ctx: Any, *, lookup: bool = True) -> Evaluated:
 
     n_dot_l = np.sum(n * light, axis=-1)
     tone = xtoon.tone(n_dot_l, half_lambert=cfg.p.tone == "half_lambert")  # sec. 3
-    if cfg.p.detail_mode == "vertex" and "xtoon_d" in interp:
+    if "xtoon_d" in interp:
         detail = np.clip(interp["xtoon_d"], 0.0, 1.0)
-    elif cfg.p.detail_mode == "vertex" and "xtoon_flow" in interp:
-        f = interp["xtoon_flow"]
-        detail = detail_values(cfg.p, record, camera, flow=f)  # |interpolated flow| -> D
+    elif "xtoon_flow" in interp:  # |interpolated flow| -> D
+        detail = detail_values(cfg.p, record, camera, flow=interp["xtoon_flow"])
     else:
         detail = d_at_pixels(n)
-    if not lookup:
-        return Evaluated(mask, tone, detail, n, weight, None)
-    rgba = xtoon.toon_lookup(cfg.texture, tone, detail)  # sec. 3: 2D toon texture lookup
-    return Evaluated(mask, tone, detail, n, weight, np.asarray(rgba, dtype=np.float64))
+    return Evaluated(mask, tone, detail, n, weight)
 
 
 def _pixel_weight(cfg, gb, mask, n0, d_at_pixels, at) -> Any:

@@ -1,10 +1,7 @@
-"""Per-vertex geometry of a scene for the X-Toon style: concatenated vertices, perspective-correct
-interpolation from the G-buffer's ``tri_id`` and ``bary``, projections to pixels.
-
-The rasterizer's ``bary`` channel holds the perspective-correct barycentrics of the original
-(unclipped) triangle's three vertices, so ``sum_k bary_k f[face_k]`` is exactly the interpolation
-it applies to a vertex attribute ``f`` (``interp_attr``): a per-vertex value computed here and
-interpolated this way is what a vertex shader output becomes at a fragment.
+"""Per-vertex geometry of a scene for the X-Toon style: concatenated vertices and their
+perspective-correct interpolation from the G-buffer's ``tri_id`` and ``bary`` (the barycentrics
+of the unclipped triangle, so ``sum_k bary_k f[face_k]`` is the rasterizer's own interpolation
+of a vertex attribute: what a vertex shader output becomes at a fragment).
 """
 
 from __future__ import annotations
@@ -15,28 +12,14 @@ from typing import Any
 import numpy as np
 
 from refnpr.raster import Camera
-from refnpr.raster.projection import project_points
 
-__all__ = ["VertexGeometry", "project_pixels", "view_axis_depth"]
+__all__ = ["VertexGeometry", "view_axis_depth"]
 
 
 def view_axis_depth(points: np.ndarray, camera: Camera) -> np.ndarray:
     """(N,) distance along the view axis (the G-buffer ``depth``: w_clip) of ``points (N, 3)``."""
     v = camera.view_matrix()
     return -(np.asarray(points, dtype=np.float64) @ v[2, :3] + v[2, 3])
-
-
-def project_pixels(
-    points: np.ndarray, camera: Camera, width: int, height: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """Pixel coordinates ``(N, 2)`` (x right, y down, pixel centres at +0.5) and w_clip ``(N,)``
-    of world ``points (N, 3)`` through ``camera`` for a ``width`` x ``height`` image, as the
-    rasterizer projects vertices (``refnpr.raster.projection``).
-
-    Points with w_clip <= 0 (behind the eye) get NaN coordinates.
-    """
-    vp = camera.view_projection(width, height)
-    return project_points(np.asarray(points, dtype=np.float64).reshape(-1, 3), vp, width, height)
 
 
 @dataclass(frozen=True, eq=False)

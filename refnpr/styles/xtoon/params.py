@@ -9,7 +9,10 @@ from typing import Any
 import numpy as np
 
 from refnpr.raster import Camera
+from refnpr.styles._common import check_uv_scale
 from refnpr.styles._declare import NOT_NONE, Param, Params, check_number, short_repr
+
+from .shape import SHAPES, AbstractedNormals
 
 __all__ = [
     "DETAILS",
@@ -118,10 +121,9 @@ class WeightSpec:
     summary: Any = None
 
 
-def weight_spec(value: Any) -> WeightSpec:
+def weight_spec(name: str, value: Any) -> WeightSpec:
     """Parse ``shape_weight``: a number in [0, 1], "detail", {"texture": ..., "uv_scale": ...} or
     a 2D array in [0, 1]."""
-    name = "shape_weight"
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
         hint = "0 keeps the mesh normals, 1 uses the abstracted shape's normals (X-Toon sec. 4)"
         w = check_number(name, value, lo=0.0, hi=1.0, hint=hint)
@@ -141,12 +143,8 @@ def weight_spec(value: Any) -> WeightSpec:
                 f"uv_scale = 1.0}}, got keys {sorted(value)}"
             )
         tex = unit_map(f"{name}['texture']", value["texture"])
-        s = value.get("uv_scale", 1.0)
-        s = (s, s) if np.isscalar(s) else tuple(s)
-        if len(s) != 2:
-            raise ValueError(f"{name}['uv_scale']: expected one or two numbers, got {s!r}")
-        su, sv = (check_number(f"{name}['uv_scale']", x, lo=0.0, lo_open=True) for x in s)
-        return WeightSpec("texture", texture=tex, uv_scale=(su, sv), summary=dict(value))
+        scale = check_uv_scale(f"{name}['uv_scale']", value.get("uv_scale", 1.0)) or (1.0, 1.0)
+        return WeightSpec("texture", texture=tex, uv_scale=scale, summary=dict(value))
     if isinstance(value, (np.ndarray, Sequence)):
         arr = unit_map(name, value)
         return WeightSpec("map", texture=arr, summary=f"array{arr.shape}")
@@ -164,7 +162,6 @@ def weight_spec(value: Any) -> WeightSpec:
 SHOWS = ("color", "detail", "inverse_detail", "tone")
 #: The two depths of a point of X-Toon Fig. 2: along the view (focal) axis, or to the eye.
 DISTANCES = ("axis", "eye")
-_R_HINT = "r is the ratio z_max / z_min of X-Toon sec. 3.1 (coarsest detail at z_max = r z_min)"
 _FLOW = {"detail": ("flow",)}
 
 
@@ -180,8 +177,6 @@ def _object_names(name: str, value: Any) -> tuple[str, ...]:
 
 
 def _shape(name: str, value: Any) -> Any:
-    from .shape import SHAPES, AbstractedNormals
-
     if (
         (isinstance(value, str) and value in SHAPES)
         or isinstance(value, AbstractedNormals)
@@ -195,8 +190,6 @@ def _shape(name: str, value: Any) -> Any:
 
 
 def _shape_label(shape: Any) -> str | None:
-    from .shape import AbstractedNormals
-
     if shape is None or isinstance(shape, str):
         return shape
     if isinstance(shape, AbstractedNormals):
@@ -206,14 +199,7 @@ def _shape_label(shape: Any) -> str | None:
 
 def camera_table(cam: Camera) -> dict[str, Any]:
     """A camera as the table ``prev_camera`` accepts."""
-    return {
-        "eye": cam.eye.tolist(),
-        "target": cam.target.tolist(),
-        "up": cam.up.tolist(),
-        "fov_y": cam.fov_y,
-        "near": cam.near,
-        "far": cam.far,
-    }
+    return {k: np.asarray(getattr(cam, k)).tolist() for k in _CAMERA_KEYS}
 
 
 def _texture_label(spec: Any) -> Any:
@@ -221,7 +207,7 @@ def _texture_label(spec: Any) -> Any:
         return spec
     if hasattr(spec, "__fspath__"):
         return str(spec)
-    return f"array{np.shape(spec)}"
+    return f"array{np.shape(spec)[:2] + (4,)}"  # the resolved RGBA texture's shape
 
 
 _SHAPED = {"shape": NOT_NONE}
@@ -319,7 +305,7 @@ PARAMS = Params(
         "world position [x, y, z] of the focus point c (focus), in front "
         "of the camera with z_c - r z_min > 0",
         kind="any",
-        parse=lambda name, v: vec3(name, v),
+        parse=vec3,
         unit="world units",
         accepts="3 floats",
         used_when={"detail": ("focus",)},
@@ -329,8 +315,8 @@ PARAMS = Params(
         16.0,
         "shininess of the highlight map |v.r|^s (sec. 3.2)",
         lo=1.0,
-        hint="X-Toon sec. 3.2 takes a shininess s >= 1",
         used_when={"detail": ("highlight",)},
+        hint="X-Toon sec. 3.2 takes a shininess s >= 1",
     ),
     Param(
         "one_sided",
@@ -406,7 +392,7 @@ PARAMS = Params(
         "(w = 1 - D of the same map, with the mesh normals); {texture, uv_scale} (a grey "
         "texture at uv, per pixel); or an (H, W) array",
         kind="any",
-        parse=lambda name, v: weight_spec(v),
+        parse=weight_spec,
         summary=lambda w: w.summary,
         accepts="float, str, table or array",
         used_when=_SHAPED,

@@ -1,10 +1,9 @@
 """Named 2D toon textures for the X-Toon style, one per effect of Barla et al. 2006 (Figs. 7-11).
 
 The paper gives its textures only as pictures and one-line recipes; each preset here is one
-recipe made concrete with the formula layer's builders (:mod:`refnpr.formulas.xtoon`). The
-colours are refnpr's choices. Every preset returns ``(rows, cols, 4)`` float64 linear RGBA with
-the X-Toon orientation of the formula layer: **row index grows with D** (row 0: D = 0, the most
-abstract tones; last row: D = 1, full detail) and column index grows with tone.
+recipe made concrete with the formula layer's builders (:mod:`refnpr.formulas.xtoon`, whose
+orientation they share: row index growing with D, column index with tone). The colours are
+refnpr's choices.
 """
 
 from __future__ import annotations
@@ -14,19 +13,18 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from refnpr.formulas import xtoon
+from refnpr.image import srgb_to_linear
 
-__all__ = ["PRESETS", "band_ramp", "as_rgba", "preset_texture"]
+__all__ = ["PRESETS", "band_ramp", "per_texel", "as_rgba", "preset_texture"]
 
 ROWS = 64
 COLS = 256
 FINE = 4096  # columns of the continuous "lambert" and "grey" ramps
 
 
-def _lin(*colours: tuple[float, float, float]) -> tuple[tuple[float, ...], ...]:
-    """sRGB-encoded colours (as picked in a paint program) -> linear RGB (IEC 61966-2-1)."""
-    c = np.asarray(colours, dtype=np.float64)
-    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-    return tuple(tuple(float(x) for x in row) for row in lin)
+def _lin(*colours: tuple[float, float, float]) -> np.ndarray:
+    """sRGB-encoded colours (as picked in a paint program) -> (K, 3) linear RGB."""
+    return srgb_to_linear(np.array(colours))
 
 
 # Colours of the presets (refnpr's choices), picked in sRGB and stored linear.
@@ -83,24 +81,20 @@ def band_ramp(
 def as_rgba(texture: np.ndarray) -> np.ndarray:
     """(rows, cols[, C]) with C in {1, 2, 3, 4} -> (rows, cols, 4) float64 RGBA (alpha 1 if none)."""
     t = np.asarray(texture, dtype=np.float64)
-    if t.ndim == 2:
-        t = t[..., None]
+    t = t[..., None] if t.ndim == 2 else t
     c = t.shape[2]
-    if c == 1:
-        return np.concatenate([np.repeat(t, 3, axis=2), np.ones_like(t)], axis=2)
-    if c == 2:
-        return np.concatenate([np.repeat(t[..., :1], 3, axis=2), t[..., 1:]], axis=2)
-    if c == 3:
-        return np.concatenate([t, np.ones_like(t[..., :1])], axis=2)
-    return t
+    rgb = np.repeat(t[..., :1], 3, axis=2) if c <= 2 else t[..., :3]
+    alpha = t[..., c - 1 :] if c in (2, 4) else np.ones_like(t[..., :1])
+    return np.concatenate([rgb, alpha], axis=2)
 
 
 def _alpha(ramp: np.ndarray) -> np.ndarray:
     return np.concatenate([ramp, np.ones((ramp.shape[0], 1))], axis=1)
 
 
-def _per_texel(weights: Sequence[float], edges: Sequence[float]) -> np.ndarray:
-    return band_ramp(np.asarray(weights, dtype=np.float64)[:, None], edges)[:, 0]
+def per_texel(weights: Sequence[float], edges: Sequence[float] | None, cols: int = COLS):
+    """One weight per band (``band_ramp``'s bands) -> ``(cols,)`` float64, one per texel."""
+    return band_ramp(np.asarray(weights, dtype=np.float64)[:, None], edges, cols=cols)[:, 0]
 
 
 def _lambert() -> np.ndarray:  # texel j holds its own tone: the lookup returns the tone itself
@@ -109,8 +103,7 @@ def _lambert() -> np.ndarray:  # texel j holds its own tone: the lookup returns 
 
 
 def _grey() -> np.ndarray:  # displayed (sRGB-encoded) grey equals the tone: for looking at n.l
-    tau = (np.arange(FINE) + 0.5) / FINE
-    ramp = np.asarray(_lin(*[(t, t, t) for t in tau]))[:, 0]
+    ramp = srgb_to_linear((np.arange(FINE) + 0.5) / FINE)
     return np.repeat(ramp[None], 2, axis=0)
 
 
@@ -142,7 +135,7 @@ def _dof_blur() -> np.ndarray:  # Fig. 8a: smooth two-tone texture converging to
 
 
 def _dof_fade() -> np.ndarray:  # Fig. 8b: contrast and opacity fall for intermediate tones
-    w = _per_texel([0.0, 1.0, 1.0, 0.0], _EDGES4)  # shadows and highlights stay opaque
+    w = per_texel([0.0, 1.0, 1.0, 0.0], _EDGES4)  # shadows and highlights stay opaque
     ramp = _alpha(band_ramp(_SHADE4, _EDGES4))
     return xtoon.toon_texture_fade(ramp, ROWS, contrast=0.8, opacity=1.0, tone_weight=w)
 
@@ -159,13 +152,13 @@ def _aerial_blue() -> np.ndarray:  # Fig. 9c: desaturation and a shift towards b
 
 def _aerial_pink() -> np.ndarray:  # Fig. 9e: towards pink, darker tones first
     ramp = band_ramp(_GREEN_BROWN, _EDGES_T)
-    w = _per_texel([2.5, 1.8, 1.2, 0.9], _EDGES_T)
+    w = per_texel([2.5, 1.8, 1.2, 0.9], _EDGES_T)
     return xtoon.toon_texture_hue(ramp, ROWS, target=_PINK, amount=1.0, tone_weight=w)
 
 
 def _aerial_fade() -> np.ndarray:  # Fig. 9f: alpha and saturation fall, light grey shadows stay
     ramp = _alpha(band_ramp(_GREEN_BROWN, _EDGES_T))
-    w = _per_texel([0.6, 0.8, 1.0, 1.0], _EDGES_T)
+    w = per_texel([0.6, 0.8, 1.0, 1.0], _EDGES_T)
     return xtoon.toon_texture_fade(
         ramp, ROWS, contrast=1.0, opacity=1.0, target=_HAZE, tone_weight=w
     )
@@ -177,7 +170,7 @@ def _silhouette_blur() -> np.ndarray:  # Fig. 10b: shading smoothed near silhoue
 
 def _silhouette_fade() -> np.ndarray:  # Fig. 10c: opacity falls except for dark tones
     ramp = _alpha(band_ramp(_GREY3, _EDGES3))
-    w = _per_texel([0.0, 1.0, 1.0], _EDGES3)
+    w = per_texel([0.0, 1.0, 1.0], _EDGES3)
     return xtoon.toon_texture_fade(ramp, ROWS, contrast=0.0, opacity=1.0, tone_weight=w)
 
 

@@ -63,17 +63,6 @@ class AbstractedNormals:
         return list(self.normals)
 
 
-def _selected(names: Sequence[str], objects: Sequence[str] | None) -> list[bool]:
-    if objects is None:
-        return [True] * len(names)
-    unknown = sorted(set(objects) - set(names))
-    if unknown:
-        raise ValueError(
-            f"shape_objects: unknown object names {unknown}; the scene's objects are {list(names)}"
-        )
-    return [n in objects for n in names]
-
-
 def abstract_normals(
     scene: Any,
     shape: str | Callable[[Any], np.ndarray] = "sphere",
@@ -102,7 +91,12 @@ def abstract_normals(
     """
     meshes = scene.world_meshes()
     names = [o.name for o in scene.objects]
-    chosen = _selected(names, objects)
+    unknown = sorted(set(objects or ()) - set(names))
+    if unknown:
+        raise ValueError(
+            f"shape_objects: unknown object names {unknown}; the scene's objects are {names}"
+        )
+    chosen = [objects is None or n in objects for n in names]
     out: list[np.ndarray | None] = []
     for mesh, use in zip(meshes, chosen, strict=True):
         if not use:

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from refnpr.image import linear_to_srgb, write_png_atomic
+
 from .presets import preset_texture
 
 __all__ = ["FIGURE_TEXTURES", "texture_sheet"]
@@ -25,12 +27,6 @@ FIGURE_TEXTURES: dict[str, tuple[str, ...]] = {
     "10a": ("silhouette_blur", "silhouette_fade", "backlight"),
     "11a": ("plastic", "metal", "highlight_red"),
 }
-
-
-def _srgb8(linear: np.ndarray) -> np.ndarray:
-    c = np.clip(linear, 0.0, 1.0)
-    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)  # IEC 61966-2-1
-    return np.rint(s * 255.0).astype(np.uint8)
 
 
 def _panel(name: str, width: int, height: int) -> np.ndarray:
@@ -66,7 +62,7 @@ def texture_sheet(*, width: int = 128, height: int = 96, gap: int = 6) -> np.nda
             y, x = gap + r * (height + gap), gap + c * (width + gap)
             out[y : y + height, x : x + width] = _panel(name, width, height)
     rgba = np.full(out.shape[:2] + (4,), 255, dtype=np.uint8)
-    rgba[..., :3] = _srgb8(out)
+    rgba[..., :3] = np.rint(linear_to_srgb(out) * 255.0)
     return rgba
 
 
@@ -75,8 +71,6 @@ def main(argv: list[str] | None = None) -> int:
     if len(args) != 1:
         print("usage: python -m refnpr.styles.xtoon.sheet OUT.png", file=sys.stderr)
         return 2
-    from refnpr.image import write_png_atomic
-
     path = write_png_atomic(Path(args[0]), texture_sheet())
     print(f"wrote {path}")
     return 0

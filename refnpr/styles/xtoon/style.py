@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from .._declare import check_number
 from ..base import ShadeContext, Style, register
 from .detail import DEFAULT_DISTANCE
 from .evaluation import Config, evaluate, plan, vertex_values
@@ -25,28 +26,16 @@ _R_HINT = "r is the ratio z_max / z_min of X-Toon sec. 3.1 (coarsest detail at z
 
 def _checked(p: Any) -> Any:
     """The checks between parameters; returns ``p`` with the paper's distance filled in."""
-    from refnpr.styles._declare import Param
-
     if p.detail in DEFAULT_DISTANCE and p.distance is None:
         p = p.replace(distance=DEFAULT_DISTANCE[p.detail])
-    if p.r is not None:
-        if p.detail in ("depth", "focus"):
-            rng = Param("r", None, "", lo=1.0, lo_open=True, hint=_R_HINT + "; use r > 1, e.g. 4")
-        else:
-            rng = Param(
-                "r", None, "", lo=0.0, hint="the near-silhouette exponent of |n.v|^r is >= 0"
-            )
-        rng.check(p.r)
+    if p.r is not None and p.detail in ("depth", "focus"):
+        check_number("r", p.r, lo=1.0, lo_open=True, hint=_R_HINT + "; use r > 1, e.g. 4")
+    elif p.r is not None:
+        check_number("r", p.r, lo=0.0, hint="the near-silhouette exponent of |n.v|^r is >= 0")
     if p.detail == "focus" and p.focus_point is None:
         raise ValueError("focus_point: detail='focus' needs the focus point [x, y, z]")
-    Param(
-        "flow_max",
-        None,
-        "",
-        lo=p.flow_min,
-        lo_open=True,
-        hint=f"D reaches 0 at flow_max pixels; it must exceed flow_min = {p.flow_min:g}",
-    ).check(p.flow_max)
+    hint = f"D reaches 0 at flow_max pixels; it must exceed flow_min = {p.flow_min:g}"
+    check_number("flow_max", p.flow_max, lo=p.flow_min, lo_open=True, hint=hint)
     if p.detail == "map":
         if p.detail_map is None:
             raise ValueError("detail_map: detail='map' needs a 2D array (or grey image) of D")
@@ -72,12 +61,8 @@ def _checked(p: Any) -> Any:
 
 @register
 class XToonStyle(Style):
-    """X-Toon shading (Barla et al. 2006); see the module docstring and ``docs/xtoon.md``.
-
-    Parameters are declared once in :data:`refnpr.styles.xtoon.params.PARAMS` (their table
-    is in ``docs/xtoon.md``); ``XToonStyle.PARAMS`` lists them with their defaults, types,
-    ranges and the detail maps that read them.
-    """
+    """X-Toon shading (Barla et al. 2006); see the package docstring and ``docs/xtoon.md``.
+    Parameters: :data:`refnpr.styles.xtoon.params.PARAMS` (``refnpr styles xtoon``)."""
 
     name = "xtoon"
     description = (
@@ -95,18 +80,11 @@ class XToonStyle(Style):
 
             pyramid = build_pyramid(p.shape_weight.texture.astype(np.float32))
         self._cfg = Config(p=p, texture=tex, weight_pyramid=pyramid)
-        self._params = self._summary(p, tex)
+        self._params = p.as_dict()
         #: The flow inputs given explicitly (the others come from the previous frame).
         self._explicit = frozenset(
             k for k in ("prev_camera", "prev_transforms") if p[k] is not None
         )
-
-    @staticmethod
-    def _summary(p: Any, tex: np.ndarray) -> dict[str, Any]:
-        out = p.as_dict()
-        if not isinstance(p.texture, (str, dict)) and not hasattr(p.texture, "__fspath__"):
-            out["texture"] = f"array{tex.shape}"
-        return out
 
     def for_frame(self, scene: Any, prev_scene: Any | None) -> XToonStyle:
         """This style for one frame of a sequence (``Style.for_frame``).
@@ -137,7 +115,7 @@ class XToonStyle(Style):
         out = copy.copy(self)
         q = p.replace(prev_camera=camera, prev_transforms=transforms)
         out._cfg = dataclasses.replace(self._cfg, p=q)
-        out._params = self._summary(q, self._cfg.texture)
+        out._params = q.as_dict()
         return out
 
     @property
@@ -159,11 +137,8 @@ class XToonStyle(Style):
         sc = scene if camera is None else scene.with_camera(camera)
         geom = VertexGeometry.of(sc.world_meshes())
         vals = vertex_values(self._cfg, sc, width, height, geom)
-        per_mesh = [dict() for _ in geom.meshes]
-        for name, v in vals.items():
-            for d, part in zip(per_mesh, geom.split(v), strict=True):
-                d[name] = part
-        return per_mesh
+        parts = {name: geom.split(v) for name, v in vals.items()}
+        return [{name: split[i] for name, split in parts.items()} for i in range(len(geom.meshes))]
 
     def prepare_scene(self, scene: Any, *, width: int, height: int, camera: Any = None) -> Any:
         """A copy of ``scene`` whose world meshes carry :meth:`vertex_attributes`, so that the
@@ -189,7 +164,7 @@ class XToonStyle(Style):
     def fields(self, ctx: ShadeContext) -> dict[str, np.ndarray]:
         """Per-sample ``tone`` and ``detail`` (nH, nW), ``normal`` (nH, nW, 3) and, where the
         shape weight varies, ``weight``: float32, NaN where no surface is seen."""
-        ev = evaluate(self._cfg, ctx, lookup=False)
+        ev = evaluate(self._cfg, ctx)
         out = {}
         for key in ("tone", "detail", "normal", "weight"):
             v = getattr(ev, key)

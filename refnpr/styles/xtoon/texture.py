@@ -1,11 +1,8 @@
 """The X-Toon style's ``texture`` parameter: a 2D toon texture from a preset, an image, a recipe
-table or an array, always returned as ``(rows, cols, 4)`` float32 linear RGBA.
-
-Orientation (the formula layer's, :func:`refnpr.formulas.xtoon.toon_lookup`): the **row index
-grows with the detail D** (row 0 is D = 0, the most abstract tones; the last row is D = 1, full
-detail) and the column index grows with tone (column 0: darkest). An image file is read the same
-way, row 0 being the top row of the file; pictures drawn like the paper's figures (D = 1 at the
-top) need ``{"image": path, "flip": true}``.
+table or an array, always returned as ``(rows, cols, 4)`` float32 linear RGBA, oriented as
+:func:`refnpr.formulas.xtoon.toon_lookup` reads it (row index growing with D, column index with
+tone). An image file is read the same way, row 0 being the top row of the file; pictures drawn
+like the paper's figures (D = 1 at the top) need ``{"image": path, "flip": true}``.
 """
 
 from __future__ import annotations
@@ -19,7 +16,7 @@ import numpy as np
 from refnpr.formulas import xtoon
 from refnpr.image import srgb_to_linear
 
-from .presets import COLS, PRESETS, ROWS, as_rgba, band_ramp
+from .presets import COLS, PRESETS, ROWS, as_rgba, band_ramp, per_texel
 
 __all__ = ["RECIPES", "resolve_texture"]
 
@@ -35,14 +32,13 @@ RECIPES = {
     "metal": xtoon.toon_texture_metal,
 }
 
-_HOW = (
-    "pass a preset name ({presets}), an image path, a table {{'recipe': ..., 'ramp': [...]}} "
-    "or {{'image': path}}, or an array (rows, cols[, C]) whose row index grows with detail D"
-)
-
 
 def _how() -> str:
-    return _HOW.format(presets=", ".join(sorted(PRESETS)))
+    return (
+        f"pass a preset name ({', '.join(sorted(PRESETS))}), an image path, a table {{'recipe': "
+        "..., 'ramp': [...]} or {'image': path}, or an array (rows, cols[, C]) whose row index "
+        "grows with detail D"
+    )
 
 
 def _check_array(tex: Any, name: str) -> np.ndarray:
@@ -76,14 +72,10 @@ def _image(path: Any, *, flip: bool, srgb: bool, name: str) -> np.ndarray:
     if not p.is_file():
         raise ValueError(f"{name}: image file {str(path)!r} does not exist; {_how()}")
     img = load_texture(p, gray=False, param=name).astype(np.float64)
-    if img.ndim == 3 and img.shape[2] > 4:
-        img = img[..., :4]
+    img = img[..., :4] if img.ndim == 3 else img[..., None]
     if srgb:  # colour channels are sRGB-encoded in image files; alpha is linear
-        colour = 1 if img.ndim == 2 else (1 if img.shape[2] in (1, 2) else 3)
-        if img.ndim == 2:
-            img = srgb_to_linear(img)
-        else:
-            img[..., :colour] = srgb_to_linear(img[..., :colour])
+        colour = 1 if img.shape[2] in (1, 2) else 3
+        img[..., :colour] = srgb_to_linear(img[..., :colour])
     return img[::-1] if flip else img
 
 
@@ -129,10 +121,7 @@ def _recipe(spec: Mapping, name: str) -> np.ndarray:
         ramp = _ramp_of(spec, "ramp", name)
         args = (ramp,)
         if "tone_weight" in kwargs:  # one weight per band -> one per texel
-            w = np.asarray(kwargs["tone_weight"], dtype=np.float64)
-            kwargs["tone_weight"] = band_ramp(w[:, None], spec.get("edges"), cols=ramp.shape[0])[
-                :, 0
-            ]
+            kwargs["tone_weight"] = per_texel(kwargs["tone_weight"], spec.get("edges"), len(ramp))
     try:
         return RECIPES[recipe](*args, rows, **kwargs)
     except TypeError as exc:
