@@ -6,12 +6,22 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_float
+from ._validate import as_float, result_dtype
 
 
 def real(name: str, value, dtype: np.dtype) -> np.ndarray:
     """``value`` as a finite float array of ``dtype`` (TypeError/ValueError naming ``name``)."""
     return as_float(name, value, finite=True).astype(dtype, copy=False)
+
+
+def reals(compute=None, /, **values) -> tuple:
+    """``(dtype, *arrays)``: the result dtype of the named ``values`` and each of them as a
+    finite float array (:func:`real`; of ``compute`` if given, else of that dtype) whose shapes
+    broadcast together (:func:`broadcast`)."""
+    dt = result_dtype(*values.values())
+    arrays = {k: real(k, v, np.dtype(compute or dt)) for k, v in values.items()}
+    broadcast(**arrays)
+    return (dt, *arrays.values())
 
 
 def broadcast(**arrays: np.ndarray) -> tuple[int, ...]:

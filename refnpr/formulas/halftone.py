@@ -10,12 +10,10 @@ outputs are in [0, 1] with 0 = black and 1 = white. A screen value g is drawn bl
 ``g + intensity <= 1``, so darker screen values stay black up to lighter intensities. Inputs are
 finite reals whose shapes broadcast; float32 in -> float32 out, else float64.
 
-The per-sample formulas (the thresholds, indication mapping and the indication map's lookup, the
-tangent frame and the stroke lighting of sec. 5.2) are scalar device functions (``f.scalar``)
-that the ``halftone`` style's kernel calls for every sample; each public function here is their
-numpy face (:mod:`refnpr.formulas._face`), computing in float64. The stroke-map encoding is one
-too, run per texel by the texture builders (float32 layers encode in float32). The engraving
-ramp and the tone curve of the smooth threshold are numpy.
+The per-sample formulas are scalar device functions (``f.scalar``) that the ``halftone`` style's
+kernel calls for every sample, with numpy faces (:mod:`refnpr.formulas._face`) computing in
+float64; the stroke-map encoding runs per texel in the layers' float type. The engraving ramp and
+the tone curve of the smooth threshold are numpy.
 """
 
 from __future__ import annotations
@@ -29,7 +27,7 @@ from refnpr.device.scalars import clip01
 from refnpr.device.vectors import dot, unit_scaled
 
 from ._face import Whole, elementwise, face
-from ._shading_checks import broadcast, check_range, frac, real, trailing
+from ._shading_checks import broadcast, check_range, frac, real, reals, trailing
 from ._validate import check_int, check_scalar, describe, result_dtype
 
 __all__ = [
@@ -49,14 +47,6 @@ __all__ = [
 ]
 
 _PROFILES = ("ramp", "triangle")
-
-
-def _pair(screen, intensity) -> tuple[np.ndarray, np.ndarray, np.dtype]:
-    dt = result_dtype(screen, intensity)
-    scr = real("screen", screen, dt)
-    x = real("intensity", intensity, dt)
-    broadcast(screen=scr, intensity=x)
-    return scr, x, dt
 
 
 @njit
@@ -86,7 +76,7 @@ def binary_threshold(screen, intensity) -> np.ndarray:
     -------
     ndarray of 0.0 / 1.0; float64, or float32 if the inputs are float32.
     """
-    scr, x, dt = _pair(screen, intensity)
+    dt, scr, x = reals(screen=screen, intensity=intensity)
     return elementwise(binary_threshold.scalar, dt, scr, x)
 
 
@@ -127,7 +117,7 @@ def smooth_threshold(screen, intensity, c: float = 4.0, *, centred: bool = False
     rounded once).
     """
     c = check_scalar("c", c, lo=0, lo_open=True, hint="c is the slope of the ramp, e.g. 4.0")
-    scr, x, dt = _pair(screen, intensity)
+    dt, scr, x = reals(screen=screen, intensity=intensity)
     return elementwise(smooth_threshold.scalar, dt, scr, x, c, bool(centred))
 
 
@@ -226,12 +216,9 @@ def encode_stroke_map(layers, *, levels=None) -> np.ndarray:
     if isinstance(layers, (list, tuple)):
         if not layers:
             raise ValueError("layers: got no stroke layers; pass at least one")
-        dt = result_dtype(*layers)
-        arrs = [real(f"layers[{i}]", a, dt) for i, a in enumerate(layers)]
-        broadcast(**{f"layers[{i}]": a for i, a in enumerate(arrs)})
+        dt, *arrs = reals(**{f"layers[{i}]": a for i, a in enumerate(layers)})
     else:
-        dt = result_dtype(layers)
-        stack = real("layers", layers, dt)
+        dt, stack = reals(layers=layers)
         if stack.ndim == 0 or stack.shape[0] == 0:
             raise ValueError(
                 f"layers: expected shape (m, ...) with m >= 1 layers, got {stack.shape}"
@@ -319,11 +306,8 @@ def apply_indication(intensity, indication) -> np.ndarray:
     -------
     ndarray in [0, 1]; float64, or float32 if the inputs are float32.
     """
-    dt = result_dtype(intensity, indication)
-    x = real("intensity", intensity, dt)
-    ind = real("indication", indication, dt)
+    dt, x, ind = reals(intensity=intensity, indication=indication)
     check_range("indication", ind, -1.0, 1.0, "the indication map holds signed values in [-1, 1]")
-    broadcast(intensity=x, indication=ind)
     return elementwise(apply_indication.scalar, dt, x, ind)
 
 

@@ -7,7 +7,8 @@ from typing import Any
 import numpy as np
 
 from ._declare import short_repr
-from ._names import warn_caller
+
+__all__ = ["rgba_out", "rgba_from", "needs_position", "check_uv_scale"]
 
 
 def rgba_out(ctx: Any, shape: tuple[int, int]) -> np.ndarray:
@@ -18,14 +19,6 @@ def rgba_out(ctx: Any, shape: tuple[int, int]) -> np.ndarray:
     if lend is None:
         return np.empty(tuple(shape) + (4,), dtype=np.float32)
     return lend(shape)
-
-
-__all__ = [
-    "rgba_from",
-    "needs_position",
-    "check_uv_scale",
-    "warn_unused",
-]
 
 
 def rgba_from(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
@@ -50,11 +43,8 @@ UV_SCALE_RANGE = (1e-6, 1e6)
 
 def check_uv_scale(name: str, value: Any) -> tuple[float, float] | None:
     """A style's ``uv_scale``: None (each material's own) or a positive number or ``[su, sv]``
-    that multiplies uv in place of the material's ``uv_scale``; the same meaning in every style.
-
-    Each factor must lie in ``UV_SCALE_RANGE`` (1e-6 to 1e6), where the scaled texture
-    coordinates, their derivatives and the LOD stay finite.
-    """
+    (each in ``UV_SCALE_RANGE``) that multiplies uv in place of the material's ``uv_scale``; the
+    same meaning in every style."""
     if value is None:
         return None
     v = [value, value] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
@@ -74,9 +64,3 @@ def check_uv_scale(name: str, value: Any) -> tuple[float, float] | None:
             f"longer finite), got {short_repr(value)}; use a factor in that range"
         )
     return (float(arr[0]), float(arr[1]))
-
-
-def warn_unused(name: str, value: Any, mode: str, fix: str) -> None:
-    """``UserWarning``: parameter ``name`` (``value``, not its default) is ignored by ``mode``;
-    attributed to the first caller outside refnpr."""
-    warn_caller(f"{name}: {short_repr(value)} is ignored with {mode}; {fix}", UserWarning)

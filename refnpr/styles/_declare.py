@@ -38,6 +38,10 @@ __all__ = [
     "Param",
     "Params",
     "check_number",
+    "warn_unused",
+    "number_or",
+    "rgb",
+    "rgb_param",
     "Values",
     "NOT_NONE",
     "markdown_table",
@@ -66,10 +70,45 @@ def short_repr(value: Any, limit: int = 80) -> str:
     return text if len(text) <= limit else text[: limit - 5] + " ...]"
 
 
+def warn_unused(name: str, value: Any, mode: str, fix: str) -> None:
+    """``UserWarning``: parameter ``name`` (``value``, not its default) is ignored by ``mode``."""
+    warn_caller(f"{name}: {short_repr(value)} is ignored with {mode}; {fix}")
+
+
 def check_number(name: str, value: Any, *, integer: bool = False, **bounds: Any) -> float | int:
     """``value`` as a finite float (an int with ``integer``) within ``bounds`` (``lo``, ``hi``,
     ``lo_open``, ``hi_open``, ``hint`` of :class:`Param`), else the error a parameter gives."""
     return Param(name, None, "", kind="int" if integer else "float", **bounds)._number(value)
+
+
+def number_or(word: str, **bounds: Any) -> Callable[[str, Any], Any]:
+    """A ``parse`` taking the string ``word`` or a number within ``bounds`` (:func:`check_number`)."""
+
+    def parse(name: str, value: Any) -> Any:
+        if not isinstance(value, str):
+            return check_number(name, value, **bounds)
+        if value != word:
+            what = Param(name, None, "", **bounds).range_text()
+            raise ValueError(f"{name}: expected {word!r} or {what}, got {value!r}")
+        return value
+
+    return parse
+
+
+def rgb(name: str, value: Any) -> tuple[float, float, float]:
+    """A ``parse`` of a colour: 3 linear RGB values in [0, 1]."""
+    try:
+        c = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        c = np.full(1, np.nan)
+    if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
+        raise ValueError(f"{name}: expected 3 values in [0, 1] (linear RGB), got {value!r}")
+    return (float(c[0]), float(c[1]), float(c[2]))
+
+
+def rgb_param(name: str, default: tuple[float, float, float], doc: str, **kw: Any) -> Param:
+    """A colour :class:`Param` (:func:`rgb`)."""
+    return Param(name, default, doc, kind="any", parse=rgb, accepts="3 floats in [0, 1]", **kw)
 
 
 @dataclass(frozen=True)
@@ -340,8 +379,9 @@ class Params:
         """The record's integer code of ``choice`` of the choice parameter ``name``."""
         return self.by_name[name].choices.index(choice)
 
-    def codes(self, name: str) -> dict[str, int]:
-        return {c: i for i, c in enumerate(self.by_name[name].choices)}
+    def codes(self, name: str, *choices: str) -> tuple[int, ...]:
+        """The record's integer codes of several ``choices`` of ``name``."""
+        return tuple(self.code(name, c) for c in choices)
 
     def defaults(self) -> dict[str, Any]:
         return {p.name: p.default for p in self.params}
@@ -359,17 +399,13 @@ class Params:
         check_known(where, set(kw) - set(extra), self.names)
         values: dict[str, Any] = {}
         modes = {m for p in self.params for m in p.used_when}
-        for p in self.params:  # the modes first: they decide which parameters are read
-            if p.name in modes:
-                values[p.name] = p.check(kw.get(p.name, p.default))
-        for p in self.params:
-            if p.name in modes:
-                continue
-            if p.name in kw and not self._used(p, values):
+        # the modes first: they decide which parameters are read
+        for p in sorted(self.params, key=lambda p: p.name not in modes):
+            ignored = p.name in kw and p.name not in modes and self._ignored(p, values)
+            if ignored:
                 value = kw[p.name]  # not read: not validated either, only warned about
                 if value is not None and not _is_default(value, p.default):
-                    mode, fix = self._usage(p, values)
-                    warn_caller(f"{p.name}: {short_repr(value)} is ignored with {mode}; {fix}")
+                    warn_unused(p.name, value, *ignored)
                 values[p.name] = p.check(p.default)
             else:
                 values[p.name] = p.check(kw.get(p.name, p.default))
@@ -377,18 +413,8 @@ class Params:
         return Values(self, ordered, frozenset(kw) & set(self.names))
 
     @staticmethod
-    def _used(p: Param, values: Mapping[str, Any]) -> bool:
-        for other, allowed in p.used_when.items():
-            v = values[other]
-            if allowed == NOT_NONE:
-                if v is None:
-                    return False
-            elif v not in allowed:
-                return False
-        return True
-
-    def _usage(self, p: Param, values: Mapping[str, Any]) -> tuple[str, str]:
-        """The mode that ignores ``p`` and how to fix it, for the warning."""
+    def _ignored(p: Param, values: Mapping[str, Any]) -> tuple[str, str] | None:
+        """The mode that ignores ``p`` and how to fix it, for the warning; None where read."""
         for other, allowed in p.used_when.items():
             v = values[other]
             if allowed == NOT_NONE and v is None:
@@ -399,17 +425,14 @@ class Params:
             if allowed != NOT_NONE and v not in allowed:
                 want = " or ".join(f"{other}={a!r}" for a in allowed)
                 return f"{other}={v!r}", f"remove {p.name} or use {want}"
-        return "these settings", f"remove {p.name}"
+        return None
 
     def used_text(self, p: Param) -> str:
         """When ``p`` is read, for docs: "detail = depth, focus", or ""."""
-        parts = []
-        for other, allowed in p.used_when.items():
-            if allowed == NOT_NONE:
-                parts.append(f"{other} given")
-            else:
-                parts.append(f"{other} = {', '.join(allowed)}")
-        return "; ".join(parts)
+        return "; ".join(
+            f"{other} given" if allowed == NOT_NONE else f"{other} = {', '.join(allowed)}"
+            for other, allowed in p.used_when.items()
+        )
 
     def resolved(self, values: Values, **overrides: Any) -> dict[str, Any]:
         """The conformance kit's resolved parameters: every declared parameter in declaration
@@ -419,7 +442,7 @@ class Params:
         entries that are not parameters (frame constants), after them."""
         out: dict[str, Any] = {}
         for p in self.params:
-            if not self._used(p, values._values):
+            if self._ignored(p, values._values):
                 out[p.name] = None
             elif p.name in overrides:
                 out[p.name] = overrides[p.name]
@@ -440,14 +463,12 @@ class Params:
                 f"{self.style} record: frame values missing {sorted(missing)}, "
                 f"unknown {sorted(unknown)}"
             )
-        out = []
-        for p in self.params:
-            if not p.in_record:
-                continue
-            v = frame[p.name] if p.name in frame else values[p.name]
-            out.append(self._record_value(p, v))
-        out += [frame[name] for name in self.frame]
-        return self.Record(*out)
+        out = [
+            self._record_value(p, frame[p.name] if p.name in frame else values[p.name])
+            for p in self.params
+            if p.in_record
+        ]
+        return self.Record(*out, *(frame[name] for name in self.frame))
 
     @staticmethod
     def _record_value(p: Param, v: Any) -> Any:

@@ -80,18 +80,14 @@ def _grid(name: str, arr: Any, shape: tuple[int, ...], kind: str) -> np.ndarray:
     """Channel ``name`` on the sample grid, C-contiguous: int32/int64 (``kind`` "i") or
     float32/float64 ("f") kept, other dtypes converted to the 64-bit one."""
     arr = np.asarray(arr)
-    _check_shape(name, arr, shape)
-    if arr.dtype.kind != kind or arr.dtype.itemsize not in (4, 8):
-        arr = arr.astype(np.int64 if kind == "i" else np.float64)
-    return np.ascontiguousarray(arr)
-
-
-def _check_shape(name: str, arr: np.ndarray, shape: tuple[int, ...]) -> None:
     if arr.shape != shape:
         raise ValueError(
             f"G-buffer channel {name!r}: expected shape {shape} (the sample grid), got "
             f"{arr.shape}; rasterize every channel at the same size and spp"
         )
+    if arr.dtype.kind != kind or arr.dtype.itemsize not in (4, 8):
+        arr = arr.astype(np.int64 if kind == "i" else np.float64)
+    return np.ascontiguousarray(arr)
 
 
 def _table(scene: Any, attr: str, width: int) -> np.ndarray:

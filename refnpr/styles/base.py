@@ -224,14 +224,9 @@ def get_style_class(name: str) -> type[Style]:
 
 def get_style(name: str, **params: Any) -> Style:
     """Instantiate a registered style by name with keyword parameters."""
-    from . import _all  # noqa: F401
-
-    if not isinstance(name, str):
-        raise TypeError(f"style: expected a style name (str), got {type(name).__name__}")
-    if name not in _REGISTRY:
-        raise ValueError(f"style: unknown style {name!r}; available styles: {sorted(_REGISTRY)}")
+    cls = get_style_class(name)
     try:
-        return _REGISTRY[name](**params)
+        return cls(**params)
     except TypeError as exc:
         msg = str(exc)
         raise TypeError(

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from . import _kernels as K
-from ._declare import Param, Params
+from ._declare import Param, Params, rgb_param
 from ._names import warn_deprecated
 from .base import ShadeContext, Style, nested_style, register
 
@@ -118,29 +118,16 @@ def _mesh_edges(mesh: Any) -> _MeshEdges:
 _MAX_WIDTH = 256.0
 
 
-def _rgb(name: str, value: Any) -> tuple[float, float, float]:
-    try:
-        c = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        c = np.full(1, np.nan)
-    if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
-        raise ValueError(f"{name}: expected 3 values in [0, 1] (linear RGB), got {value!r}")
-    return (float(c[0]), float(c[1]), float(c[2]))
-
-
 #: The contour layer's parameters, each declared once (``refnpr styles contoured`` lists the
 #: wrapper's; ``docs/paper-notes.md`` and the kit describe the layer).
 CONTOURS = Params(
     "contours",
     Param("width", 1.5, "line width", lo=0.0, lo_open=True, hi=_MAX_WIDTH, unit="px"),
-    Param(
+    rgb_param(
         "ink",
         (0.0, 0.0, 0.0),
-        "linear RGB of the lines (the name every style uses for its "
-        "line colour; color is its deprecated alias)",
-        kind="any",
-        parse=_rgb,
-        accepts="3 floats in [0, 1]",
+        "linear RGB of the lines (the name every style uses for its line colour; color is its "
+        "deprecated alias)",
     ),
     Param("silhouettes", True, "draw edges between a front- and a back-facing face", kind="bool"),
     Param("boundaries", True, "draw edges with one face", kind="bool"),
@@ -195,25 +182,11 @@ class ContourLayer:
         )
         return self.ink
 
-    def selected_edges(
-        self,
-        table: EdgeTable,
-        positions: np.ndarray,
-        faces: np.ndarray,
-        eye: np.ndarray,
-        *,
-        normals: np.ndarray | None = None,
-        centroid: np.ndarray | None = None,
-    ) -> np.ndarray:
-        """(K, 2) vertex indices of this frame's silhouette/boundary/crease edges.
-
-        ``normals``, ``centroid`` (M, 3) float64: the faces' unit normals and centroids, if
-        already known (else computed from ``positions`` and ``faces``)."""
-        if normals is None:
-            normals = _face_normals(positions, faces)
-        if centroid is None:
-            centroid = positions[faces].mean(axis=1)
-        front = np.sum(normals * (eye - centroid), axis=1) > 0.0
+    def selected_edges(self, mesh: _MeshEdges, eye: np.ndarray) -> np.ndarray:
+        """(K, 2) vertex indices of the silhouette/boundary/crease edges of ``mesh`` seen from
+        ``eye`` (3,)."""
+        front = np.sum(mesh.normals * (eye - mesh.centroid), axis=1) > 0.0
+        table = mesh.table
         f0, f1 = table.faces[:, 0], table.faces[:, 1]
         boundary = f1 < 0
         sel = np.zeros(len(f0), dtype=bool)
@@ -225,27 +198,16 @@ class ContourLayer:
             sel |= ~boundary & (table.dihedral_deg > self.crease_angle)
         return table.edges[sel]
 
-    def coverage(self, ctx: ShadeContext, tables: list[EdgeTable] | None = None) -> np.ndarray:
+    def coverage(self, ctx: ShadeContext) -> np.ndarray:
         """(nH, nW) float64 line coverage in [0, 1] on the sample grid (needs ``depth``)."""
         gb = ctx.gb
-        meshes = ctx.scene.world_meshes()
-        known = [_mesh_edges(m) for m in meshes] if tables is None else [None] * len(meshes)
-        if tables is None:
-            tables = [k.table for k in known]
         eye = np.asarray(ctx.scene.camera.eye, dtype=np.float64)
         depth = np.ascontiguousarray(gb["depth"], dtype=np.float64)
         cov = np.zeros(depth.shape)
         vp = np.ascontiguousarray(gb.view_projection, dtype=np.float64)
         line = (0.5 * self.width * gb.n, self.depth_tolerance, 0.5)  # radius, slack, piece
-        for mesh, table, k in zip(meshes, tables, known, strict=True):
-            edges = self.selected_edges(
-                table,
-                mesh.positions,
-                mesh.faces,
-                eye,
-                normals=None if k is None else k.normals,
-                centroid=None if k is None else k.centroid,
-            )
+        for mesh in ctx.scene.world_meshes():
+            edges = self.selected_edges(_mesh_edges(mesh), eye)
             if edges.size == 0:
                 continue
             positions = np.ascontiguousarray(mesh.positions, dtype=np.float64)

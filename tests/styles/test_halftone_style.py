@@ -326,8 +326,8 @@ def test_cli_renders_with_halftone_parameters(tmp_path):
     "params,exc,match",
     [
         ({"threshold": "dither"}, ValueError, r"threshold: expected one of \['smooth', 'binary'\]"),
-        ({"c": 0.0}, ValueError, r"c: expected a value > 0.0, got 0.0"),
-        ({"c": "fwidth"}, ValueError, r"c: expected a number > 0 or 'auto', got 'fwidth'"),
+        ({"c": 0.0}, ValueError, r"c: expected a value > 0, got 0.0"),
+        ({"c": "fwidth"}, ValueError, r"c: expected 'auto' or a value > 0, got 'fwidth'"),
         ({"centred": "yes"}, TypeError, r"centred: expected a bool"),
         ({"screen": "voronoi"}, ValueError, r"screen: unknown screen name, got 'voronoi'"),
         ({"screen": {"kind": "halftone"}}, ValueError, r"a screen table needs kind in"),
@@ -339,7 +339,7 @@ def test_cli_renders_with_halftone_parameters(tmp_path):
         ({"indication": [[0.0, 1.5]]}, ValueError, r"indication: expected signed values in"),
         ({"indication": "nowhere.png"}, ValueError, r"indication: 'nowhere.png' is not an"),
         ({"objects": {"wall": {"tone": 1}}}, ValueError, r"objects.wall.tone: unknown key"),
-        ({"ink": [0, 0]}, ValueError, r"ink: expected 3 linear RGB values in \[0, 1\]"),
+        ({"ink": [0, 0]}, ValueError, r"ink: expected 3 values in \[0, 1\] \(linear RGB\)"),
         ({"mip": "nearest"}, ValueError, r"mip: expected one of \['trilinear', 'per_level'\]"),
     ],
 )

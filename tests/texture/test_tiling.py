@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from refnpr.styles.threshold.images import PyramidCache
-from refnpr.styles.threshold.params import parse_params
+from refnpr.styles.threshold.params import PARAMS
 from refnpr.texture import (
     BUILTIN_TEXTURES,
     TILINGS,
@@ -418,7 +418,7 @@ def test_tiling_bad_values(tiling, exc, match):
 def test_threshold_pyramid_cache_plumbs_the_tiling_option(tmp_path):
     path = str(_ramp_png(tmp_path))
     cache = PyramidCache()
-    p = parse_params(source="image")
+    p = PARAMS.validate({"source": "image"})
     plain = cache.get(path, p)
     tiled = cache.get(path, p, tiling="periodic")
     assert len(cache) == 2 and cache.get(path, p, tiling="periodic") is tiled
@@ -428,7 +428,9 @@ def test_threshold_pyramid_cache_plumbs_the_tiling_option(tmp_path):
     want = clahe_pyramid(load_texture(path, tiling="periodic"))
     for a, b in zip(tiled.levels, want.levels, strict=True):
         np.testing.assert_array_equal(a, b)
-    raw = cache.get(path, parse_params(source="image", clahe_levels="none"), tiling="periodic")
+    raw = cache.get(
+        path, PARAMS.validate({"source": "image", "clahe_levels": "none"}), tiling="periodic"
+    )
     np.testing.assert_array_equal(
         raw.levels[0], build_pyramid(load_texture(path, tiling="periodic")).levels[0]
     )

@@ -22,17 +22,9 @@ A style holding per-pixel ``v``, ``s`` (dyadic scale) and ``intensity`` arrays `
     ink_aa = line_coverage(v, s, intensity, dv_dx, dv_dy, uniform=True)   # box-filtered
 
 Each per-sample formula is a scalar device function (``f.scalar``: the ``threshold`` style's
-kernel calls it per sample) whose public numpy face validates and runs it elementwise.
-
-Contents: eqs. 2-4 (:func:`threshold_illumination`, :func:`step`, :func:`step_n`); eqs. 5-8
-(:func:`dyadic_scale`, :func:`dyadic_scale_from_gradient`, :func:`dyadic_remap`,
-:func:`multiscale_line`, :func:`multiscale_line_cdf`, :func:`line_threshold`); compositions
-(:func:`hatch_coordinate`, :func:`hatch_threshold`, :func:`combine_thresholds`,
-:func:`layer_whites`, :func:`layer_schedule`,
-:func:`dot_function`, :func:`dot_dyadic_scale`, :func:`dot_tone_table`, :func:`dot_threshold`; the screen-round
-jittered stipple :func:`stipple_scales`, :func:`stipple_tone_table`, :func:`stipple_threshold`);
-filtering (:func:`pcf_threshold`, :func:`mip_threshold`, :func:`line_coverage`); the strength of
-sec. 5 (:func:`facing_strength`, :func:`tone_strength`, :func:`strength_blend`).
+kernel calls it per sample) whose public numpy face validates and runs it elementwise. Modules:
+``lines`` (eqs. 3-8), ``textures`` and ``compose`` (hatching, cross-hatching, dots), ``stipple``,
+``filtering`` (sec. 4), ``strength`` (sec. 5); eq. 2 is :func:`threshold_illumination`.
 """
 
 from __future__ import annotations

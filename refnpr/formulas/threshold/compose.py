@@ -10,18 +10,14 @@ non-decreasing re-mapping of layer i. The re-mappings are chosen so that
 - layer i appears below the intensity ``onsets[i]`` (staged cross-hatching);
 - the dark lines of every layer present stay as thin as possible: a new layer takes all the
   darkening until its lines are as wide as those of the layers already drawn, then all darken
-  together. The earlier rule (one common level scaled per layer) let the first layer keep
-  darkening after the second appeared, so wherever two directions showed the first one was
-  mostly black and the second only chopped its white gaps into dashes.
+  together (scaling one common level per layer instead keeps darkening the first layer, which
+  goes mostly black while the second only chops its white gaps into dashes).
 
 In darkness ``lambda = -ln x`` the allocation is water-filling: ``lambda = sum_i lambda_i``
 (tone), ``lambda_i = 0`` while ``lambda < Lambda_i = -ln onsets[i]``, and each increment goes to
-the active layers of least darkness. Every ``lambda_i(lambda)`` is piecewise linear.
-
-The layers' white fractions and the composition are scalar device functions (``f.scalar``) that
-the ``threshold`` style's kernel calls per sample, given the schedule of :func:`layer_schedule`
-(``lam_bp``, ``lev_bp``, computed once per frame); the public functions are their numpy faces.
-Public names are re-exported by :mod:`refnpr.formulas.threshold`.
+the active layers of least darkness. Every ``lambda_i(lambda)`` is piecewise linear. The
+kernel's device functions take the schedule of :func:`layer_schedule` (``lam_bp``, ``lev_bp``,
+computed once per frame).
 """
 
 from __future__ import annotations
@@ -35,8 +31,8 @@ from refnpr._jit import njit
 from refnpr.device.scalars import ONE_BELOW, clip, interp
 
 from .._face import Whole, elementwise, face
-from .._shading_checks import broadcast, check_range, real
-from .._validate import describe, result_dtype
+from .._shading_checks import check_range, real, reals
+from .._validate import describe
 from .lines import _below_one
 
 __all__ = ["layer_schedule", "layer_whites", "combine_thresholds", "check_onsets"]
@@ -133,8 +129,7 @@ def layer_whites(x, onsets) -> np.ndarray:
     -------
     (L, ...) ndarray in [0, 1]; float64, or float32 if ``x`` is float32.
     """
-    dt = result_dtype(x)
-    x = real("x", x, dt)
+    dt, x = reals(x=x)
     lam_bp, lev_bp = (Whole(a) for a in layer_schedule(onsets))
     n = lev_bp.value.shape[1]
     out = np.empty((n, *x.shape), dtype=dt)
@@ -212,11 +207,9 @@ def combine_thresholds(layers: Sequence, *, onsets=None) -> np.ndarray:
         raise TypeError(
             f"layers: expected a non-empty list of threshold arrays, got {describe(layers)}"
         )
-    dt = result_dtype(*layers)
-    fs = [real(f"layers[{i}]", x, dt) for i, x in enumerate(layers)]
+    dt, *fs = reals(**{f"layers[{i}]": x for i, x in enumerate(layers)})
     for i, f in enumerate(fs):
         check_range(f"layers[{i}]", f, 0.0, 1.0, "threshold textures take values in [0, 1]")
-    broadcast(**{f"layers[{i}]": f for i, f in enumerate(fs)})
     lam_bp, lev_bp = layer_schedule(check_onsets(onsets, len(fs)))
     t = elementwise(combine_thresholds.scalar, dt, tuple(fs), Whole(lam_bp), Whole(lev_bp))
     return _below_one(t)

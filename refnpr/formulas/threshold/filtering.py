@@ -1,10 +1,5 @@
 """Filtered thresholding of Veryovka sec. 4: percentage-closer filtering of thresholding results
-and the analytic box filter of a thresholded multi-scale line texture.
-
-Each formula is a scalar device function (``f.scalar``) that the ``threshold`` style's kernel
-calls per sample; the public function is its numpy face. Public names are re-exported by
-:mod:`refnpr.formulas.threshold`.
-"""
+and the analytic box filter of a thresholded multi-scale line texture."""
 
 from __future__ import annotations
 
@@ -14,7 +9,7 @@ from refnpr._jit import njit
 from refnpr.device.scalars import clip, frac
 
 from .._face import Whole, elementwise, face
-from .._shading_checks import broadcast, check_range, real
+from .._shading_checks import broadcast, check_range, real, reals
 from .._validate import check_int, result_dtype
 from .lines import _dyadic_remap, _multiscale_line, _step, ldexp, level, step_any
 
@@ -196,13 +191,8 @@ def mip_threshold(x, t_fine, t_coarse, lod_frac, *, n: int = 1) -> np.ndarray:
     (...) ndarray; float64, or float32 if the inputs are float32.
     """
     n = check_int("n", n, lo=1)
-    dt = result_dtype(x, t_fine, t_coarse, lod_frac)
-    x = real("x", x, dt)
-    t0 = real("t_fine", t_fine, dt)
-    t1 = real("t_coarse", t_coarse, dt)
-    f = real("lod_frac", lod_frac, dt)
+    dt, x, t0, t1, f = reals(x=x, t_fine=t_fine, t_coarse=t_coarse, lod_frac=lod_frac)
     check_range("lod_frac", f, 0.0, 1.0, "lod_frac is the fractional part of the mip LOD")
-    broadcast(x=x, t_fine=t0, t_coarse=t1, lod_frac=f)
     return elementwise(mip_threshold.scalar, dt, x, t0, t1, f, n)
 
 
@@ -357,12 +347,5 @@ def line_coverage(v, s, intensity, dv_dx, dv_dy, *, uniform: bool = False) -> np
     The absolute error is about 1e-16 (1 + |v 2**floor(s)|) / (|dv_dx| + |dv_dy|) 2**-floor(s),
     the conditioning of locating a line edge inside a footprint that small.
     """
-    dt = result_dtype(v, s, intensity, dv_dx, dv_dy)
-    f64 = np.dtype(np.float64)
-    v = real("v", v, f64)
-    s = real("s", s, f64)
-    x = real("intensity", intensity, f64)
-    gx = real("dv_dx", dv_dx, f64)
-    gy = real("dv_dy", dv_dy, f64)
-    broadcast(v=v, s=s, intensity=x, dv_dx=gx, dv_dy=gy)
+    dt, v, s, x, gx, gy = reals(np.float64, v=v, s=s, intensity=intensity, dv_dx=dv_dx, dv_dy=dv_dy)
     return elementwise(line_coverage.scalar, dt, v, s, x, gx, gy, bool(uniform))

@@ -1,10 +1,5 @@
-"""Veryovka 2002 eqs. 3-8: step functions, dyadic scale and re-mapping, multi-scale line function.
-
-Each formula is a scalar device function (``f.scalar``) that the ``threshold`` style's kernel
-calls per sample; the public function is its numpy face (validation, then ``elementwise``).
-Public names are re-exported by :mod:`refnpr.formulas.threshold`; see its docstring for the
-conventions.
-"""
+"""Veryovka 2002 eqs. 3-8: step functions, dyadic scale and re-mapping, multi-scale line function
+(conventions: :mod:`refnpr.formulas.threshold`)."""
 
 from __future__ import annotations
 
@@ -16,8 +11,8 @@ from refnpr._jit import njit
 from refnpr.device.scalars import ONE_BELOW, clip, frac
 
 from .._face import elementwise, face
-from .._shading_checks import broadcast, check_positive, check_range, real
-from .._validate import check_int, result_dtype
+from .._shading_checks import check_positive, check_range, reals
+from .._validate import check_int
 
 __all__ = [
     "step",
@@ -105,10 +100,7 @@ def step(x, t) -> np.ndarray:
     -------
     ndarray of 0.0 / 1.0 with the broadcast shape; float64, or float32 if the inputs are float32.
     """
-    dt = result_dtype(x, t)
-    x = real("x", x, dt)
-    t = real("t", t, dt)
-    broadcast(x=x, t=t)
+    dt, x, t = reals(x=x, t=t)
     return elementwise(step.scalar, dt, x, t)
 
 
@@ -135,10 +127,7 @@ def step_n(x, t, n: int) -> np.ndarray:
     ndarray with the broadcast shape; float64, or float32 if the inputs are float32.
     """
     n = check_int("n", n, lo=1)
-    dt = result_dtype(x, t)
-    x = real("x", x, dt)
-    t = real("t", t, dt)
-    broadcast(x=x, t=t)
+    dt, x, t = reals(x=x, t=t)
     return elementwise(step_n.scalar, dt, x, t, n)  # eq. 4
 
 
@@ -168,12 +157,9 @@ def dyadic_scale(d, w) -> np.ndarray:
     -------
     ndarray s with the broadcast shape; float64, or float32 if the inputs are float32.
     """
-    dt = result_dtype(d, w)
-    d = real("d", d, dt)
-    w = real("w", w, dt)
+    dt, d, w = reals(d=d, w=w)
     check_positive("d", d, "d is a distance between iso-lines in pixels; mask empty pixels")
     check_positive("w", w, "w is the desired line period in pixels, e.g. 8")
-    broadcast(d=d, w=w)
     return elementwise(dyadic_scale.scalar, dt, d, w)
 
 
@@ -204,12 +190,8 @@ def dyadic_scale_from_gradient(dv_dx, dv_dy, w) -> np.ndarray:
     -------
     ndarray s with the broadcast shape; float64, or float32 if the inputs are float32.
     """
-    dt = result_dtype(dv_dx, dv_dy, w)
-    gx = real("dv_dx", dv_dx, dt)
-    gy = real("dv_dy", dv_dy, dt)
-    w = real("w", w, dt)
+    dt, gx, gy, w = reals(dv_dx=dv_dx, dv_dy=dv_dy, w=w)
     check_positive("w", w, "w is the desired line period in pixels, e.g. 8")
-    broadcast(dv_dx=gx, dv_dy=gy, w=w)
     log2_w = np.log2(w.astype(np.float64))
     return elementwise(dyadic_scale_from_gradient.scalar, dt, gx, gy, log2_w)
 
@@ -247,10 +229,7 @@ def dyadic_remap(v, s) -> np.ndarray:
     ndarray in [0, 1) with the broadcast shape; computed in float64, returned as float32 if
     the inputs are float32.
     """
-    dt = result_dtype(v, s)
-    v = real("v", v, dt)
-    s = real("s", s, dt)
-    broadcast(v=v, s=s)
+    dt, v, s = reals(v=v, s=s)
     return _below_one(elementwise(dyadic_remap.scalar, dt, v, s))  # eq. 6
 
 
@@ -310,11 +289,8 @@ def multiscale_line(v, t, *, uniform: bool = False) -> np.ndarray:
     ndarray in [0, 1) with the broadcast shape; computed in float64, returned as float32 if the
     inputs are float32 (within an ulp of float32 of the float64 values).
     """
-    dt = result_dtype(v, t)
-    v = real("v", v, dt)
-    t = real("t", t, dt)
+    dt, v, t = reals(v=v, t=t)
     check_range("t", t, 0.0, 1.0, "t is the fractional part of the dyadic scale")
-    broadcast(v=v, t=t)
     return _below_one(elementwise(multiscale_line.scalar, dt, v, t, bool(uniform)))
 
 
@@ -352,11 +328,8 @@ def multiscale_line_cdf(y, t) -> np.ndarray:
     -------
     ndarray in [0, 1] with the broadcast shape; float64, or float32 if the inputs are float32.
     """
-    dt = result_dtype(y, t)
-    y = real("y", y, dt)
-    t = real("t", t, dt)
+    dt, y, t = reals(y=y, t=t)
     check_range("t", t, 0.0, 1.0, "t is the fractional part of the dyadic scale")
-    broadcast(y=y, t=t)
     return elementwise(multiscale_line_cdf.scalar, dt, y, t)
 
 
@@ -398,14 +371,6 @@ def line_threshold(v, s, *, uniform: bool = False, noise=None) -> np.ndarray:
     (...) ndarray in [0, 1); computed in float64, returned as float32 if the inputs are float32
     (within an ulp of float32 of the float64 values).
     """
-    extra = () if noise is None else (noise,)
-    dt = result_dtype(v, s, *extra)
-    v = real("v", v, dt)
-    s = real("s", s, dt)
-    named = {"v": v, "s": s}
-    if noise is not None:
-        noise = real("noise", noise, dt)
-        named["noise"] = noise
-    broadcast(**named)
-    z = 0.0 if noise is None else noise
+    dt, v, s, *z = reals(v=v, s=s, **({} if noise is None else {"noise": noise}))
+    z = z[0] if z else 0.0
     return _below_one(elementwise(line_threshold.scalar, dt, v, s, bool(uniform), z))

@@ -25,10 +25,6 @@ scales) and changes three things:
 The residual anisotropy: the metric uses each axis's screen length, so it is exact when the
 screen images of the u and v directions are perpendicular (a UV sphere, a plane seen along an
 axis) and follows the shear of the mapping otherwise.
-
-:func:`stipple_threshold` is a scalar device function (``f.scalar``) that the ``threshold``
-style's kernel calls per sample; the public function is its numpy face. Public names are
-re-exported by :mod:`refnpr.formulas.threshold`.
 """
 
 from __future__ import annotations

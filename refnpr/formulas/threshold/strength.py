@@ -12,10 +12,6 @@ paper gives no formula; refnpr uses
 
 and the blend ``B(x) = x + st (T(x) - x)`` (:func:`strength_blend`; st = strength s_o s_i) of
 :func:`refnpr.formulas.threshold.threshold_illumination` (st = 1: eq. 2, st = 0: eq. 1).
-
-Each is a scalar device function (``f.scalar``) that the ``threshold`` style's kernel calls per
-sample; the public function is its numpy face. Public names are re-exported by
-:mod:`refnpr.formulas.threshold`.
 """
 
 from __future__ import annotations
@@ -28,8 +24,8 @@ from refnpr._jit import njit
 from refnpr.device.scalars import clip01
 
 from .._face import elementwise, face
-from .._shading_checks import broadcast, real
-from .._validate import check_scalar, result_dtype
+from .._shading_checks import reals
+from .._validate import check_scalar
 
 __all__ = ["facing_strength", "tone_strength", "strength_blend"]
 
@@ -78,8 +74,7 @@ def facing_strength(n_dot_v, fade: float, power: float) -> np.ndarray:
     """
     fade = check_scalar("fade", fade, lo=0.0, hi=1.0, hint="0 = no fade, 1 = none facing")
     power = check_scalar("power", power, lo=0.0, lo_open=True, hint="use e.g. 1 or 2")
-    dt = result_dtype(n_dot_v)
-    c = real("n_dot_v", n_dot_v, dt)
+    dt, c = reals(n_dot_v=n_dot_v)
     return elementwise(facing_strength.scalar, dt, c, fade, power)
 
 
@@ -113,8 +108,7 @@ def tone_strength(x, dark: float, bright: float) -> np.ndarray:
     """
     dark = check_scalar("dark", dark, lo=0.0, hi=0.5, hint="a width of 0 disables the fade")
     bright = check_scalar("bright", bright, lo=0.0, hi=0.5, hint="a width of 0 disables the fade")
-    dt = result_dtype(x)
-    x = real("x", x, dt)
+    dt, x = reals(x=x)
     return elementwise(tone_strength.scalar, dt, x, dark, bright)
 
 
@@ -140,9 +134,5 @@ def strength_blend(x, tx, strength) -> np.ndarray:
     -------
     (...) ndarray; float64, or float32 if every input is float32.
     """
-    dt = result_dtype(x, tx, strength)
-    x = real("x", x, dt)
-    tx = real("tx", tx, dt)
-    strength = real("strength", strength, dt)
-    broadcast(x=x, tx=tx, strength=strength)
+    dt, x, tx, strength = reals(x=x, tx=tx, strength=strength)
     return elementwise(strength_blend.scalar, dt, x, tx, strength)

@@ -1,10 +1,5 @@
 """Line-texture compositions of Veryovka sec. 3.2 (Fig. 4): hatching at one or more angles and
-stippling from a 2D multi-scale dot function.
-
-The per-sample formulas (the hatch coordinate, the dot function, the dot texture and its
-scale) are scalar device functions (``f.scalar``); the public functions are their numpy faces.
-Public names are re-exported by :mod:`refnpr.formulas.threshold`.
-"""
+stippling from a 2D multi-scale dot function."""
 
 from __future__ import annotations
 

@@ -9,10 +9,6 @@ Effects (sec. 5): indication maps offset I; stroke sets with a normal map light 
 (``anisotropy``, keeps a stroke map's strokes thin on surfaces seen at grazing angles) and raw
 views of the screen, normal map and intensity (``show``, Figs. 3 and 8).
 
-Modules: ``params.py`` (the parameters, declared once), ``screens.py`` (screen specs -> built,
-mip-mapped screens and their tone LUTs), ``shading.py`` (the frame's records and tables; one
-numba pass per object, kernels in ``_kernels.py`` composing the formulas of
-:mod:`refnpr.formulas.halftone` and :mod:`refnpr.formulas.lighting`), ``style.py`` (the class).
 Built screens of specs that read no file are shared between style instances
 (:func:`.screens.cached_screen`).
 """

@@ -1,16 +1,11 @@
 """numba kernels of the ``halftone`` style (private; inputs built and validated by
 :mod:`.shading`).
 
-One banded pass over the samples of one object (bands of sample-grid rows, no reductions, so the
-result does not depend on the thread count), composing the formulas of
-:mod:`refnpr.formulas.halftone` and :mod:`refnpr.formulas.lighting` with the GL sampling of
-:mod:`refnpr.device.sampling`: the target intensity (Veryovka eq. 1 as luminance, with the DOT3
-stroke lighting of Freudenberg sec. 5.2 and the indication map of sec. 5.1), the screen lookup at
-the sample's uv and LOD (sec. 3; GL's isotropic LOD or anisotropic probes), the binary (sec. 3.1)
-or smooth (sec. 3.2) threshold, per-level thresholding with tone LUTs, and ink/paper compositing
-into float32 straight-alpha RGBA. The kernel reads the frame record
-(:class:`refnpr.styles._frame.Frame`), the style record (``PARAMS.Record``) and the object's
-:class:`Tables`.
+One banded pass over the samples of one object (no reductions, so the result does not depend on
+the thread count): the target intensity (Veryovka eq. 1 as luminance, the DOT3 stroke lighting of
+sec. 5.2, the indication map of sec. 5.1), the screen lookup at the sample's uv and LOD (sec. 3),
+the binary (sec. 3.1) or smooth (sec. 3.2) threshold, per level with tone LUTs or not, and
+ink/paper compositing into float32 straight-alpha RGBA.
 
 Speed: the lighting of a row's samples of the object is computed first, in passes over rows
 of scratch (the samples packed), one loop per light (:func:`lit_row`), which LLVM vectorizes:
@@ -58,10 +53,9 @@ _bilinear = inline_copy(bilinear)
 
 #: Codes of the style record (the declaration's choices).
 BINARY = PARAMS.code("threshold", "binary")
-SHOW_COLOR = PARAMS.code("show", "color")
-SHOW_SCREEN = PARAMS.code("show", "screen")
-SHOW_NORMALS = PARAMS.code("show", "normals")
-SHOW_INTENSITY = PARAMS.code("show", "intensity")
+SHOW_COLOR, SHOW_SCREEN, SHOW_NORMALS, SHOW_INTENSITY = PARAMS.codes(
+    "show", "color", "screen", "normals", "intensity"
+)
 
 #: Rows of a band's scratch (each (nW,) float64): a row's samples of the object, packed; then
 #: f_d and f_s of each light (rows _F + 2 i, _F + 2 i + 1).
@@ -271,27 +265,14 @@ def shade_object_for(show, bump, fwidth, per_level):
         (the raw value, or the normal map's RGB)."""
         # the records' arrays as locals, taken once (reading them from a record inside the
         # loops takes and drops a reference to each array per sample)
-        mesh_id = frame.mesh_id
-        cover = frame.cover
-        normal = frame.normal
-        uv = frame.uv
-        duv_dx = frame.duv_dx
-        duv_dy = frame.duv_dy
-        position = frame.position
-        dp_dx = frame.dposition_dx
-        dp_dy = frame.dposition_dy
+        mesh_id, cover, normal, position = frame.mesh_id, frame.cover, frame.normal, frame.position
+        uv, duv_dx, duv_dy = frame.uv, frame.duv_dx, frame.duv_dy
+        dp_dx, dp_dy = frame.dposition_dx, frame.dposition_dy
         eye = (frame.eye[0], frame.eye[1], frame.eye[2])
-        kind = frame.lights.kind
-        light_vec = frame.lights.vec
-        light_color = frame.lights.color
+        kind, light_vec, light_color = frame.lights.kind, frame.lights.vec, frame.lights.color
         materials = frame.materials
-        pyr = tables.screen
+        pyr, npyr, luts, lut_x, imap, ov = tables
         texels, offsets, shapes = pyr
-        npyr = tables.normals
-        luts = tables.luts
-        lut_x = tables.lut_x
-        imap = tables.indication
-        ov = tables.values
         obj = ov.index
         ambient = _row3(materials.ambient, obj)  # eq. 1: m_a l_a
         m_d = _row3(materials.diffuse, obj)

@@ -9,7 +9,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .._common import check_uv_scale
-from .._declare import Param, Params
+from .._declare import Param, Params, number_or, rgb_param
 from . import screens as HS
 
 __all__ = ["PARAMS", "Given", "parse_indication", "parse_objects"]
@@ -119,33 +119,11 @@ def _uv_scale(name: str, value: Any) -> Given | None:
     return None if scale is None else Given(scale, value)
 
 
-def _c(name: str, value: Any) -> float | str:
-    if isinstance(value, str):
-        if value != "auto":
-            raise ValueError(f"c: expected a number > 0 or 'auto', got {value!r}")
-        return value
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"c: expected a number > 0 or 'auto', got {type(value).__name__} {value!r}")
-    v = float(value)
-    if not np.isfinite(v):
-        raise ValueError(f"c: expected a finite number, got {v}")
-    if v <= 0.0:
-        raise ValueError(f"c: expected a value > 0.0, got {v}")
-    return v
-
-
-def _colour(name: str, value: Any) -> tuple[float, float, float]:
-    try:
-        c = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        c = np.array([np.nan])
-    if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
-        raise ValueError(f"{name}: expected 3 linear RGB values in [0, 1], got {value!r}")
-    return (float(c[0]), float(c[1]), float(c[2]))
-
-
-def _given(v: Given) -> Any:
-    return v.given
+def _given(name: str, default: Any, doc: str, parse: Any, accepts: str) -> Param:
+    """A table parameter parsed to a :class:`Given`; ``params()`` shows the form given."""
+    return Param(
+        name, default, doc, kind="any", parse=parse, summary=lambda v: v.given, accepts=accepts
+    )
 
 
 _SMOOTH = {"threshold": ("smooth",)}
@@ -167,7 +145,7 @@ PARAMS = Params(
         "the screen's change over one sample step, with the ramp centred (an extension: the grey "
         "ramp spans the sample's footprint)",
         kind="any",
-        parse=_c,
+        parse=number_or("auto", lo=0.0, lo_open=True),
         accepts='float > 0 or "auto"',
         used_when=_SMOOTH,
     ),
@@ -179,47 +157,39 @@ PARAMS = Params(
         kind="bool",
         used_when=_SMOOTH,
     ),
-    Param(
+    _given(
         "screen",
         "hatching",
         "default screen of every object: engraving, hatching, bricks, material, a texture name "
         'or path, or a table such as {kind = "engraving", profile = "triangle", angle = 90} '
         "(docs/halftone.md, Screens)",
-        kind="any",
-        parse=_screen,
-        summary=_given,
-        accepts="str or table",
+        _screen,
+        "str or table",
     ),
-    Param(
+    _given(
         "uv_scale",
         None,
         "multiplies uv before the screen lookup, in place of each material's uv_scale (none: "
         "the material's)",
-        kind="any",
-        parse=_uv_scale,
-        summary=_given,
-        accepts="float or 2 floats",
+        _uv_scale,
+        "float or 2 floats",
     ),
-    Param(
+    _given(
         "objects",
         None,
         "per-object settings by object name: {name = {screen, indication, indication_scale, "
         "uv_scale}} (indication_scale multiplies uv before the indication lookup)",
-        kind="any",
-        parse=_objects,
-        summary=_given,
-        accepts="table",
+        _objects,
+        "table",
     ),
-    Param(
+    _given(
         "indication",
         None,
         "default indication map (sec. 5.1): a low-resolution signed map in [-1, 1] over the "
         "object's uv in [0, 1]^2 (before uv_scale; row j covers v in [j/rows, (j+1)/rows)), or a "
         "grey image path (2 g - 1); added to I",
-        kind="any",
-        parse=_indication,
-        summary=_given,
-        accepts="nested list or path",
+        _indication,
+        "nested list or path",
     ),
     Param(
         "specular",
@@ -227,22 +197,8 @@ PARAMS = Params(
         "include the specular term (Blinn-Phong) in I (needs positions)",
         kind="bool",
     ),
-    Param(
-        "ink",
-        (0.0, 0.0, 0.0),
-        "colour of output 0 (linear RGB)",
-        kind="any",
-        parse=_colour,
-        accepts="3 floats in [0, 1]",
-    ),
-    Param(
-        "paper",
-        (1.0, 1.0, 1.0),
-        "colour of output 1 (linear RGB)",
-        kind="any",
-        parse=_colour,
-        accepts="3 floats in [0, 1]",
-    ),
+    rgb_param("ink", (0.0, 0.0, 0.0), "colour of output 0 (linear RGB)"),
+    rgb_param("paper", (1.0, 1.0, 1.0), "colour of output 1 (linear RGB)"),
     Param("lod_bias", 0.0, "added to every LOD", lo=-16.0, hi=16.0, unit="mip levels"),
     Param(
         "sample_lod",

@@ -57,7 +57,6 @@ def object_tables(style: Any, index: int, obj: Any, screen: Any) -> K.Tables:
     if equalize:
         luts = np.ascontiguousarray(style._luts(screen), dtype=np.float64)
         lut_x = np.linspace(0.0, 1.0, luts.shape[1])
-    screen_pyr = screen.pyramid.packed()
     normals = _NO_NORMALS if screen.normals is None else screen.normals.packed()
     imap = settings.get("indication", style.indication)
     direction = screen.direction
@@ -72,14 +71,8 @@ def object_tables(style: Any, index: int, obj: Any, screen: Any) -> K.Tables:
         per_level=bool(p.mip == "per_level" or equalize),
         equalize=bool(equalize),
     )
-    return K.Tables(
-        screen_pyr,
-        normals,
-        luts,
-        lut_x,
-        _NO_MAP if imap is None else np.ascontiguousarray(imap, dtype=np.float64),
-        values,
-    )
+    imap = _NO_MAP if imap is None else np.ascontiguousarray(imap, dtype=np.float64)
+    return K.Tables(screen.pyramid.packed(), normals, luts, lut_x, imap, values)
 
 
 def channels(style: Any, scene: Any) -> tuple[str, ...]:

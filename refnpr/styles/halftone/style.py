@@ -9,11 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from .._common import needs_position, warn_unused
+from .._declare import warn_unused
 from ..base import ShadeContext, Style, register
 from . import screens as HS
 from .params import PARAMS
-from .shading import shade_rgba
+from .shading import channels, shade_rgba
 
 __all__ = ["HalftoneStyle"]
 
@@ -66,12 +66,7 @@ class HalftoneStyle(Style):
         return any(HS.has_normal_map(s) for s in self.object_specs(scene))
 
     def requires(self, scene: Any) -> frozenset[str]:
-        req = {"mesh_id", "normal", "uv", "duv_dx", "duv_dy"}
-        if needs_position(scene, self.p.specular):
-            req.add("position")
-        if self.uses_normal_maps(scene):
-            req |= {"dposition_dx", "dposition_dy"}
-        return frozenset(req)
+        return frozenset({"mesh_id", *channels(self, scene)})
 
     # -- screens ----------------------------------------------------------------------------
     def screen_for(self, spec: dict[str, Any], material_texture: str | None) -> HS.Screen:

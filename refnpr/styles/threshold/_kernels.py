@@ -22,46 +22,30 @@ from refnpr._jit import banded, njit, specialised
 from refnpr.device.lights import LIGHT_POINT, light_dir
 from refnpr.device.scalars import clip
 from refnpr.device.vectors import dot, towards, unit_scaled
-from refnpr.formulas.lighting import diffuse, illumination_term, specular
-from refnpr.formulas.threshold import (
-    combine_thresholds,
-    dyadic_scale_from_gradient,
-    facing_strength,
-    hatch_coordinate,
-    layer_whites,
-    line_coverage,
-    line_threshold,
-    pcf_threshold,
-    step_n,
-    stipple_threshold,
-    strength_blend,
-    tone_strength,
-)
+from refnpr.formulas import lighting
+from refnpr.formulas import threshold as thr
 
 from .params import PARAMS
 
-_diffuse = diffuse.scalar
-_specular = specular.scalar
-_illumination_term = illumination_term.scalar
-_step_n = step_n.scalar
-_pcf_threshold = pcf_threshold.scalar
-_hatch_coordinate = hatch_coordinate.scalar
-_dyadic_scale = dyadic_scale_from_gradient.scalar
-_line_threshold = line_threshold.scalar
-_combine_thresholds = combine_thresholds.scalar
-_layer_white = layer_whites.scalar
-_line_coverage = line_coverage.scalar
-_stipple_threshold = stipple_threshold.scalar
-_facing_strength = facing_strength.scalar
-_tone_strength = tone_strength.scalar
-_strength_blend = strength_blend.scalar
+_diffuse = lighting.diffuse.scalar
+_specular = lighting.specular.scalar
+_illumination_term = lighting.illumination_term.scalar
+_step_n = thr.step_n.scalar
+_pcf_threshold = thr.pcf_threshold.scalar
+_hatch_coordinate = thr.hatch_coordinate.scalar
+_dyadic_scale = thr.dyadic_scale_from_gradient.scalar
+_line_threshold = thr.line_threshold.scalar
+_combine_thresholds = thr.combine_thresholds.scalar
+_layer_white = thr.layer_whites.scalar
+_line_coverage = thr.line_coverage.scalar
+_stipple_threshold = thr.stipple_threshold.scalar
+_facing_strength = thr.facing_strength.scalar
+_tone_strength = thr.tone_strength.scalar
+_strength_blend = thr.strength_blend.scalar
 
 #: Threshold sources of :func:`shade_threshold_for` (the analytic filter is a source of its
 #: own: the lines' coverage replaces the thresholds).
-CONSTANT = PARAMS.code("source", "constant")
-IMAGE = PARAMS.code("source", "image")
-LINES = PARAMS.code("source", "lines")
-STIPPLE = PARAMS.code("source", "stipple")
+CONSTANT, IMAGE, LINES, STIPPLE = PARAMS.codes("source", "constant", "image", "lines", "stipple")
 ANALYTIC = len(PARAMS["source"].choices)
 
 
@@ -164,41 +148,21 @@ def shade_threshold_for(src, cross, filtered):
         ``style`` (``PARAMS.Record``) and the :class:`Tables` ``tables``."""
         # the records' arrays as locals, taken once (read from a record inside the loops, each
         # access takes and drops a reference to the array)
-        cover = frame.cover
-        mesh_id = frame.mesh_id
-        normal = frame.normal
-        position = frame.position
-        uv = frame.uv
-        duv_dx = frame.duv_dx
-        duv_dy = frame.duv_dy
-        dyadic = frame.dyadic_scale
+        cover, mesh_id, normal, position = frame.cover, frame.mesh_id, frame.normal, frame.position
+        uv, duv_dx, duv_dy, dyadic = frame.uv, frame.duv_dx, frame.duv_dy, frame.dyadic_scale
         eye = (frame.eye[0], frame.eye[1], frame.eye[2])
         m = frame.materials
         m_ambient, m_diffuse, m_specular, shininess = m.ambient, m.diffuse, m.specular, m.shininess
-        light_kind = frame.lights.kind
-        light_vec = frame.lights.vec
-        light_unit = frame.lights.unit
-        light_color = frame.lights.color
-        row_start = tables.row_start
-        normals = tables.normals
-        t_tab = tables.t
-        w_tab = tables.w
-        offsets = tables.offsets
-        noise_tab = tables.noise
-        uv_scale = tables.uv_scale
+        lt = frame.lights
+        light_kind, light_vec, light_unit, light_color = lt.kind, lt.vec, lt.unit, lt.color
+        row_start, normals, t_tab, w_tab = tables.row_start, tables.normals, tables.t, tables.w
+        offsets, noise_tab, uv_scale = tables.offsets, tables.noise, tables.uv_scale
         log2_sv = tables.log2_sv
-        dir_sin = tables.sin
-        dir_cos = tables.cos
-        dir_channel = tables.channel
+        dir_sin, dir_cos, dir_channel = tables.sin, tables.cos, tables.channel
         schedule = (tables.lam, tables.levels)
-        cdf = tables.cdf
-        spec_on = tables.spec_on
-        steps = style.n
-        uniform = style.uniform
-        specular = style.specular
-        spec_t = style.spec_t
-        fade = style.facing_fade
-        n_sub = style.n_sub
+        cdf, spec_on = tables.cdf, tables.spec_on
+        steps, uniform, specular, spec_t = style.n, style.uniform, style.specular, style.spec_t
+        fade, n_sub = style.facing_fade, style.n_sub
         nh, nw = cover.shape
         has_position = position.shape[0] == nh and position.shape[1] == nw  # else a stand-in
         points = False

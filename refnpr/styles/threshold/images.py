@@ -4,12 +4,8 @@ footprint of the covered samples in texture space.
 The footprint of a sample is its share of the pixel: with ``spp = k * k`` the pixel derivatives
 divided by k. Scales (the dyadic scale of eq. 5, the mip LOD) are per *pixel* whatever the
 supersampling, so that supersampling converges to the box filter of the one-sample-per-pixel
-image of the same view.
-
-Pyramids are built once per (texture, tiling, window, clip limit, nbins, rank equalization,
-CLAHE levels) and cached in a :class:`PyramidCache` owned by the style instance (never rebuilt
-per frame). The LOD is the GL isotropic one from the analytic uv derivatives (per pixel), so one
-pyramid serves objects with different ``uv_scale``.
+image of the same view. The LOD is the GL isotropic one from the analytic uv derivatives (per
+pixel), so one pyramid serves objects with different ``uv_scale``.
 """
 
 from __future__ import annotations
@@ -128,7 +124,8 @@ class ToneMaps:
 
 
 class PyramidCache:
-    """Threshold pyramids by key; ``get`` builds a pyramid on first use only."""
+    """Threshold pyramids by texture and CLAHE settings, owned by a style instance: ``get``
+    builds a pyramid on first use only (never per frame)."""
 
     def __init__(self) -> None:
         self._pyramids: dict[tuple, MipPyramid] = {}

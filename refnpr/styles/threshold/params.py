@@ -15,10 +15,10 @@ import numpy as np
 from refnpr.texture import TILINGS
 
 from .._common import check_uv_scale
-from .._declare import NOT_NONE, Param, Params, check_number
+from .._declare import NOT_NONE, Param, Params, check_number, number_or
 from .._names import renamed_params, warn_deprecated
 
-__all__ = ["PARAMS", "SOURCES", "FILTERS", "MIPS", "deprecated_forms", "checked", "parse_params"]
+__all__ = ["PARAMS", "SOURCES", "FILTERS", "MIPS", "deprecated_forms", "checked"]
 
 SOURCES = ("constant", "image", "lines", "stipple")
 FILTERS = ("none", "pcf", "analytic")
@@ -81,14 +81,6 @@ def _tone_fade(name: str, value: Any) -> tuple[float, float]:
     return widths[0], widths[1]
 
 
-def _specular_threshold(name: str, value: Any) -> str | float:
-    if isinstance(value, str):
-        if value != "texture":
-            raise ValueError(f"{name}: expected 'texture' or a number in [0, 1], got {value!r}")
-        return value
-    return check_number(name, value, lo=0.0, hi=1.0)
-
-
 def _samples(name: str, value: int) -> int:
     if math.isqrt(value) ** 2 != value:
         raise ValueError(
@@ -100,17 +92,9 @@ def _samples(name: str, value: int) -> int:
 
 def _texture(name: str, value: Any) -> str:
     if not isinstance(value, str) or not value:
+        what = " for the height map" if name == "bump" else ""
         raise TypeError(
-            f"{name}: expected a built-in texture name or an image path (str), got {value!r}"
-        )
-    return value
-
-
-def _bump(name: str, value: Any) -> str:
-    if not isinstance(value, str) or not value:
-        raise TypeError(
-            f"{name}: expected a built-in texture name or an image path (str) for the height "
-            f"map, got {value!r}"
+            f"{name}: expected a built-in texture name or an image path (str){what}, got {value!r}"
         )
     return value
 
@@ -143,20 +127,14 @@ PARAMS = Params(
         choices=SOURCES,
     ),
     Param("n", 1, "steps of T_n (eq. 4): n + 1 tones", kind="int", lo=1, hi=256),
-    Param(
-        "t",
-        0.5,
-        "constant threshold (source constant, and untextured objects of source image)",
-        lo=0.0,
-        hi=1.0,
-    ),
+    Param("t", 0.5, "threshold: source constant, untextured objects of image", lo=0.0, hi=1.0),
     Param("specular", True, "add the thresholded specular term (needs positions)", kind="bool"),
     Param(
         "specular_threshold",
         "texture",
         "threshold the specular term against the same texture, or against this constant",
         kind="any",
-        parse=_specular_threshold,
+        parse=number_or("texture", lo=0.0, hi=1.0),
         accepts='"texture" or float in [0, 1]',
     ),
     Param(
@@ -345,7 +323,7 @@ PARAMS = Params(
         "the alternative to threshold textures of Fig. 2 (top centre), usually with source "
         "constant",
         kind="any",
-        parse=_bump,
+        parse=_texture,
         accepts="str",
     ),
     Param(
@@ -411,9 +389,3 @@ def checked(p: Any) -> Any:
             f"onsets: expected one onset per direction ({len(p.directions)}), got {list(p.onsets)}"
         )
     return p
-
-
-def parse_params(**kw: Any) -> Any:
-    """Validated parameter values of keyword parameters (deprecated ``scale`` not taken)."""
-    kw, _ = deprecated_forms(kw)
-    return checked(PARAMS.validate(kw))

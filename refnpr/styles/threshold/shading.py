@@ -1,14 +1,8 @@
-"""The ``threshold`` style's shading of a frame: the records :func:`._kernels.shade_threshold_for`
-reads, and its call.
-
-The frame record (G-buffer grids, eye, lights, materials) and the style record (the declared
-parameters and the frame constants: the tone fades, the specular threshold, log2 of the line
-period, the stipple seed, the samples per pixel per axis) are built here, with the threshold
-tables (:class:`._kernels.Tables`): the uv scale per object, the hatching directions and their
-layer schedule, the footprint offsets of PCF, the line noise per sample (value noise, a host
-texture), the stipple tone table, the bump-mapped normals (Fig. 2) and, for image thresholds,
-the texture samples of the covered samples (:func:`.images.image_thresholds`). The procedural
-lines and dots and every formula of the shading are evaluated in the kernel.
+"""The ``threshold`` style's shading of a frame: the frame record, the style record (the declared
+parameters and the frame constants) and the :class:`._kernels.Tables` that
+:func:`._kernels.shade_threshold_for` reads, and its call. Image thresholds, the line noise and
+the bump-mapped normals are host tables; the procedural lines and dots and every formula of the
+shading are evaluated in the kernel.
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ from ..base import ShadeContext, Style, register
 from .bump import BumpMap
 from .images import Footprint, PyramidCache, image_thresholds
 from .params import DEPRECATED, PARAMS, checked, deprecated_forms
-from .shading import shade_rgba
+from .shading import shade_rgba, uv_scale_table
 
 __all__ = ["ThresholdStyle"]
 
@@ -92,12 +92,7 @@ class ThresholdStyle(Style):
     def uv_scales(self, ctx: ShadeContext, mask: np.ndarray) -> np.ndarray:
         """Per covered sample ``[su, sv]`` multiplying uv: the style's ``uv_scale`` or the
         material's (times the deprecated ``scale``), ``(M, 2)`` float64."""
-        p = self.p
-        if p.uv_scale is None:
-            uvs = ctx.material_field("uv_scale", mask)
-        else:
-            uvs = np.broadcast_to(np.asarray(p.uv_scale, dtype=np.float64), (int(mask.sum()), 2))
-        return uvs if self.scale is None else uvs * self.scale
+        return uv_scale_table(self, ctx.scene)[np.maximum(ctx.gb["mesh_id"][mask], 0)]
 
     def footprint(self, ctx: ShadeContext, mask: np.ndarray) -> Footprint:
         """Scaled texture coordinates and per-pixel derivatives of the covered samples."""
@@ -130,14 +125,12 @@ class ThresholdStyle(Style):
         pyramids, keys = [], {}
         group_of_object = []
         for obj in ctx.scene.objects:
-            tex = p.texture if p.texture is not None else obj.material.texture
+            tex = obj.material.texture if p.texture is None else p.texture
             if self.pyramid is not None:
                 tex = "<prebuilt>"
             if tex not in keys:
                 keys[tex] = len(pyramids)
-                if tex is None:
-                    pyramids.append(None)
-                elif self.pyramid is not None:
+                if tex is None or self.pyramid is not None:  # None: the constant t
                     pyramids.append(self.pyramid)
                 else:
                     pyramids.append(self.pyramids.get(tex, p, tiling=p.tiling))
