@@ -7,15 +7,9 @@ from __future__ import annotations
 import math
 import numbers
 
-import numpy as np
+from ..formulas._validate import describe
 
 __all__ = ["check_int", "check_real", "check_type", "check_vec", "describe", "positives"]
-
-
-def describe(value) -> str:
-    """Short ``repr`` of ``value`` for an error message."""
-    text = repr(value.tolist() if isinstance(value, np.ndarray) else value)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def check_type(name: str, value, cls, what: str) -> None:

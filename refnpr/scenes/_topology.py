@@ -62,16 +62,18 @@ def pole_u(u: np.ndarray, faces: np.ndarray, fpole: np.ndarray) -> np.ndarray:
 
 
 def split_u_seam(
-    u: np.ndarray, faces: np.ndarray, pole: np.ndarray
+    uv: np.ndarray, faces: np.ndarray, dirs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Make a periodic ``u`` (N,) in ``[0, 1]`` continuous inside every triangle of ``faces``.
+    """Make a periodic ``u = uv[:, 0]`` in ``[0, 1]`` continuous inside every triangle of ``faces``.
 
     A triangle whose non-pole corners span more than half a period straddles the seam: its
-    corners with ``u < 0.5`` get duplicates with ``u + 1``. Pole vertices (``pole`` (N,) bool,
-    where ``u`` is undefined) get one duplicate per incident triangle, with :func:`pole_u`.
-    Returns ``(source, u_out, faces_out)``: the original vertex of each output vertex (index
-    positions, normals and v with it), its u, and the renumbered faces.
+    corners with ``u < 0.5`` get duplicates with ``u + 1``. Pole vertices (``dirs`` (N, 3) on the
+    y axis, where ``u`` is undefined) get one duplicate per incident triangle, with
+    :func:`pole_u`. Returns ``(source, uv_out, faces_out)``: the original vertex of each output
+    vertex (index positions and normals with it), its uv, and the renumbered faces.
     """
+    u = uv[:, 0]
+    pole = (dirs[:, 0] == 0.0) & (dirs[:, 2] == 0.0)
     n = u.shape[0]
     fu = u[faces]
     fpole = pole[faces]
@@ -95,7 +97,8 @@ def split_u_seam(
         u_out = np.concatenate([u_out, pole_u(u_out, faces_out, fpole)[fi]])
         faces_out[fi, ci] = start + np.arange(fi.size)
     keep, faces_out = compact(source.size, faces_out)
-    return source[keep], u_out[keep], faces_out
+    source = source[keep]
+    return source, np.stack([u_out[keep], uv[source, 1]], axis=1), faces_out
 
 
 def concat(

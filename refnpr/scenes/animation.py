@@ -105,9 +105,7 @@ class Track:
         part, which, attr = parse_target(self.target)
         object.__setattr__(self, "target", self.target.strip())
         kind = "rotation" if (part, attr) == ("object", "rotation") else "vector"
-        interp = self.interpolation
-        if interp is None:
-            interp = INTERPOLATIONS[kind][0]
+        interp = INTERPOLATIONS[kind][0] if self.interpolation is None else self.interpolation
         if interp not in INTERPOLATIONS[kind]:
             raise ValueError(
                 f"interpolation: {interp!r} is not available for {self.target!r}; "
@@ -273,17 +271,15 @@ class Animation:
                         f"{where}: light[{which}] is a {kind} light, which has no animated "
                         f"{attr}; animate its " + ("position" if kind == "point" else "direction")
                     )
-            elif part == "object":
-                count = names.count(which)
-                if count != 1:
-                    raise ValueError(
-                        f"{where}: "
-                        + (
-                            f"no object named {which!r}; objects: {', '.join(map(repr, names))}"
-                            if count == 0
-                            else f"{count} objects are named {which!r}; give them unique names"
-                        )
-                    )
+            elif part == "object" and which not in names:
+                raise ValueError(
+                    f"{where}: no object named {which!r}; objects: {', '.join(map(repr, names))}"
+                )
+            elif part == "object" and names.count(which) > 1:
+                raise ValueError(
+                    f"{where}: {names.count(which)} objects are named {which!r}; give them "
+                    "unique names"
+                )
         for i, t in enumerate(self.tracks):
             part, name, _ = t.parts
             if part != "object":

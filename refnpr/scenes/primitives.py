@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, check_real
+from ._params import check_int, check_real, positives
 from ._topology import split_u_seam
 from .revolution import revolve
 
@@ -33,8 +33,7 @@ def uv_sphere(radius: float = 1.0, n_u: int = 64, n_v: int = 32) -> Mesh:
         seen from +y, starting at +x), v = latitude / pi + 1/2 in [0, 1] (0 at the south pole).
     """
     radius = check_real("radius", radius, positive=True)
-    n_u = check_int("n_u", n_u, minimum=3)
-    n_v = check_int("n_v", n_v, minimum=2)
+    n_u, n_v = check_int("n_u", n_u, minimum=3), check_int("n_v", n_v, minimum=2)
     k = np.arange(n_v + 1)
     lat = np.pi * k / n_v - np.pi / 2.0
     nr, ny = np.cos(lat), np.sin(lat)
@@ -127,11 +126,8 @@ def icosphere(subdivisions: int = 3, radius: float = 1.0) -> Mesh:
     verts, faces = _icosahedron()
     for _ in range(subdivisions):
         verts, faces = _subdivide(verts, faces)
-    uv = spherical_uv(verts)
-    pole = (verts[:, 0] == 0.0) & (verts[:, 2] == 0.0)
-    source, u, faces = split_u_seam(uv[:, 0], faces, pole)
+    source, uv, faces = split_u_seam(spherical_uv(verts), faces, verts)
     unit_pos = verts[source]
-    uv = np.stack([u, uv[source, 1]], axis=1)
     # Number vertices in order of first use by the faces: subdivision appends midpoints far from
     # their triangles' other corners, and renderers gather per-triangle vertex data by index.
     _, first_use = np.unique(faces.ravel(), return_index=True)
@@ -161,12 +157,10 @@ def torus(R: float = 1.0, r: float = 0.35, n_u: int = 64, n_v: int = 32) -> Mesh
         ``2 * n_u * n_v`` triangles. uv: u = angle about y / 2 pi; v = angle around the tube
         / 2 pi, 0 on the outer equator, increasing upward; both in [0, 1].
     """
-    R = check_real("R", R, positive=True)
-    r = check_real("r", r, positive=True)
+    R, r = positives(R=R, r=r)
     if r >= R:
         raise ValueError(f"r: the tube radius must be smaller than R ({R}), got {r}")
-    n_u = check_int("n_u", n_u, minimum=3)
-    n_v = check_int("n_v", n_v, minimum=3)
+    n_u, n_v = check_int("n_u", n_u, minimum=3), check_int("n_v", n_v, minimum=3)
     k = np.arange(n_v + 1)
     phi = 2.0 * np.pi * k / n_v
     nr, ny = np.cos(phi), np.sin(phi)

@@ -247,8 +247,7 @@ class Scene:
         _set(self, objects=objects, lights=lights, ambient=ambient, background=background)
         _set(self, style=dict(self.style))
         if self.animation is not None:
-            what = "a refnpr.scenes.animation.Animation or None"
-            check_type("animation", self.animation, Animation, what)
+            check_type("animation", self.animation, Animation, "an Animation or None")
             self.animation.check_scene(self)
 
     @property

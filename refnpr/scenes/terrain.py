@@ -83,9 +83,7 @@ def _gradient_noise(
 
 def _fractal_height(x, z, *, size, height, octaves, seed):
     rng = np.random.default_rng(seed)
-    total_h = np.zeros(np.shape(x))
-    total_x = np.zeros(np.shape(x))
-    total_z = np.zeros(np.shape(x))
+    total_h, total_x, total_z = (np.zeros(np.shape(x)) for _ in range(3))
     a_sum = np.sum(0.5 ** np.arange(octaves))
     for o in range(octaves):
         perm = rng.permutation(_TABLE).astype(np.int64)

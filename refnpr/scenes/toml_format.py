@@ -79,17 +79,7 @@ __all__ = [
     "scene_frames",
 ]
 
-_TOP_KEYS = (
-    "name",
-    "description",
-    "ambient",
-    "background",
-    "camera",
-    "style",
-    "light",
-    "object",
-    "animation",
-)
+_TOP_KEYS = tuple("name description ambient background camera style light object animation".split())
 _CAMERA_KEYS = ("eye", "target", "up", "fov_y", "near", "far")
 _LIGHT_KEYS = ("kind", "direction", "position", "color")
 _MATERIAL_KEYS = tuple(f.name for f in fields(Material))
@@ -105,8 +95,7 @@ class SceneFileError(ValueError):
 
 @contextmanager
 def _where(source: str, where: str) -> Iterator[None]:
-    """Re-raise ValueError, TypeError and OSError (a missing mesh file) as SceneFileError
-    prefixed with the location."""
+    """Re-raise ValueError, TypeError and OSError (a missing mesh file) as located SceneFileError."""
     try:
         yield
     except SceneFileError:
@@ -314,14 +303,8 @@ def _animation(src: str, value) -> Animation:
     frames, fps = spec["frames"], spec.get("fps", 24.0)
     with _where(src, "[animation]"):
         Animation(frames, fps)  # frames and fps checked before the keys use fps
-    specs = spec.get("track", [])
-    if not isinstance(specs, list):
-        raise SceneFileError(
-            f"{src}: [animation]: track: expected an array of tables ([[animation.track]]), got "
-            f"{type(specs).__name__}"
-        )
     tracks = []
-    for i, track in enumerate(specs):
+    for i, track in enumerate(_array_of_tables(src, "animation.track", spec.get("track", []))):
         where = f"[[animation.track]] #{i + 1}"
         track = _table(src, where, track, _TRACK_KEYS)
         target = track.get("target")
@@ -343,14 +326,10 @@ def _animation(src: str, value) -> Animation:
         ]
         check_keys_in_range(f"{src}: {where}", parsed, frames, fps, error=SceneFileError)
         integer = track.get("integer")
-        if integer is None:
+        if integer is None:  # style keys are checked to have a value
             integer = target.strip().startswith("style.") and all(
-                isinstance(k, Mapping)
-                and (
-                    _is_int(k.get("value"))
-                    or (isinstance(k.get("value"), list) and all(map(_is_int, k["value"])))
-                )
-                for k in keys
+                all(map(_is_int, v if isinstance(v, list) else [v]))
+                for v in (k["value"] for k in keys)
             )
         with _where(src, where):
             tracks.append(Track(target, tuple(parsed), track.get("interpolation"), integer))

@@ -166,22 +166,18 @@ def interpolate(keys: Sequence[Keyframe], frame: float, interpolation: str) -> t
         return keys[i].value
     f0, f1 = frames[i], frames[i + 1]
     u = (frame - f0) / (f1 - f0)
-    p0 = np.asarray(keys[i].value, dtype=np.float64)
-    p1 = np.asarray(keys[i + 1].value, dtype=np.float64)
+    values = np.asarray([k.value for k in keys], dtype=np.float64)
+    p0, p1 = values[i], values[i + 1]
     if interpolation == "slerp":
         return slerp(p0, p1, u)
     if interpolation == "linear":
         return tuple(float(c) for c in (1.0 - u) * p0 + u * p1)
     if interpolation != "catmull_rom":
         raise ValueError(f"interpolation: unknown interpolation {interpolation!r}")
-    n = len(keys)
 
     def tangent(j: int) -> np.ndarray:  # central difference per frame, one-sided at the ends
-        lo, hi = max(j - 1, 0), min(j + 1, n - 1)
-        return (
-            np.asarray(keys[hi].value, dtype=np.float64)
-            - np.asarray(keys[lo].value, dtype=np.float64)
-        ) / (frames[hi] - frames[lo])
+        lo, hi = max(j - 1, 0), min(j + 1, len(keys) - 1)
+        return (values[hi] - values[lo]) / (frames[hi] - frames[lo])
 
     h = f1 - f0
     m0, m1 = tangent(i) * h, tangent(i + 1) * h

@@ -124,9 +124,8 @@ def project_uv(mesh: Mesh, kind: str, *, axis: str | None = None) -> Mesh:
         faces = inverse.reshape(-1, 3).astype(np.int64)
         return _with(mesh, source, faces, uv)
     d = (p - 0.5 * (lo + hi)) @ _TO_Y[axis].T
-    pole = (d[:, 0] == 0.0) & (d[:, 2] == 0.0)
     uv = spherical_uv(unit(d))
     if kind == "cylindrical":
         uv[:, 1] = _normalize(d[:, 1])
-    source, u, faces = split_u_seam(uv[:, 0], mesh.faces, pole)
-    return _with(mesh, source, faces, np.stack([u, uv[source, 1]], axis=1))
+    source, uv, faces = split_u_seam(uv, mesh.faces, d)
+    return _with(mesh, source, faces, uv)

@@ -33,3 +33,10 @@ def _pow2(name: str, value, lo: int, hi: int) -> int:
     if v & (v - 1):
         raise ValueError(f"{name}: expected a power of two in [{lo}, {hi}], got {v}")
     return v
+
+
+def _image_shape(name: str, a: np.ndarray) -> None:
+    if a.ndim not in (2, 3) or a.shape[0] < 1 or a.shape[1] < 1:
+        raise ValueError(
+            f"{name}: expected a (rows, cols) or (rows, cols, C) image, got shape {a.shape}"
+        )

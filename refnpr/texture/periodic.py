@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._checks import _image_shape
+
 __all__ = ["TILINGS", "check_tiling", "make_tileable", "periodic_component", "smooth_component"]
 
 #: Values of the ``tiling`` option of texture loaders: "none" (the image as given; ``None``
@@ -29,10 +31,7 @@ def _as_float64_image(image, name: str) -> np.ndarray:
     a = np.asarray(image)
     if a.dtype.kind not in "fiub":
         raise TypeError(f"{name}: expected a numeric image array, got dtype {a.dtype}")
-    if a.ndim not in (2, 3) or a.shape[0] < 1 or a.shape[1] < 1:
-        raise ValueError(
-            f"{name}: expected a (rows, cols) or (rows, cols, C) image, got shape {a.shape}"
-        )
+    _image_shape(name, a)
     a = a.astype(np.float64)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: contains NaN or inf")

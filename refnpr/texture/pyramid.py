@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import _int
+from ._checks import _image_shape, _int
 from .clahe import periodic_clahe
 
 __all__ = ["MipPyramid", "build_pyramid", "clahe_pyramid", "rank_equalize", "as_texture"]
@@ -22,10 +22,7 @@ __all__ = ["MipPyramid", "build_pyramid", "clahe_pyramid", "rank_equalize", "as_
 def as_texture(image, *, name: str = "image") -> np.ndarray:
     """``image`` as a float32 texture in [0, 1]: uint8/uint16/bool scaled, floats checked."""
     a = np.asarray(image)
-    if a.ndim not in (2, 3) or a.shape[0] < 1 or a.shape[1] < 1:
-        raise ValueError(
-            f"{name}: expected a (rows, cols) or (rows, cols, C) image, got shape {a.shape}"
-        )
+    _image_shape(name, a)
     if a.dtype == np.bool_:
         return a.astype(np.float32)
     if a.dtype == np.uint8:

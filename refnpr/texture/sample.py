@@ -34,9 +34,13 @@ def _check_pyramid(pyramid) -> None:
         )
 
 
-def _finish(out: np.ndarray, shape: tuple[int, ...], channels: int, dtype) -> np.ndarray:
-    out = out.reshape(shape + ((channels,) if channels > 1 else ()))
-    return out.astype(dtype, copy=False)
+def _run(kernel, pyramid: MipPyramid, flat: np.ndarray, shape, per_sample, dtype) -> np.ndarray:
+    """``kernel`` over the samples, reshaped to ``shape`` (+ (C,) for several channels)."""
+    pyr = pyramid.packed()
+    channels = pyr[0].shape[1]
+    out = np.empty((flat.shape[0], channels), dtype=np.float64)
+    kernel(pyr, flat, per_sample, out)
+    return out.reshape(shape + ((channels,) if channels > 1 else ())).astype(dtype, copy=False)
 
 
 def sample_trilinear(pyramid: MipPyramid, uv, lod, *, dtype=np.float32) -> np.ndarray:
@@ -61,10 +65,7 @@ def sample_trilinear(pyramid: MipPyramid, uv, lod, *, dtype=np.float32) -> np.nd
         raise ValueError(f"lod: expected shape {shape} (uv's leading shape), got {lam.shape}")
     if not np.all(np.isfinite(lam)):
         raise ValueError("lod: contains NaN or inf")
-    pyr = pyramid.packed()
-    out = np.empty((flat.shape[0], pyr[0].shape[1]), dtype=np.float64)
-    K.sample_trilinear(pyr, flat, np.ascontiguousarray(lam.ravel()), out)
-    return _finish(out, shape, pyr[0].shape[1], dtype)
+    return _run(K.sample_trilinear, pyramid, flat, shape, np.ascontiguousarray(lam.ravel()), dtype)
 
 
 def sample_level(pyramid: MipPyramid, uv, level, *, dtype=np.float32) -> np.ndarray:
@@ -76,10 +77,7 @@ def sample_level(pyramid: MipPyramid, uv, level, *, dtype=np.float32) -> np.ndar
     if lv.dtype.kind not in "iu":
         raise TypeError(f"level: expected integer level indices, got dtype {lv.dtype}")
     lv = np.ascontiguousarray(np.broadcast_to(lv, shape).ravel(), dtype=np.int64)
-    pyr = pyramid.packed()
-    out = np.empty((flat.shape[0], pyr[0].shape[1]), dtype=np.float64)
-    K.sample_level(pyr, flat, lv, out)
-    return _finish(out, shape, pyr[0].shape[1], dtype)
+    return _run(K.sample_level, pyramid, flat, shape, lv, dtype)
 
 
 def level_weights(pyramid: MipPyramid, lod) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

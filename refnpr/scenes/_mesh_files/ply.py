@@ -84,9 +84,8 @@ def _ply_ascii(data: bytes, start: int, elements: list):
         left = vals.size - pos
         nlist = sum(isinstance(t, tuple) for _, t in props)
         width = len(props)
-        lists = []  # per list property: its count column
         if nlist and count:
-            k, cols = 0, []  # the first row's layout
+            k, lists = 0, []  # the first row's layout: the count column of each list
             for _, typ in props:
                 if pos + k >= vals.size:
                     k = left + 1  # cut inside the first row
@@ -95,12 +94,11 @@ def _ply_ascii(data: bytes, start: int, elements: list):
                     n = vals[pos + k]
                     if not _is_count(n):
                         raise BadMeshFile(f"{name} 0: bad list length {n!r}")
-                    cols.append(k)
+                    lists.append(k)
                     k += 1 + int(n)
                 else:
                     k += 1
             width = k
-            lists = cols
         need = width * count
         if need > left and not nlist:
             raise BadMeshFile(

@@ -21,9 +21,8 @@ def _brick_fields(s: int, rows: int, per_row: int, seed: int):
     """Per texel of a running bond (odd rows shifted half a brick): distance (texels) to the
     brick cell's border, the outward unit direction (u, v) of the nearest border, the brick's
     random number, and (distance, direction) to its own left or lower border."""
-    u = (np.arange(s) + 0.5) / s
-    v = (np.arange(s) + 0.5) / s
-    uu, vv = np.meshgrid(u, v)  # (rows=v, cols=u)
+    t = (np.arange(s) + 0.5) / s
+    uu, vv = np.meshgrid(t, t)  # (rows=v, cols=u)
     row = np.floor(vv * rows).astype(np.int64)
     shift = np.where(row % 2 == 1, 0.5 / per_row, 0.0)
     uc = (uu + shift) * per_row

@@ -19,10 +19,6 @@ HATCH_ANGLES = (0.0, 90.0, 45.0, 135.0, 0.0, 90.0, 45.0, 135.0)
 _HATCH_PHASES = (0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.5, 0.5)
 
 
-def _binary_tone(screen: np.ndarray, intensity: float) -> float:
-    return float(np.mean(screen + intensity > 1.0))  # sec. 3.1, white iff screen + I > 1
-
-
 def _layer_coverage(m: int, i: int) -> float:
     """Coverage layer i must add to what layers 0..i-1 left white so that the union covers
     ``(i + 1/2) / m``: ``1 - (1 - (i + 1/2)/m) / (1 - (i - 1/2)/m)`` (``1/(2m)`` for layer 0)."""
@@ -70,7 +66,9 @@ def _calibrated_layers(size: int, m: int, width: float) -> np.ndarray:
             def excess(width: float, i=i, top=top, through=through, below=below, i_mid=i_mid):
                 a = _band(geometry[i], width)
                 screen = top + through * (below + a * (levels[i] - below))
-                return _binary_tone(screen, i_mid) - i_mid  # decreases with the width
+                # binary-threshold tone (sec. 3.1, white iff screen + I > 1) minus the target;
+                # it decreases with the width
+                return float(np.mean(screen + i_mid > 1.0)) - i_mid
 
             period = size / plan[i][0]
             lo, hi = 0.05 * widths[i], min(4.0 * widths[i], period)

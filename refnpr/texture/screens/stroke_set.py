@@ -60,6 +60,11 @@ class StrokeSet:
         return (int(self.layers[0].shape[2]), int(self.layers[0].shape[1]))
 
 
+def _check(strokes) -> None:
+    if not isinstance(strokes, StrokeSet):
+        raise TypeError(f"strokes: expected a StrokeSet, got {type(strokes).__name__}")
+
+
 def stroke_map_pyramid(strokes: StrokeSet) -> MipPyramid:
     """The stroke map of every level: ``encode_stroke_map(layers_k, levels)`` (sec. 4.2).
 
@@ -67,8 +72,7 @@ def stroke_map_pyramid(strokes: StrokeSet) -> MipPyramid:
     -------
     MipPyramid of (rows_k, cols_k) float32 screens in [0, 1]
     """
-    if not isinstance(strokes, StrokeSet):
-        raise TypeError(f"strokes: expected a StrokeSet, got {type(strokes).__name__}")
+    _check(strokes)
     levels = tuple(
         np.asarray(halftone.encode_stroke_map(lay, levels=strokes.levels), dtype=np.float32)
         for lay in strokes.layers
@@ -78,8 +82,7 @@ def stroke_map_pyramid(strokes: StrokeSet) -> MipPyramid:
 
 def normal_pyramid(strokes: StrokeSet) -> MipPyramid | None:
     """The encoded normal maps as a 3-channel pyramid (None when the set has none)."""
-    if not isinstance(strokes, StrokeSet):
-        raise TypeError(f"strokes: expected a StrokeSet, got {type(strokes).__name__}")
+    _check(strokes)
     if strokes.normals is None:
         return None
     return MipPyramid(tuple(np.asarray(n, dtype=np.float32) for n in strokes.normals))
