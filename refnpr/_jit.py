@@ -32,6 +32,7 @@ This module imports nothing of refnpr and may be imported by every subpackage.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import itertools
 import os
@@ -44,17 +45,10 @@ import warnings
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
+from numba._dispatcher import compute_fingerprint as _fingerprint
 from numba.core import caching as _numba_caching
 from numba.core import config as _numba_config
 from numba.core.typing.typeof import Purpose as _Purpose
-
-try:
-    from numba._dispatcher import compute_fingerprint as _fingerprint
-except ImportError:  # a numba without it: call_banded falls back on the dispatcher
-
-    def _fingerprint(args):
-        raise NotImplementedError
-
 
 try:
     import fcntl
@@ -157,12 +151,6 @@ def _no_locator(exc: RuntimeError) -> bool:
     return "no locator available" in str(exc)
 
 
-def _jit(func, flags: dict):
-    kernel = _jit_cached(func, flags)
-    _track_dependencies(kernel)
-    return kernel
-
-
 def _jit_cached(func, flags: dict):
     try:
         return numba.njit(**flags)(func)
@@ -197,8 +185,7 @@ def _jit_cached(func, flags: dict):
     return numba.njit(**{**flags, "cache": False})(func)
 
 
-# --------------------------------------------------------------------------------------------
-# Cache entries keyed on the sources a kernel calls into.
+# -- Cache entries keyed on the sources a kernel calls into.
 
 
 def _dispatchers_in(value, names: frozenset[str]) -> list:
@@ -298,14 +285,14 @@ def _track_dependencies(dispatcher) -> None:
 
 def njit(func=None, **overrides):
     """Serial numba kernel with refnpr's flags (``@njit`` or ``@njit(boundscheck=True)``)."""
-    flags = {**JIT_FLAGS, **overrides}
     if func is None:
-        return lambda f: _jit(f, flags)
-    return _jit(func, flags)
+        return lambda f: njit(f, **overrides)
+    kernel = _jit_cached(func, {**JIT_FLAGS, **overrides})
+    _track_dependencies(kernel)
+    return kernel
 
 
-# --------------------------------------------------------------------------------------------
-# Banded kernels: a serial nogil kernel run over contiguous bands of its loop on Python threads.
+# -- Banded kernels: a serial nogil kernel run over contiguous bands of its loop on Python threads.
 
 #: Worker threads shared by every banded kernel (created on first use, dropped in a forked child).
 _POOL: list[ThreadPoolExecutor] = []
@@ -387,7 +374,7 @@ def run_bands(body, n: int, args: tuple, parts: int | None = None) -> None:
 
     pool = _pool()
     # pool threads besides the caller: one per further numba thread, and at least one where
-    # the caller asked for several bands on one thread (``parts``), as before
+    # the caller asked for several bands on one thread (``parts``)
     helpers = min(len(bounds), max(threads, 2)) - 1
     futures = [pool.submit(work) for _ in range(helpers)]
     work()
@@ -409,11 +396,7 @@ class Banded:
         self.count = count
         self.parts = parts
         self.py_func = body.py_func
-        self.__name__ = body.py_func.__name__
-        self.__qualname__ = body.py_func.__qualname__
-        self.__module__ = body.py_func.__module__
-        self.__doc__ = body.py_func.__doc__
-        self.__wrapped__ = body.py_func
+        functools.update_wrapper(self, body.py_func)
 
     def __call__(self, *args):
         run_bands(self.body, int(self.count(*args)), args, self.parts)
@@ -487,8 +470,7 @@ def call_banded(kernel, *args):
     run_bands(entry, int(kernel.count(*args)), args, kernel.parts)
 
 
-# --------------------------------------------------------------------------------------------
-# Kernels specialised to the modes a frame uses.
+# -- Kernels specialised to the modes a frame uses.
 
 
 def specialised(factory):
@@ -530,16 +512,10 @@ def specialised(factory):
         return kernel
 
     get.kernels = kernels
-    get.__name__ = factory.__name__
-    get.__qualname__ = factory.__qualname__
-    get.__module__ = factory.__module__
-    get.__doc__ = factory.__doc__
-    get.__wrapped__ = factory
-    return get
+    return functools.update_wrapper(get, factory)
 
 
-# --------------------------------------------------------------------------------------------
-# A device function inlined into a hot loop.
+# -- A device function inlined into a hot loop.
 
 _INLINE_COPIES: dict = {}
 _INLINE_LOCK = threading.RLock()
@@ -569,10 +545,8 @@ def inline_copy(func, keep=()):
             value = scope.get(name)
             if isinstance(value, numba.core.dispatcher.Dispatcher) and value not in keep:
                 scope[name] = inline_copy(value, keep)
+        # name, qualname, docstring and module come with the code object and the globals
         clone = types.FunctionType(py.__code__, scope, py.__name__, py.__defaults__, py.__closure__)
-        clone.__qualname__ = py.__qualname__
-        clone.__module__ = py.__module__
-        clone.__doc__ = py.__doc__
         flags = {**JIT_FLAGS, "cache": False, "inline": "always"}
         copy = _INLINE_COPIES[key] = numba.njit(**flags)(clone)
         return copy

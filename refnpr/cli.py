@@ -53,61 +53,16 @@ def _bar(fraction: float, width: int = 30) -> str:
     return "#" * filled + "-" * (width - filled)
 
 
-class _Progress:
-    """A stderr progress bar that appears only once a render has taken more than a second."""
-
-    def __init__(self, stream=sys.stderr, delay: float = 1.0) -> None:
-        self.stream, self.delay = stream, delay
-        self.start = time.perf_counter()
-        self.phase, self.fraction = "start", 0.0
-        self._done = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._shown = False
-        self._thread.start()
-
-    def __call__(self, phase: str, fraction: float) -> None:
-        self.phase, self.fraction = phase, fraction
-
-    def _draw(self) -> None:
-        elapsed = time.perf_counter() - self.start
-        self.stream.write(f"\r[{_bar(self.fraction)}] {self.phase:10s} {elapsed:6.1f}s")
-        self.stream.flush()
-        self._shown = True
-
-    def _run(self) -> None:
-        if self._done.wait(self.delay):
-            return
-        while not self._done.wait(0.2):
-            self._draw()
-
-    def close(self) -> None:
-        self._done.set()
-        self._thread.join()
-        if self._shown:
-            self.fraction, self.phase = 1.0, "done"
-            self._draw()
-            self.stream.write("\n")
-
-
-class _FrameProgress:
-    """A one-line stderr progress bar for `refnpr animate`: frame i/N, frames per second, ETA."""
+class _Line:
+    """A progress line on stderr, rewritten in place (``\\r``) and ended by :meth:`close`."""
 
     def __init__(self, stream=None) -> None:
         self.stream = sys.stderr if stream is None else stream
         self.start = time.perf_counter()
-        self.rendered = 0
         self._shown = False
 
-    def __call__(self, done: int, total: int, frame: int, status: str) -> None:
-        self.rendered += status == "rendered"
-        elapsed = time.perf_counter() - self.start
-        fps = self.rendered / elapsed if elapsed > 0 and self.rendered else 0.0
-        eta = f"{(total - done) / fps:6.0f}s" if fps > 0 else "     ?"
-        what = "(state) " if status == "state" else ""
-        bar = _bar(done / total if total else 1.0)
-        self.stream.write(
-            f"\r[{bar}] frame {done}/{total} {what}(#{frame}) {fps:5.2f} fps  ETA {eta}"
-        )
+    def _draw(self, fraction: float, text: str) -> None:
+        self.stream.write(f"\r[{_bar(fraction)}] {text}")
         self.stream.flush()
         self._shown = True
 
@@ -117,10 +72,62 @@ class _FrameProgress:
             self.stream.flush()
 
 
-def _style_params(pairs: list[tuple[str, object]]) -> dict[str, object]:
-    """--param pairs as a dict: each key once, and never the style's name."""
+class _Progress(_Line):
+    """A render's progress bar, shown only once the render has taken more than a second."""
+
+    def __init__(self, stream=None, delay: float = 1.0) -> None:
+        super().__init__(stream)
+        self.delay, self.phase, self.fraction = delay, "start", 0.0
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def __call__(self, phase: str, fraction: float) -> None:
+        self.phase, self.fraction = phase, fraction
+
+    def _show(self) -> None:
+        elapsed = time.perf_counter() - self.start
+        self._draw(self.fraction, f"{self.phase:10s} {elapsed:6.1f}s")
+
+    def _run(self) -> None:
+        if self._done.wait(self.delay):
+            return
+        while not self._done.wait(0.2):
+            self._show()
+
+    def close(self) -> None:
+        self._done.set()
+        self._thread.join()
+        if self._shown:
+            self.fraction, self.phase = 1.0, "done"
+            self._show()
+        super().close()
+
+
+class _FrameProgress(_Line):
+    """`refnpr animate`'s progress bar: frame i/N, frames per second, ETA."""
+
+    rendered = 0
+
+    def __call__(self, done: int, total: int, frame: int, status: str) -> None:
+        self.rendered += status == "rendered"
+        elapsed = time.perf_counter() - self.start
+        fps = self.rendered / elapsed if elapsed > 0 and self.rendered else 0.0
+        eta = f"{(total - done) / fps:6.0f}s" if fps > 0 else "     ?"
+        what = "(state) " if status == "state" else ""
+        text = f"frame {done}/{total} {what}(#{frame}) {fps:5.2f} fps  ETA {eta}"
+        self._draw(done / total if total else 1.0, text)
+
+
+def _style_params(args: argparse.Namespace) -> dict[str, object]:
+    """--style checked, and the --param pairs as a dict: each key once, never the style's name."""
+    if args.style is not None and not args.style.strip():
+        raise ValueError(
+            f"--style: expected a style name, got {args.style!r}; list them with `refnpr styles`, "
+            "or leave --style out to use the scene's own style"
+        )
     params: dict[str, object] = {}
-    for key, value in pairs:
+    for key, value in args.param or []:
         if key == "name":
             raise ValueError(
                 f"--param: 'name' is not a style parameter (got name={value!r}); choose the "
@@ -134,29 +141,25 @@ def _style_params(pairs: list[tuple[str, object]]) -> dict[str, object]:
     return params
 
 
-def _scene_and_style(args: argparse.Namespace) -> tuple[object, dict | None]:
-    """The scene of --scene and the style of --style/--param (None: the scene's own), the
-    options checked before the scene is loaded."""
-    from .scenes import load_scene
-
-    if args.style is not None and not args.style.strip():
+def _with_params(style: dict | None, params: dict, scene: str) -> dict:
+    """The scene's own style table with the --param values (no --style given)."""
+    if not style:
         raise ValueError(
-            f"--style: expected a style name, got {args.style!r}; list them with `refnpr styles`, "
-            "or leave --style out to use the scene's own style"
-        )
-    params = _style_params(args.param or [])
-    scene = load_scene(args.scene)
-    if not (args.style or params):
-        return scene, None
-    if args.style:
-        return scene, {"name": args.style, **params}
-    base = dict(scene.style or {})
-    if not base:
-        raise ValueError(
-            f"--param needs --style: the scene {args.scene!r} names no style; "
+            f"--param needs --style: the scene {scene!r} names no style; "
             "add --style NAME (list them with `refnpr styles`)"
         )
-    return scene, {**base, **params}
+    return {**style, **params}
+
+
+def _scene_and_style(args: argparse.Namespace) -> tuple[object, dict | None]:
+    """The scene of --scene and the style of --style/--param (None: the scene's own)."""
+    from .scenes import load_scene
+
+    params = _style_params(args)
+    scene = load_scene(args.scene)
+    if args.style:
+        return scene, {"name": args.style, **params}
+    return scene, _with_params(scene.style, params, args.scene) if params else None
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
@@ -439,6 +442,13 @@ def _add_style_options(p: argparse.ArgumentParser, style_help: str) -> None:
     )
 
 
+def _add_suite_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
+    )
+    p.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
+
+
 def _add_cluster_options(parser: argparse.ArgumentParser) -> None:
     where = parser.add_mutually_exclusive_group()
     where.add_argument(
@@ -542,10 +552,7 @@ def build_parser() -> argparse.ArgumentParser:
     mode = g.add_mutually_exclusive_group()
     mode.add_argument("--check", action="store_true", help="re-render and compare (default)")
     mode.add_argument("--update", action="store_true", help="re-render and overwrite")
-    g.add_argument(
-        "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
-    )
-    g.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
+    _add_suite_options(g)
     _add_cluster_options(g)
     g.set_defaults(func=_cmd_golden)
 
@@ -583,10 +590,7 @@ def build_parser() -> argparse.ArgumentParser:
     ksub = kit.add_subparsers(dest="kit_command", required=True)
     ke = ksub.add_parser("export", help="write the conformance kit of the golden suite to DIR")
     ke.add_argument("dir", help="kit directory (created; existing cases are replaced)")
-    ke.add_argument(
-        "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
-    )
-    ke.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
+    _add_suite_options(ke)
     ke.add_argument("-q", "--quiet", action="store_true", help="no line per case")
     ke.set_defaults(func=_cmd_kit_export)
     kc = ksub.add_parser("check", help="compare a backend's renders with a kit")

@@ -70,18 +70,11 @@ def load_image(path: str | Path, *, what: str = "image") -> np.ndarray:
         unsupported pixel type or channel count.
     """
     a = read_image_file(path, what=what)
-    if a.dtype == np.bool_:
-        f = a.astype(np.float64)
-    elif a.dtype == np.uint8:
-        f = a.astype(np.float64) / 255.0
-    elif a.dtype == np.uint16:
-        f = a.astype(np.float64) / 65535.0
-    elif a.dtype.kind == "f":
-        f = a.astype(np.float64)
-    else:
+    if a.dtype not in (np.bool_, np.uint8, np.uint16) and a.dtype.kind != "f":
         raise ValueError(
             f"{what}: {str(path)!r} has unsupported pixel type {a.dtype}; write 8- or 16-bit PNG"
         )
+    f = a.astype(np.float64) / (np.iinfo(a.dtype).max if a.dtype.kind == "u" else 1.0)
     if f.ndim == 2:
         f = f[..., None]
     if f.ndim != 3 or not 1 <= f.shape[2] <= 4:
@@ -89,9 +82,7 @@ def load_image(path: str | Path, *, what: str = "image") -> np.ndarray:
             f"{what}: {str(path)!r} has shape {a.shape}; expected a single gray, gray + alpha, "
             "RGB or RGBA image"
         )
-    if f.shape[2] == 1:
-        f = np.repeat(f, 3, axis=2)
-    if f.shape[2] == 2:  # gray + alpha
+    if f.shape[2] <= 2:  # gray (+ alpha)
         f = np.concatenate([np.repeat(f[..., :1], 3, axis=2), f[..., 1:]], axis=2)
     if f.shape[2] == 3:
         f = np.concatenate([f, np.ones(f.shape[:2] + (1,))], axis=2)
@@ -113,10 +104,9 @@ def difference_image(
     d = cand[..., :3].mean(axis=-1) - ref[..., :3].mean(axis=-1)
     mag = np.clip(np.abs(cand - ref).max(axis=-1) * gain, 0, 1)
     base = 0.25 * ref[..., :3].mean(axis=-1)
-    out = np.stack([base, base, base], axis=-1)
-    out[..., 0] = np.where(d >= 0, np.maximum(base, mag), base)
-    out[..., 2] = np.where(d < 0, np.maximum(base, mag), base)
-    out[..., 1] = np.where(mag > 0, base * (1 - mag), base)
+    hi = np.maximum(base, mag)
+    red, blue = np.where(d >= 0, hi, base), np.where(d < 0, hi, base)
+    out = np.stack([red, np.where(mag > 0, base * (1 - mag), base), blue], axis=-1)
     return np.rint(np.clip(out, 0, 1) * 255).astype(np.uint8)
 
 
@@ -129,12 +119,8 @@ def compare_images(
     if not (isinstance(tolerance, (int, float)) and 0.0 <= tolerance <= 1.0):
         raise ValueError(f"tolerance: expected a number in [0, 1], got {tolerance!r}")
     if reference.shape != candidate.shape:
-        return ImageMetrics.failed(
-            name,
-            tolerance,
-            "size",
-            f"sizes differ: reference {_wxh(reference)}, candidate {_wxh(candidate)}",
-        )
+        why = f"sizes differ: reference {_wxh(reference)}, candidate {_wxh(candidate)}"
+        return ImageMetrics.failed(name, tolerance, "size", why)
     ref, cand = _flatten(reference), _flatten(candidate)
     diff = np.abs(cand - ref)
     lum_r, lum_c = luminance(ref), luminance(cand)
@@ -210,13 +196,11 @@ def compare_dirs(
             continue
         m = compare_images(ref, cand, name=stem, tolerance=tolerance)
         if m.status == "size":
-            m = replace(
-                m,
-                message=(
-                    f"sizes differ: reference {str(ref_path)!r} is {_wxh(ref)}, "
-                    f"candidate {str(cand_path)!r} is {_wxh(cand)}"
-                ),
+            why = (
+                f"sizes differ: reference {str(ref_path)!r} is {_wxh(ref)}, "
+                f"candidate {str(cand_path)!r} is {_wxh(cand)}"
             )
+            m = replace(m, message=why)
         results.append(m)
         if out_dir is not None and m.status == "ok":
             write_png_atomic(Path(out_dir) / f"{stem}.diff.png", difference_image(ref, cand))

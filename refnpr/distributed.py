@@ -269,17 +269,24 @@ def render_sequence(
 # -- golden cases -------------------------------------------------------------------------------
 
 
-def _case_renderer(client: Any, catch: bool) -> Any:
-    def render_cases(cases: Sequence[Any]) -> Iterator[tuple[int, Any, str | None]]:
-        futures = [client.submit(_golden._render, case, catch, pure=False) for case in cases]
-        index = {fut.key: i for i, fut in enumerate(futures)}
-        with contextlib.closing(_as_completed(client, futures)) as arrived:
-            for fut in arrived:
-                got, error = fut.result()
-                fut.release()
-                yield index[fut.key], got, error
+def _golden_on_cluster(run: Any, suite_path: Any, where: tuple, catch: bool, **kwargs: Any) -> Any:
+    """``run`` (golden.check_suite / update_suite) with its cases rendered on the cluster of
+    ``where`` (workers, scheduler, client); ``catch``: render errors as check_suite words them."""
+    workers, scheduler, client = where
+    _check_workers(workers, scheduler)
+    _golden.load_suite(suite_path)  # a bad suite fails before a cluster starts
+    with _client_for(client, workers, scheduler) as c:
 
-    return render_cases
+        def render_cases(cases: Sequence[Any]) -> Iterator[tuple[int, Any, str | None]]:
+            futures = [c.submit(_golden._render, case, catch, pure=False) for case in cases]
+            index = {fut.key: i for i, fut in enumerate(futures)}
+            with contextlib.closing(_as_completed(c, futures)) as arrived:
+                for fut in arrived:
+                    got, error = fut.result()
+                    fut.release()
+                    yield index[fut.key], got, error
+
+        return run(suite_path, render_cases=render_cases, **kwargs)
 
 
 def check_suite(
@@ -294,15 +301,10 @@ def check_suite(
     """:func:`refnpr.golden.check_suite` with the cases rendered on a Dask cluster (``workers``,
     ``scheduler``, ``client``: as for :func:`render_sequence`); the comparison runs on the client,
     so results (in suite order), messages and failure images are the serial check's."""
-    _check_workers(workers, scheduler)
-    _golden.load_suite(suite_path)  # a bad suite fails before a cluster starts
-    with _client_for(client, workers, scheduler) as c:
-        return _golden.check_suite(
-            suite_path,
-            only=only,
-            failure_dir=failure_dir,
-            render_cases=_case_renderer(c, catch=True),
-        )
+    where = (workers, scheduler, client)
+    return _golden_on_cluster(
+        _golden.check_suite, suite_path, where, True, only=only, failure_dir=failure_dir
+    )
 
 
 def update_suite(
@@ -317,9 +319,5 @@ def update_suite(
     """:func:`refnpr.golden.update_suite` with the cases rendered on a Dask cluster: the same
     golden files, written by the client as each case arrives (``log`` lines in completion order,
     the returned paths in suite order); a case that fails to render raises, as serially."""
-    _check_workers(workers, scheduler)
-    _golden.load_suite(suite_path)
-    with _client_for(client, workers, scheduler) as c:
-        return _golden.update_suite(
-            suite_path, only=only, log=log, render_cases=_case_renderer(c, catch=False)
-        )
+    where = (workers, scheduler, client)
+    return _golden_on_cluster(_golden.update_suite, suite_path, where, False, only=only, log=log)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import ast
 import dataclasses
 import functools
+import html
 import math
 import re
 import sys
@@ -36,7 +37,7 @@ import numpy as np
 
 from .image import Image
 from .raster import Camera
-from .render import as_scene, render
+from .render import DEFAULT_STYLE, as_scene, render
 from .styles import Style, get_style, style_from_spec
 
 __all__ = ["Explorer", "Orbit", "explore", "orbit_camera", "orbit_of", "parameter_controls"]
@@ -220,7 +221,7 @@ def parameter_controls(style: Style, spec: Mapping[str, Any] | None = None) -> d
         if name not in values:
             continue
         v = values[name]
-        common = {"description": name, "continuous_update": False, "style": _LABEL_STYLE}
+        common = _common(name)
         if isinstance(v, (bool, np.bool_)):
             controls[name] = w.Checkbox(value=bool(v), description=name, indent=False)
         elif isinstance(v, (int, np.integer)):
@@ -247,6 +248,10 @@ def parameter_controls(style: Style, spec: Mapping[str, Any] | None = None) -> d
 
 
 _LABEL_STYLE = {"description_width": "initial"}
+
+
+def _common(name: str) -> dict[str, Any]:
+    return {"description": name, "continuous_update": False, "style": _LABEL_STYLE}
 
 
 # ---------------------------------------------------------------------------- the explorer
@@ -306,15 +311,7 @@ class Explorer:
             "fov_y": (float(self.base_camera.fov_y), 5.0, 120.0, 1.0),
         }
         self.camera_controls = {
-            name: w.FloatSlider(
-                value=v,
-                min=lo,
-                max=hi,
-                step=step,
-                description=name,
-                continuous_update=False,
-                style=_LABEL_STYLE,
-            )
+            name: w.FloatSlider(value=v, min=lo, max=hi, step=step, **_common(name))
             for name, (v, lo, hi, step) in sliders.items()
         }
         self.image = w.Image(format="png", width=width, height=height)
@@ -333,14 +330,9 @@ class Explorer:
     def current_spec(self) -> dict[str, Any]:
         """The style table the controls stand for: the starting table plus every change."""
         changed = {k: c.value for k, c in self.controls.items() if c.value != self._start[k]}
-        spec = dict(self.spec)
-        if spec.get("name") == "contoured":
-            base = spec.get("base", "toon")
-            base = {"name": base} if isinstance(base, str) else dict(base)
-            spec["base"] = {**base, **changed}
-        else:
-            spec.update(changed)
-        return spec
+        if self.spec.get("name") == "contoured":
+            return {**self.spec, "base": {**_base_table(self.spec), **changed}}
+        return {**self.spec, **changed}
 
     def current_camera(self) -> Camera:
         """The camera the camera sliders stand for."""
@@ -356,7 +348,7 @@ class Explorer:
             camera = self.current_camera()
             img = render(self.scene, style, self.width, self.height, self.spp, camera=camera)
         except (TypeError, ValueError) as exc:
-            self.status.value = f"<span style='color:#b00'>{_html(str(exc))}</span>"
+            self.status.value = f"<span style='color:#b00'>{html.escape(str(exc), False)}</span>"
             return None
         self.style, self.camera, self.last = style, camera, img
         self.image.value = img.to_png_bytes()
@@ -366,13 +358,8 @@ class Explorer:
     def _on_change(self, change: Any) -> None:
         self.render()
 
-    def _repr_mimebundle_(self, **kwargs: Any) -> Any:
+    def _repr_mimebundle_(self, **kwargs: Any) -> Any:  # a notebook displays the widget
         return self.widget._repr_mimebundle_(**kwargs)
-
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
-
-        display(self.widget)
 
 
 def explore(scene: Any, style: Any = None, **options: Any) -> Explorer:
@@ -409,8 +396,6 @@ def explore(scene: Any, style: Any = None, **options: Any) -> Explorer:
 def _spec_of(style: Any, scene: Any) -> dict[str, Any]:
     """The style as a table ``{"name": ..., **params}`` that rebuilds it."""
     if style is None:
-        from .render import DEFAULT_STYLE
-
         style = getattr(scene, "style", None) or DEFAULT_STYLE
     if isinstance(style, str):
         return {"name": style}
@@ -439,16 +424,15 @@ def _params_only(spec: Any) -> dict[str, Any]:
     return {k: v for k, v in dict(spec).items() if k not in ("name", "contours")}
 
 
+def _base_table(spec: Mapping[str, Any]) -> dict[str, Any]:
+    """A contoured style table's base style as a table."""
+    base = spec.get("base", "toon")
+    return {"name": base} if isinstance(base, str) else dict(base)
+
+
 def _params_of_spec(spec: Mapping[str, Any]) -> dict[str, Any]:
     """The parameters of a style table (a contoured style's: its base's)."""
-    if spec.get("name") == "contoured":
-        base = spec.get("base", "toon")
-        spec = {} if isinstance(base, str) else base
-    return _params_only(spec)
-
-
-def _html(text: str) -> str:
-    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return _params_only(_base_table(spec) if spec.get("name") == "contoured" else spec)
 
 
 class _CallableModule(types.ModuleType):

@@ -45,7 +45,7 @@ Suite format::
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -151,13 +151,8 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
         if set(inc_data) - {"case"}:
             raise ValueError(f"{inc_path}: an included file holds only [[case]] tables")
         raw_cases += list(inc_data.get("case", []))
-    defaults = dict(_DEFAULTS)
-    for key, value in data.get("defaults", {}).items():
-        if key not in _DEFAULTS:
-            raise ValueError(
-                f"{path}: [defaults] unknown key {key!r}; valid keys: {sorted(_DEFAULTS)}"
-            )
-        defaults[key] = value
+    _check_keys(data.get("defaults", {}), f"{path}: [defaults]")
+    defaults = {**_DEFAULTS, **data.get("defaults", {})}
     cases, seen = [], set()
     for i, raw in enumerate(raw_cases):
         raw = dict(raw)
@@ -174,11 +169,7 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
             raise ValueError(
                 f"{path}: case {name!r}: 'scene' (a built-in name or .toml path) is required"
             )
-        for key in raw:
-            if key not in _DEFAULTS:
-                raise ValueError(
-                    f"{path}: case {name!r}: unknown key {key!r}; valid keys: {sorted(_DEFAULTS)}"
-                )
+        _check_keys(raw, f"{path}: case {name!r}:")
         params = {**defaults, **raw}
         _check_case(path, name, params)
         if params["kind"] not in ("image", "gbuffer"):
@@ -191,6 +182,12 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
     if not cases:
         raise ValueError(f"{path}: the suite has no [[case]] entries")
     return cases
+
+
+def _check_keys(table: dict[str, Any], where: str) -> None:
+    for key in table:
+        if key not in _DEFAULTS:
+            raise ValueError(f"{where} unknown key {key!r}; valid keys: {sorted(_DEFAULTS)}")
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
@@ -256,19 +253,14 @@ def _render(case: GoldenCase, catch: bool) -> tuple[Any, str | None]:
     return render_or_error(case) if catch else (render_case(case), None)
 
 
-def _serial(catch: bool) -> RenderCases:
-    def render_cases(cases: Sequence[GoldenCase]) -> Iterator[tuple[int, Any, str | None]]:
-        for i, case in enumerate(cases):
-            yield i, *_render(case, catch)
-
-    return render_cases
-
-
 @contextmanager
 def _renders(render_cases: RenderCases | None, cases: list[GoldenCase], catch: bool):
-    """The renders of ``cases``, closed when the block ends: a generator of renders elsewhere
-    cancels what is left (errors, Ctrl-C)."""
-    renders = iter((render_cases or _serial(catch))(cases))
+    """The renders of ``cases`` (here, one after another, without ``render_cases``), closed when
+    the block ends: a generator of renders elsewhere cancels what is left (errors, Ctrl-C)."""
+    if render_cases is None:
+        renders = ((i, *_render(case, catch)) for i, case in enumerate(cases))
+    else:
+        renders = iter(render_cases(cases))
     try:
         yield renders
     finally:
@@ -418,14 +410,12 @@ def _check_case_render(case: GoldenCase, target: Path, got: Any, fail_root: Path
     m = compare_images(ref, cand, name=case.name, tolerance=case.tolerance)
     if m.status == "size":
         gh, gw = ref.shape[:2]
-        return CaseResult(
-            case.name,
-            False,
+        why = (
             f"size: golden file {str(target)!r} is {gw}x{gh} but the case renders "
             f"{case.width}x{case.height}; if the suite's size changed on purpose, "
-            "run `refnpr golden --update`",
-            m,
+            "run `refnpr golden --update`"
         )
+        return CaseResult(case.name, False, why, m)
     ok = m.passes(max_frac_over=case.max_frac_over, min_ssim=case.min_ssim)
     if not ok:
         d = fail_root / case.name

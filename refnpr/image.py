@@ -72,14 +72,10 @@ def read_image_file(path: str | os.PathLike, *, what: str = "image") -> np.ndarr
         raise ValueError(f"{what}: {shown!r} is a directory; expected {IMAGE_FORMATS} file")
     if not p.exists():
         raise ValueError(f"{what}: file {shown!r} does not exist; expected {IMAGE_FORMATS} file")
+    if p.stat().st_size == 0:
+        raise ValueError(f"{what}: {shown!r} is an empty file; expected {IMAGE_FORMATS}")
     try:
-        if p.stat().st_size == 0:
-            raise ValueError(f"{what}: {shown!r} is an empty file; expected {IMAGE_FORMATS}")
         return np.asarray(iio.imread(p))
-    except ValueError as exc:
-        if str(exc).startswith(f"{what}: "):
-            raise
-        reason = _decode_reason(exc)
     except Exception as exc:  # noqa: BLE001 -- imageio and its plugins raise many types
         reason = _decode_reason(exc)
     raise ValueError(f"{what}: cannot read {shown!r}: {reason}; expected {IMAGE_FORMATS}") from None

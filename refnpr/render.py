@@ -47,8 +47,7 @@ def as_scene(scene: Any):
 
 
 def _still(scene: Any):
-    """An animated scene rendered as a still is its frame 0 (a still is frame 0 of a one-frame
-    sequence); a still scene is itself."""
+    """The still a render draws: an animated scene's frame 0, else the scene itself."""
     return scene.at(0) if getattr(scene, "animation", None) is not None else scene
 
 
@@ -322,9 +321,8 @@ class RenderContext:
             The frame's style (default: the context's).
         state : any
             The state from the previous frame (``style.initial_state()`` on the first).
-        progress, copy : as for :meth:`render`.
-        return_gbuffer : bool
-            Also return the G-buffer (the context's: overwritten by the next frame).
+        progress, return_gbuffer, copy
+            As for :meth:`render`.
 
         Returns
         -------

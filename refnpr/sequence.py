@@ -130,8 +130,8 @@ def frame_range(frames: Any, count: int) -> range:
 
 def is_stateful(style: Style) -> bool:
     """Whether ``style`` carries state from frame to frame: exactly when its
-    :meth:`~refnpr.styles.Style.initial_state` is not None (overriding ``shade_frame`` alone
-    says nothing: the contour layer passes it through to its base)."""
+    :meth:`~refnpr.styles.Style.initial_state` is not None (not whether it overrides
+    ``shade_frame``: the contour layer passes that through to its base)."""
     return style.initial_state() is not None
 
 
@@ -203,18 +203,12 @@ def _write_exr(path: Path, rgba: np.ndarray) -> None:
             f.write(str(tmp))
 
 
-def _style_tracks(scene: Any) -> list[str]:
+def _check_style_tracks(scene: Any, spec: Any, style: Style, user_style: bool) -> list[str]:
+    """The parameters the scene's style tracks animate, each one the style takes."""
     anim = scene.animation
-    if anim is None:
-        return []
-    return [t.parts[2] for t in anim.tracks if t.parts[0] == "style"]
-
-
-def _check_style_tracks(scene: Any, spec: Any, style: Style, user_style: bool) -> None:
-    """Each style track's parameter must be one the style takes."""
-    params = _style_tracks(scene)
+    params = [t.parts[2] for t in anim.tracks if t.parts[0] == "style"] if anim is not None else []
     if not params:
-        return
+        return params
     if isinstance(spec, Style):
         raise TypeError(
             f"style: scene {scene.name!r} animates style parameters ({', '.join(params)}), "
@@ -239,6 +233,7 @@ def _check_style_tracks(scene: Any, spec: Any, style: Style, user_style: bool) -
                     else f"remove the track or give [style] a style that takes {p!r}"
                 )
             )
+    return params
 
 
 @dataclass
@@ -327,8 +322,7 @@ def _plan(
     user_style = style is not None
     spec = style if user_style else (scene.style or DEFAULT_STYLE)
     base_style = style_from_spec(spec)
-    _check_style_tracks(scene, spec, base_style, user_style)
-    animated_style = bool(_style_tracks(scene))
+    animated_style = bool(_check_style_tracks(scene, spec, base_style, user_style))
     if isinstance(spec, str):
         spec = {"name": spec}
     out.mkdir(parents=True, exist_ok=True)
@@ -378,11 +372,7 @@ class _Shader:
 
 
 def _write_frame(
-    plan: _Plan,
-    f: int,
-    png: bytes,
-    rgba: np.ndarray | None,
-    extra: dict[str, Any] | None = None,
+    plan: _Plan, f: int, png: bytes, rgba: np.ndarray | None, extra: dict[str, Any] | None = None
 ) -> None:
     """Write frame ``f``: its PNG (and EXR from ``rgba``), then its record, each atomically.
 

@@ -113,25 +113,19 @@ def warm(
     rows = list(rows)
     work = _jobs(rows)
     groups = _groups(rows)
-    if jobs == 1 or len(groups) < 2:
-        times: dict[str, float] = {}
-        for i, job in enumerate(work):
-            if progress is not None:
-                progress(_label(*job), i / len(work))
-            times[_label(*job)] = _render_job(*job)
-        if progress is not None:
-            progress("done", 1.0)
-        return times
+    tell = progress or (lambda label, fraction: None)
     done: dict[str, float] = {}
-    ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(min(jobs, len(groups)), mp_context=ctx) as pool:
-        futures = [pool.submit(_warm_group, group) for group in groups]
-        for fut in as_completed(futures):
-            part = fut.result()
-            done.update(part)
-            if progress is not None:
+    if jobs == 1 or len(groups) < 2:
+        for i, job in enumerate(work):
+            tell(_label(*job), i / len(work))
+            done[_label(*job)] = _render_job(*job)
+    else:
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(min(jobs, len(groups)), mp_context=ctx) as pool:
+            for fut in as_completed([pool.submit(_warm_group, group) for group in groups]):
+                part = fut.result()
+                done.update(part)
                 for label in part:
-                    progress(label, len(done) / len(work))
-    if progress is not None:
-        progress("done", 1.0)
+                    tell(label, len(done) / len(work))
+    tell("done", 1.0)
     return {_label(*job): done[_label(*job)] for job in work}

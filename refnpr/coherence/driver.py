@@ -14,7 +14,7 @@ from ..styles import Style, style_from_spec
 from .metrics import pair_metrics
 from .motion import DEPTH_RTOL, MOTION_CHANNELS, motion_field
 from .report import CoherenceReport
-from .strokes import _scenes, frame_stroke_ends_from, stroke_pair_metrics, stroke_style
+from .strokes import _scenes, frame_stroke_ends, stroke_pair_metrics, stroke_style
 
 __all__ = ["measure", "render_frame"]
 
@@ -142,9 +142,7 @@ def measure(
             stroker = stroke_style(frame_style)
             if t == 0:
                 stroke_state = stroker.initial_state()
-            ends, sgb, stroke_state = frame_stroke_ends_from(
-                stroker, scene, width, height, stroke_state
-            )
+            ends, sgb, stroke_state = frame_stroke_ends(stroker, scene, width, height, stroke_state)
             if prev_ends is not None:
                 row = stroke_pair_metrics(ends, *prev_ends, scene, prev_scene, frame=frames[t])
                 stroke_rows.append(row)

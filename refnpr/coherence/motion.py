@@ -156,11 +156,9 @@ def _relative_transforms(scene: Any, prev_scene: Any) -> np.ndarray:
                 "sequence keep their meshes"
             )
     rel = np.empty_like(t_now)
-    for i in range(t_now.shape[0]):
-        if np.array_equal(t_now[i], t_prev[i]):
-            rel[i] = np.eye(4)  # exact: a still object maps every point onto itself
-        else:
-            rel[i] = t_prev[i] @ np.linalg.inv(t_now[i])
+    for i, (now, prev) in enumerate(zip(t_now, t_prev, strict=True)):
+        # exact for a still object: it maps every point onto itself
+        rel[i] = np.eye(4) if np.array_equal(now, prev) else prev @ np.linalg.inv(now)
     return rel
 
 
@@ -184,14 +182,10 @@ def bilinear_taps(xy: np.ndarray, width: int, height: int) -> tuple[np.ndarray, 
     weights : (4, ...) float64
         Bilinear weights, summing to 1.
     """
-    fx = xy[..., 0] - 0.5
-    fy = xy[..., 1] - 0.5
-    x0 = np.floor(fx)
-    y0 = np.floor(fy)
-    ax = fx - x0
-    ay = fy - y0
-    x0 = x0.astype(np.int64)
-    y0 = y0.astype(np.int64)
+    fx, fy = xy[..., 0] - 0.5, xy[..., 1] - 0.5
+    x0, y0 = np.floor(fx), np.floor(fy)
+    ax, ay = fx - x0, fy - y0
+    x0, y0 = x0.astype(np.int64), y0.astype(np.int64)
     cols = (np.clip(x0, 0, width - 1), np.clip(x0 + 1, 0, width - 1))
     rows = (np.clip(y0, 0, height - 1), np.clip(y0 + 1, 0, height - 1))
     taps = np.stack([r * width + c for r in rows for c in cols])  # TL, TR, BL, BR
@@ -200,12 +194,7 @@ def bilinear_taps(xy: np.ndarray, width: int, height: int) -> tuple[np.ndarray, 
 
 
 def motion_field(
-    gb: Any,
-    prev_gb: Any,
-    scene: Any,
-    prev_scene: Any,
-    *,
-    depth_rtol: float = DEPTH_RTOL,
+    gb: Any, prev_gb: Any, scene: Any, prev_scene: Any, *, depth_rtol: float = DEPTH_RTOL
 ) -> MotionField:
     """The exact motion field of frame t with respect to frame t-1, and the valid mask M.
 

@@ -261,35 +261,27 @@ def stroke_style(style: Any) -> Any | None:
 
 
 def frame_stroke_ends(
-    style: Any, scene: Any, width: int, height: int, run_kwargs: dict | None = None
-) -> tuple[StrokeEnds, Any]:
-    """Rasterize one frame for a stroke style and return its drawn stroke ends and G-buffer.
+    style: Any,
+    scene: Any,
+    width: int,
+    height: int,
+    state: Any = None,
+    run_kwargs: dict | None = None,
+) -> tuple[StrokeEnds, Any, Any]:
+    """Rasterize one frame for a stroke style: its drawn stroke ends, G-buffer and next state.
 
     The G-buffer is at spp 1 (float64 unless the style's ``raster_options`` name a dtype) with
-    the style's channels plus ``STROKE_CHANNELS``; the strokes come from
-    ``style.run(ctx, **run_kwargs)``.
+    the style's channels plus ``STROKE_CHANNELS``. The strokes come from
+    ``style.run_frame(ctx, state)`` (the style's state across frames: hash tables, aggregate
+    history, smoothed fits), or from ``style.run(ctx, **run_kwargs)`` when ``run_kwargs`` is
+    given or the style has no ``run_frame`` (the state passes through).
     """
-    gb = _stroke_gbuffer(style, scene, width, height)
-    return stroke_ends(style.run(ShadeContext(gb, scene), **dict(run_kwargs or {}))), gb
-
-
-def _stroke_gbuffer(style: Any, scene: Any, width: int, height: int) -> Any:
     channels = sorted(set(style.requires(scene)) | set(STROKE_CHANNELS))
     options = {"dtype": np.float64, **style.raster_options(scene)}  # the style's dtype wins
-    return rasterize(scene, None, width, height, channels, 1, **options)
-
-
-def frame_stroke_ends_from(
-    style: Any, scene: Any, width: int, height: int, state: Any
-) -> tuple[StrokeEnds, Any, Any]:
-    """:func:`frame_stroke_ends` for one frame of a sequence: the strokes of
-    ``style.run_frame(ctx, state)`` (the style's state across frames: hash tables, aggregate
-    history, smoothed fits), returned with the G-buffer and the next frame's state. A style
-    without ``run_frame`` runs statelessly (the state passes through)."""
-    gb = _stroke_gbuffer(style, scene, width, height)
+    gb = rasterize(scene, None, width, height, channels, 1, **options)
     ctx = ShadeContext(gb, scene)
-    if not hasattr(style, "run_frame"):
-        return stroke_ends(style.run(ctx)), gb, state
+    if run_kwargs is not None or not hasattr(style, "run_frame"):
+        return stroke_ends(style.run(ctx, **(run_kwargs or {}))), gb, state
     result, state = style.run_frame(ctx, state)
     return stroke_ends(result), gb, state
 
@@ -337,10 +329,7 @@ def measure_strokes(
     rows, prev = [], None
     state = strokes.initial_state() if run_kwargs is None else None
     for t, sc in enumerate(scenes):
-        if run_kwargs is None:  # the style's own state across frames
-            ends, gb, state = frame_stroke_ends_from(strokes, sc, width, height, state)
-        else:
-            ends, gb = frame_stroke_ends(strokes, sc, width, height, run_kwargs)
+        ends, gb, state = frame_stroke_ends(strokes, sc, width, height, state, run_kwargs)
         if prev is not None:
             rows.append(stroke_pair_metrics(ends, prev[0], prev[1], sc, prev[2], frame=frames[t]))
         prev = (ends, gb, sc)

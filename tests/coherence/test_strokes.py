@@ -125,7 +125,7 @@ def test_stroke_metrics_follow_the_styles_state_across_frames():
     aggregate history of average_frames=3): the same rows as threading it by hand, and not the
     rows of stateless runs."""
     from refnpr.coherence import measure
-    from refnpr.coherence.strokes import frame_stroke_ends_from
+    from refnpr.coherence.strokes import frame_stroke_ends
     from refnpr.styles import get_style
 
     anim = load_scene("tamiss_knot_orbit")
@@ -135,7 +135,7 @@ def test_stroke_metrics_follow_the_styles_state_across_frames():
     rows = measure_strokes(stills, style, w, h)
     state, by_hand, prev = style.initial_state(), [], None
     for t, sc in enumerate(stills):
-        e, gb, state = frame_stroke_ends_from(style, sc, w, h, state)
+        e, gb, state = frame_stroke_ends(style, sc, w, h, state)
         if prev is not None:
             by_hand.append(stroke_pair_metrics(e, prev[0], prev[1], sc, prev[2], frame=t))
         prev = (e, gb, sc)
