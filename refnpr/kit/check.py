@@ -96,13 +96,8 @@ class CaseCheck:
 def _matches(
     a: np.ndarray, b: np.ndarray, threshold: float, deviation: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Both directions of the fuzzy compare in one pass over the (2N + 1)^2 shifts.
-
-    Returns ``(a_matched, b_matched)``, (H, W) bool: ``a_matched[y, x]`` when some
-    ``b[y + dy, x + dx]`` (|dx|, |dy| <= N, inside the image) is within ``threshold`` of
-    ``a[y, x]`` on every channel, and ``b_matched`` the same with the roles swapped (each pair
-    of pixels is compared once and credited to both).
-    """
+    """(H, W) bool: which pixels of ``a`` and of ``b`` match a pixel of the other image within
+    ``deviation`` (both directions in one pass: each pair is compared once, credited to both)."""
     h, w = a.shape[:2]
     ca = np.ascontiguousarray(np.moveaxis(a, -1, 0))  # (C, H, W): fast per-channel planes
     cb = np.ascontiguousarray(np.moveaxis(b, -1, 0))
@@ -367,15 +362,8 @@ def _check_image(
         try:
             metrics.update(_linear_metrics(case_path, expected, exr_path, ref.shape, threshold))
         except _CaseError as exc:  # the PNG's metrics stay in the record
-            return CaseCheck(
-                name,
-                "image",
-                False,
-                exc.status,
-                f"{exc.message} (PNG: {msg})",
-                metrics,
-                tolerance=tol,
-            )
+            message = f"{exc.message} (PNG: {msg})"
+            return CaseCheck(name, "image", False, exc.status, message, metrics, tolerance=tol)
     return CaseCheck(name, "image", ok, "ok", msg, metrics=metrics, tolerance=tol)
 
 
@@ -474,23 +462,16 @@ def _check_gbuffer(
             diff = np.zeros(exp.shape)
             np.subtract(exp, got, out=diff, where=both, dtype=np.float64)
             diff = np.abs(diff)
-            rec = {
-                "kind": "float",
-                "allowed_frac": max_frac,
-                "nonfinite_mismatch": int(pattern.sum()),
-            }
+            n_pattern = int(pattern.sum())
+            rec = {"kind": "float", "allowed_frac": max_frac, "nonfinite_mismatch": n_pattern}
         bad_px = bad.any(axis=-1) if bad.ndim == 3 else bad
         n_bad = int(bad_px.sum())
         if is_discrete:
             frac, passed = n_bad / max(bad_px.size, 1), n_bad <= allowed
         else:
             passed = frac <= max_frac and not pattern.any()
-        rec.update(
-            max_abs=float(diff.max()) if diff.size else 0.0,
-            bad_pixels=n_bad,
-            frac_bad=frac,
-            passed=bool(passed),
-        )
+        max_abs = float(diff.max()) if diff.size else 0.0
+        rec.update(max_abs=max_abs, bad_pixels=n_bad, frac_bad=frac, passed=bool(passed))
         per[ch] = rec
         _accumulate(data, ch, exp, got, bad_px)
     failed = [c for c, r in per.items() if not r["passed"]]
@@ -501,16 +482,8 @@ def _check_gbuffer(
         else f"beyond rtol={rtol:g} atol={atol:g}: "
         + "; ".join(_channel_failure(c, per[c]) for c in failed)
     )
-    return CaseCheck(
-        name,
-        "gbuffer",
-        not failed,
-        "ok",
-        msg,
-        metrics={"frac_bad": worst},
-        channels=per,
-        tolerance=tol,
-    )
+    metrics = {"frac_bad": worst}
+    return CaseCheck(name, "gbuffer", not failed, "ok", msg, metrics, per, tol)
 
 
 def _channel_failure(ch: str, r: dict[str, Any]) -> str:

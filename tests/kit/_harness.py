@@ -1,111 +1,75 @@
-"""A style pass of the GLSL backend run on refnpr's own G-buffer, without the driver: isolates a
-style's shading from rasterization (used by the per-style kit tests)."""
+"""What the per-style GLSL tests share: the golden cases of a style, a style pass run on refnpr's
+own G-buffer without the driver (isolates a style's shading from rasterization), and the
+backend driver run on an exported kit and judged by ``refnpr kit check``."""
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from refnpr.golden import load_suite
 from refnpr.raster import rasterize
 from refnpr.scenes import load_scene
 from refnpr.styles import ShadeContext, style_from_spec
 
+SUITE = Path(__file__).resolve().parents[2] / "golden" / "suite.toml"
 
-class FakeCase:
-    """The parts of ``refnpr_glsl.kit_io.Case`` a style pass reads, built from a refnpr scene
-    and the style's kit export (the files go to ``case_dir``), without a driver."""
 
-    def __init__(self, name, scene, style, case_dir: Path, width: int, height: int, spp: int):
-        from refnpr_glsl.kit_io import MeshData, read_image
+@functools.cache
+def _styled_cases() -> list:
+    from refnpr.kit.export import _style_of
+    from refnpr.kit.styles import style_name
 
-        from refnpr.kit.styles import export_style, style_name
+    return [
+        (c, style_name(_style_of(c, load_scene(c.scene))))
+        for c in load_suite(SUITE)
+        if c.kind == "image"
+    ]
 
-        exp = export_style(style, scene, case_dir, width=width, height=height, spp=spp)
-        self.name = name
-        self.dir = case_dir
-        self.width, self.height, self.spp = width, height, spp
-        self.n = int(round(spp**0.5))
-        self.sample_size = (self.n * width, self.n * height)
-        cam = scene.camera
-        lights = []
-        for li in scene.lights:
-            d = {"kind": li.kind, "color": list(li.color)}
-            if li.kind == "point":
-                d["position"] = list(li.position)
-            else:
-                d["direction"] = list(li.direction)
-            lights.append(d)
-        objects = [
-            {"name": o.name, "mesh_id": k, "material": dataclasses.asdict(o.material)}
-            for k, o in enumerate(scene.objects)
-        ]
-        self.data = {
-            "name": name,
-            "width": width,
-            "height": height,
-            "spp": spp,
-            "camera": {
-                "eye": cam.eye.tolist(),
-                "view_matrix": cam.view_matrix().tolist(),
-                "projection_matrix": cam.projection_matrix(width, height).tolist(),
-            },
-            "lights": lights,
-            "ambient": list(scene.ambient),
-            "objects": objects,
-            "style": {"name": style_name(style), "params": json.loads(json.dumps(exp.params))},
-            "textures": exp.textures,
-            "derived": exp.derived,
-        }
-        self.params = self.data["style"]["params"]
-        self.lights = lights
-        self.objects = objects
-        self.eye = np.asarray(cam.eye, dtype=np.float64)
-        self.ambient = np.asarray(scene.ambient, dtype=np.float64)
-        self._textures = exp.textures
-        self._read = read_image
-        meshes, first = [], 0
-        for k, m in enumerate(scene.world_meshes()):
-            attrs = {
-                key: np.asarray(v, dtype=np.float32).astype(np.float64)
-                for key, v in exp.vertex_attributes.get(k, {}).items()
-            }
-            f32 = lambda a: None if a is None else np.asarray(a, np.float32).astype(np.float64)  # noqa: E731
-            meshes.append(
-                MeshData(
-                    name=m.name,
-                    positions=f32(m.positions),
-                    normals=f32(m.normals),
-                    uv=f32(m.uv),
-                    indices=np.asarray(m.faces, dtype=np.int64),
-                    attributes=attrs,
-                    mesh_id=k,
-                    first_tri_id=first,
-                    material=objects[k]["material"],
-                )
-            )
-            first += int(m.faces.shape[0])
-        self.meshes = meshes
 
-    def view_matrix(self):
-        return np.asarray(self.data["camera"]["view_matrix"], dtype=np.float64)
+def style_cases(style: str) -> list:
+    """The golden image cases rendered with ``style`` (the case's style, else its scene's;
+    a contour layer unwrapped)."""
+    return [c for c, name in _styled_cases() if name == style]
 
-    def projection_matrix(self):
-        return np.asarray(self.data["camera"]["projection_matrix"], dtype=np.float64)
 
-    def materials(self, key, default=0.0):
-        return np.array(
-            [np.asarray(o["material"].get(key, default), dtype=np.float64) for o in self.objects]
-        )
+def point_lit(scene: str, offset, color, *more):
+    """``scene`` lit by a point light at its eye + ``offset`` (and the lights ``more``)."""
+    from refnpr.scenes.scene import Light
 
-    def texture(self, role):
-        entry = self._textures[role]
-        return [self._read(self.dir / f) for f in entry["levels"]]
+    s = load_scene(scene)
+    eye = np.asarray(s.camera.eye)
+    light = Light(kind="point", position=tuple(eye + offset), color=color)
+    return dataclasses.replace(s, lights=(light, *more))
+
+
+def write_case(case_dir: Path, name: str, scene, style, width: int, height: int, spp: int) -> Path:
+    """A case.json of ``style`` on ``scene`` made by the kit's own exporters (no expected image),
+    for ``refnpr_glsl.kit_io.Case``."""
+    from refnpr.kit.export import _base
+    from refnpr.kit.scene_export import objects_entry
+    from refnpr.kit.styles import export_style, style_name
+
+    exp = export_style(style, scene, case_dir, width=width, height=height, spp=spp)
+    size = dict(width=width, height=height, spp=spp)
+    data = _base(SimpleNamespace(name=name, description="", kind="image", **size), scene)
+    data["objects"] = objects_entry(scene, case_dir, exp.vertex_attributes)
+    data["style"] = {"name": style_name(style), "params": exp.params}
+    data["channels"] = sorted(style.requires(scene))
+    data["textures"] = exp.textures
+    data["derived"] = exp.derived
+    path = case_dir / "case.json"
+    path.write_text(json.dumps(data))
+    return path
 
 
 def upload_gbuffer(gl, gb) -> dict:
@@ -120,38 +84,41 @@ def upload_gbuffer(gl, gb) -> dict:
     return out
 
 
-def isolated(gl, case, tmp_path: Path, width: int, height: int, spp: int, module):
-    """(GLSL result, refnpr result), both (nH, nW, 4) float32, for one golden case's style on
-    refnpr's G-buffer of the case's scene at ``width`` x ``height`` (``case.scene``: a scene
-    name or a Scene; ``case.style``: a style table or a Style)."""
-    scene = load_scene(case.scene) if isinstance(case.scene, str) else case.scene
-    style = style_from_spec(case.style)
-    inner = style.base if style.name == "contoured" else style
-    gb = rasterize(
-        scene,
-        scene.camera,
-        width,
-        height,
-        sorted(inner.requires(scene)),
-        spp,
-        **inner.raster_options(scene),
-    )
-    ref = np.asarray(inner.shade(ShadeContext(gb, scene)), dtype=np.float32)
-    fake = FakeCase(case.name, scene, style, tmp_path, width, height, spp)
+def shade_pass(gl, module, case, gb, **options) -> np.ndarray:
+    """``module.shade`` of a ``refnpr_glsl.kit_io.Case`` on refnpr's G-buffer ``gb``, read back."""
     textures = upload_gbuffer(gl, gb)
     try:
-        out = module.shade(gl, fake, textures, fake.sample_size)
+        out = module.shade(gl, case, textures, case.sample_size, **options)
         got = gl.read(out)
         out.release()
     finally:
         for t in textures.values():
             t.release()
-    return got, ref
+    return got
 
 
-def render_and_check(kit: Path, names: list[str], derivatives: str) -> dict:
-    """Render ``names`` of ``kit`` with the backend driver (a subprocess) and check them with
-    ``refnpr kit check``'s comparator: name -> CaseCheck, plus ``"_driver_log"``."""
+def isolated(gl, case, tmp_path: Path, width: int, height: int, spp: int, module, edit=None):
+    """(GLSL result, refnpr result), both (nH, nW, 4) float32, for one golden case's style on
+    refnpr's G-buffer of the case's scene at ``width`` x ``height`` (``case.scene``: a scene
+    name or a Scene; ``case.style``: a style table or a Style; ``edit``: called with the
+    ``Case`` before shading)."""
+    from refnpr_glsl.kit_io import Case
+
+    scene = load_scene(case.scene) if isinstance(case.scene, str) else case.scene
+    style = style_from_spec(case.style)
+    inner = style.base if style.name == "contoured" else style
+    channels = sorted(inner.requires(scene))
+    gb = rasterize(scene, scene.camera, width, height, channels, spp, **inner.raster_options(scene))
+    ref = np.asarray(inner.shade(ShadeContext(gb, scene)), dtype=np.float32)
+    kit_case = Case(write_case(tmp_path, case.name, scene, style, width, height, spp))
+    if edit is not None:
+        edit(kit_case)
+    return shade_pass(gl, module, kit_case, gb), ref
+
+
+def render_and_check(kit: Path, names: list[str], derivatives: str = "analytic", env=None) -> dict:
+    """Render ``names`` of ``kit`` with the backend driver (a subprocess, as CI does) and check
+    them with ``refnpr kit check``'s comparator: name -> CaseCheck, plus ``"_driver_log"``."""
     from refnpr.kit.check import check_kit
 
     renders = kit.parent / f"renders-{derivatives}"
@@ -160,10 +127,12 @@ def render_and_check(kit: Path, names: list[str], derivatives: str) -> dict:
          "--derivatives", derivatives],
         capture_output=True,
         text=True,
+        timeout=1800,
+        env=None if env is None else {**os.environ, **env},
     )  # fmt: skip
-    renders.mkdir(exist_ok=True)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     results = check_kit(kit, renders, json_path=kit.parent / f"check-{derivatives}.json")
-    out: dict = {r.name: r for r in results}
+    out: dict = {r.name: r for r in results if r.name in names}
     out["_driver_log"] = run.stdout + run.stderr
     return out
 
@@ -195,10 +164,10 @@ def assert_samples_match(
     assert frac <= max_frac_over, f"{name}: {frac:.4%} of samples over 2/255, max {diff.max():.4g}"
 
 
-def export_cases(tmp_path_factory, style: str, suite: Path, names: list[str]) -> Path:
+def export_cases(tmp_path_factory, style: str, names: list[str]) -> Path:
     """A style's golden cases exported as a kit (``refnpr kit export --only ...``)."""
     from refnpr.kit import export_kit
 
     kit = tmp_path_factory.mktemp(f"kit-{style}") / "kit"
-    export_kit(kit, suite=suite, only=names)
+    export_kit(kit, suite=SUITE, only=names)
     return kit

@@ -26,20 +26,9 @@ def test_glsl_backend_passes_the_whole_kit(kit_dir: Path, tmp_path: Path):
         timeout=1800,
     )
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    cmd = [sys.executable, "-m", "refnpr.cli", "kit", "check", str(kit_dir), str(out)]
     check = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "refnpr.cli",
-            "kit",
-            "check",
-            str(kit_dir),
-            str(out),
-            "--report",
-            str(report),
-            "--json",
-            str(metrics),
-        ],
+        [*cmd, "--report", str(report), "--json", str(metrics)],
         capture_output=True,
         text=True,
         timeout=1800,

@@ -474,7 +474,7 @@ def test_a_broken_case_json_fails_that_case_only(tiny_kit, tmp_path):
     assert results["gradient"].passed
 
 
-# -- the whole exported suite (K1's kit_dir session fixture) -----------------------------------
+# -- the whole exported suite (the kit_dir session fixture) ------------------------------------
 
 
 GOLDEN = Path(__file__).resolve().parents[2] / "golden"

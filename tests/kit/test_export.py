@@ -282,21 +282,8 @@ def test_export_refuses_a_file_and_unknown_names(tmp_path):
 
 
 def test_cli_kit_export(tmp_path, capsys):
-    assert (
-        main(
-            [
-                "kit",
-                "export",
-                str(tmp_path / "k"),
-                "--suite",
-                str(SUITE),
-                "--only",
-                "sphere-toon3",
-                "-q",
-            ]
-        )
-        == 0
-    )
+    args = ["kit", "export", str(tmp_path / "k"), "--suite", str(SUITE), "--only", "sphere-toon3"]
+    assert main([*args, "-q"]) == 0
     assert "exported 1 case(s)" in capsys.readouterr().out
     assert (tmp_path / "k" / "sphere-toon3" / "case.json").is_file()
     (tmp_path / "f").write_text("x")
@@ -362,66 +349,25 @@ def test_write_texture_levels(tmp_path):
 
     rng = np.random.default_rng(0)
     f = [rng.random((8, 4, 3)).astype(np.float32), rng.random((4, 2, 3)).astype(np.float32)]
-    e = write_texture_levels(
-        tmp_path,
-        "screen",
-        f,
-        encoding="linear",
-        wrap="repeat",
-        filter="per_level",
-        orientation="row 0 = v 0",
-        used_for="test",
-    )
+    opts = dict(wrap="repeat", orientation="row 0 = v 0", used_for="test")
+    e = write_texture_levels(tmp_path, "screen", f, encoding="linear", filter="per_level", **opts)
     assert e["levels"] == ["textures/screen/level_0.exr", "textures/screen/level_1.exr"]
     assert e["shape"] == [8, 4, 3] and e["dtype"] == "float32"
     for rel, a in zip(e["levels"], f, strict=True):
         assert np.array_equal(read_exr(tmp_path / rel), a)  # exact float32
     u8 = rng.integers(0, 256, (5, 7), dtype=np.uint8)
     e = write_texture_levels(
-        tmp_path,
-        "ink",
-        [u8],
-        encoding="srgb",
-        wrap="clamp",
-        filter="nearest",
-        orientation="row 0 = v 0",
-        used_for="test",
+        tmp_path, "ink", [u8], encoding="srgb", filter="nearest", **{**opts, "wrap": "clamp"}
     )
     assert e["file"] == "textures/ink/level_0.png"
     assert np.array_equal(iio.imread(tmp_path / e["file"]), u8)
+    opts = dict(encoding="linear", filter="linear", orientation="o", used_for="u")
     with pytest.raises(ValueError, match="wrap: expected one of"):
-        write_texture_levels(
-            tmp_path,
-            "x",
-            f,
-            encoding="linear",
-            wrap="mirror",
-            filter="linear",
-            orientation="o",
-            used_for="u",
-        )
+        write_texture_levels(tmp_path, "x", f, wrap="mirror", **opts)
     with pytest.raises(TypeError, match="mixed dtypes"):
-        write_texture_levels(
-            tmp_path,
-            "x",
-            [f[0], u8],
-            encoding="linear",
-            wrap="repeat",
-            filter="linear",
-            orientation="o",
-            used_for="u",
-        )
+        write_texture_levels(tmp_path, "x", [f[0], u8], wrap="repeat", **opts)
     with pytest.raises(ValueError, match="role: expected a name"):
-        write_texture_levels(
-            tmp_path,
-            "Bad Role",
-            f,
-            encoding="linear",
-            wrap="repeat",
-            filter="linear",
-            orientation="o",
-            used_for="u",
-        )
+        write_texture_levels(tmp_path, "Bad Role", f, wrap="repeat", **opts)
 
 
 def test_unresolved_detects_auto():

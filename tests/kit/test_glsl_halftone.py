@@ -18,27 +18,26 @@ Two levels:
 from __future__ import annotations
 
 import dataclasses
-import json
-import math
-import os
-import subprocess
-import sys
-from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 moderngl = pytest.importorskip("moderngl")
 
-from refnpr.golden import load_suite  # noqa: E402
-from refnpr.raster import rasterize  # noqa: E402
 from refnpr.scenes import load_scene  # noqa: E402
-from refnpr.styles import ShadeContext, style_from_spec  # noqa: E402
+from refnpr.styles import style_from_spec  # noqa: E402
 
-from ._harness import upload_gbuffer  # noqa: E402
+from ._harness import (  # noqa: E402
+    assert_passed,
+    case_params,
+    export_cases,
+    isolated,
+    render_and_check,
+    style_cases,
+    write_case,
+)
 
-ROOT = Path(__file__).resolve().parents[2]
-SUITE = ROOT / "golden" / "suite.toml"
 STYLE = "halftone"
 
 #: Per-sample agreement of the isolated pass on linear RGBA: samples over 2/255. With float32
@@ -51,19 +50,7 @@ MAX_FRAC_OVER = 0.002
 #: Kit cases (refnpr kit check, own tolerance) known not to pass, with the reason.
 KNOWN_FAILURES: dict[str, str] = {}
 
-
-def _style_name(case) -> str | None:
-    spec = case.style if case.style is not None else load_scene(case.scene).style
-    if isinstance(spec, str):
-        return spec
-    return (spec or {}).get("name")
-
-
-def _cases() -> list:
-    return [c for c in load_suite(SUITE) if c.kind == "image" and _style_name(c) == STYLE]
-
-
-CASES = _cases()
+CASES = style_cases(STYLE)
 NAMES = [c.name for c in CASES]
 
 
@@ -71,61 +58,19 @@ def _base_style(case, overrides: dict | None = None):
     scene = load_scene(case.scene)
     spec = case.style if case.style is not None else scene.style
     spec = dict(spec) if isinstance(spec, dict) else {"name": spec}
-    spec.pop("contours", None)  # the contour layer is the driver's (K3), not this pass
+    spec.pop("contours", None)  # the contour layer is the driver's, not this pass
     spec.update(overrides or {})
     return scene, style_from_spec(spec)
 
 
-def _write_case(case_dir: Path, name: str, scene, style, w: int, h: int, spp: int, channels):
-    """A case.json with the keys a style pass reads (lights, ambient, eye, objects, style)."""
-    from refnpr.kit.camera import camera_entry
-    from refnpr.kit.scene_export import lights_entry, material_entry
-    from refnpr.kit.styles import export_style
-
-    exp = export_style(style, scene, case_dir, width=w, height=h, spp=spp)
-    data = {
-        "name": name,
-        "kind": "image",
-        "width": w,
-        "height": h,
-        "spp": spp,
-        "camera": camera_entry(scene.camera, w, h),
-        "background": list(scene.background),
-        "ambient": [float(a) for a in scene.ambient],
-        "lights": lights_entry(scene),
-        "objects": [
-            {"name": o.name, "mesh_id": k, "material": material_entry(o.material)}
-            for k, o in enumerate(scene.objects)
-        ],
-        "style": {"name": STYLE, "params": exp.params},
-        "channels": sorted(channels),
-        "textures": exp.textures,
-    }
-    path = case_dir / "case.json"
-    path.write_text(json.dumps(data))
-    return path
-
-
-def _isolated(gl, tmp_path: Path, case, overrides=None, *, scale: float = 0.5):
+def _isolated(gl, tmp_path, case, overrides=None, *, scale: float = 0.5, edit=None):
     """(GLSL shade, refnpr shade) per sample, (nH, nW, 4) float32, on refnpr's G-buffer."""
-    from refnpr_glsl.kit_io import Case
     from refnpr_glsl.styles import halftone as glsl_halftone
 
     scene, style = _base_style(case, overrides)
     w, h = max(8, int(case.width * scale)), max(8, int(case.height * scale))
-    channels = style.requires(scene)
-    gb = rasterize(scene, scene.camera, w, h, sorted(channels), case.spp)
-    ref = np.asarray(style.shade(ShadeContext(gb, scene)), dtype=np.float32)
-    kit_case = Case(_write_case(tmp_path, case.name, scene, style, w, h, case.spp, channels))
-    textures = upload_gbuffer(gl, gb)
-    try:
-        out = glsl_halftone.shade(gl, kit_case, textures, (w * gb.n, h * gb.n))
-        got = gl.read(out)
-        out.release()
-    finally:
-        for t in textures.values():
-            t.release()
-    return got, ref
+    one = SimpleNamespace(name=case.name, scene=scene, style=style)
+    return isolated(gl, one, tmp_path, w, h, case.spp, glsl_halftone, edit)
 
 
 def _frac_over(got: np.ndarray, ref: np.ndarray) -> float:
@@ -233,80 +178,35 @@ def test_wrong_params_fail_loudly(gl, tmp_path):
     from refnpr_glsl.kit_io import Case
     from refnpr_glsl.styles import halftone as glsl_halftone
 
-    path = _write_case(tmp_path, case.name, scene, style, 16, 16, 1, style.requires(scene))
-    data = json.loads(path.read_text())
-    data["style"]["params"]["show"] = "sparkles"
-    path.write_text(json.dumps(data))
+    kit_case = Case(write_case(tmp_path, case.name, scene, style, 16, 16, 1))
+    kit_case.data["style"]["params"]["show"] = "sparkles"
     with pytest.raises(ValueError, match="show"):
-        glsl_halftone.shade(gl, Case(path), {"mesh_id": None}, (16, 16))
+        glsl_halftone.shade(gl, kit_case, {"mesh_id": None}, (16, 16))
 
 
 def test_shade_detects_a_wrong_screen(gl, tmp_path):
     """The comparison can fail: a kit whose screen texture is perturbed gives other samples."""
-    from refnpr_glsl.kit_io import Case
-    from refnpr_glsl.styles import halftone as glsl_halftone
+
+    def darker(kit_case):
+        real_texture = kit_case.texture
+        kit_case.texture = lambda role: [np.clip(a * 0.7, 0, 1) for a in real_texture(role)]
 
     case = next(c for c in CASES if c.name == "halftone-fig1-sphere-dither-binary")
-    scene, style = _base_style(case)
-    w, h = 64, 64
-    channels = style.requires(scene)
-    gb = rasterize(scene, scene.camera, w, h, sorted(channels), 1)
-    ref = np.asarray(style.shade(ShadeContext(gb, scene)), dtype=np.float32)
-    path = _write_case(tmp_path, case.name, scene, style, w, h, 1, channels)
-    kit_case = Case(path)
-    real_texture = kit_case.texture
-    kit_case.texture = lambda role: [np.clip(a * 0.7, 0, 1) for a in real_texture(role)]
-    textures = {
-        ch: gl.texture_from_array(
-            np.asarray(gb[ch]), dtype="i4" if np.asarray(gb[ch]).dtype.kind in "iu" else "f4"
-        )
-        for ch in channels
-    }
-    got = gl.read(glsl_halftone.shade(gl, kit_case, textures, (w, h)))
+    case = dataclasses.replace(case, params={**case.params, "width": 64, "height": 64, "spp": 1})
+    got, ref = _isolated(gl, tmp_path, case, scale=1.0, edit=darker)
     assert _frac_over(got, ref) > 0.01
 
 
 # -- the whole pipeline: export, render with the driver, kit check ----------------------------
 @pytest.fixture(scope="module")
-def halftone_kit(tmp_path_factory):
-    from .conftest import export_cases
-
-    d = tmp_path_factory.mktemp("halftone-kit")
-    errors = export_cases(d, NAMES)
-    assert not errors, errors
-    return d
+def halftone_results(tmp_path_factory):
+    return render_and_check(export_cases(tmp_path_factory, STYLE, NAMES), NAMES)
 
 
-def _render_and_check(kit: Path, out: Path, names: list[str], env: dict | None = None) -> dict:
-    """Render ``names`` with the driver (a subprocess, as CI does) and check them."""
-    from refnpr.kit.check import check_kit
-
-    run = subprocess.run(
-        [sys.executable, "-m", "refnpr_glsl", str(kit), str(out), "--only", *names],
-        capture_output=True,
-        text=True,
-        timeout=1800,
-        env=None if env is None else {**os.environ, **env},
-    )
-    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
-    return {r.name: r for r in check_kit(kit, out) if r.name in names}
-
-
-@pytest.fixture(scope="module")
-def halftone_results(halftone_kit, tmp_path_factory):
-    return _render_and_check(halftone_kit, tmp_path_factory.mktemp("halftone-renders"), NAMES)
-
-
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", case_params(NAMES, KNOWN_FAILURES))
 def test_kit_cases(halftone_results, name):
-    result = halftone_results[name]
-    if name in KNOWN_FAILURES:
-        assert not result.passed, f"{name} passes now: remove it from KNOWN_FAILURES"
-        return
-    assert result.passed, f"{name}: {result}"
+    assert_passed(halftone_results, name)
 
 
 def test_known_failures_are_halftone_cases():
     assert set(KNOWN_FAILURES) <= set(NAMES)
-    assert all(isinstance(v, str) and v for v in KNOWN_FAILURES.values())
-    assert math.isfinite(MAX_FRAC_OVER)

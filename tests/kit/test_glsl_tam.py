@@ -17,14 +17,11 @@ Three levels:
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from refnpr.golden import load_suite
-from refnpr.scenes import load_scene
+from refnpr.scenes.scene import Light
 
 from ._harness import (
     assert_passed,
@@ -32,11 +29,11 @@ from ._harness import (
     case_params,
     export_cases,
     isolated,
+    point_lit,
     render_and_check,
+    style_cases,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
-SUITE = ROOT / "golden" / "suite.toml"
 STYLE = "tam"
 
 #: Per-sample agreement of the isolated pass: |GLSL - refnpr| on linear RGBA. refnpr rasterizes
@@ -64,14 +61,7 @@ QUAD_KNOWN_FAILURES: dict[str, str] = {
     "tam-defaults-teapot": _QUAD_REASON,
 }
 
-
-def _cases() -> list:
-    return [
-        c for c in load_suite(SUITE) if c.kind == "image" and (c.style or {}).get("name") == STYLE
-    ]
-
-
-CASES = _cases()
+CASES = style_cases(STYLE)
 NAMES = [c.name for c in CASES]
 
 
@@ -88,12 +78,12 @@ def test_shade_matches_refnpr_per_sample(gl, tmp_path, name):
 @pytest.fixture(scope="module")
 def exported_kit(tmp_path_factory) -> Path:
     """This style's golden cases exported as a kit (``refnpr kit export --only ...``)."""
-    return export_cases(tmp_path_factory, STYLE, SUITE, NAMES)
+    return export_cases(tmp_path_factory, STYLE, NAMES)
 
 
 @pytest.fixture(scope="module")
 def kit_results(exported_kit) -> dict:
-    return render_and_check(exported_kit, NAMES, "analytic")
+    return render_and_check(exported_kit, NAMES)
 
 
 @pytest.fixture(scope="module")
@@ -113,18 +103,6 @@ def test_kit_case_with_quad_derivatives(kit_results_quad, name):
     assert_passed(kit_results_quad, name)
 
 
-def _point_lit(name: str):
-    from refnpr.scenes.scene import Light
-
-    scene = load_scene(name)
-    eye = np.asarray(scene.camera.eye)
-    lights = (
-        Light(kind="point", position=tuple(eye + (2.0, 3.0, 0.5)), color=(0.8, 0.8, 0.8)),
-        Light(kind="directional", direction=(0.0, 1.0, 0.3), color=(0.3, 0.3, 0.3)),
-    )
-    return dataclasses.replace(scene, lights=lights)
-
-
 #: Parameter combinations no golden case uses (80 x 60 unless noted).
 VARIANTS = {
     "constant-tone-paper": ("tamiss_sphere", dict(constant_tone=0.7, paper=(1.0, 0.9, 0.8),
@@ -132,8 +110,9 @@ VARIANTS = {
     "flat-unoriented-angles": ("tamiss_teapot", dict(derivatives="flat", orient_charts=False,
                                directions=[30.0, 120.0, "u"], density_mode="clip",
                                density=1.5)),
-    "point-lights": (_point_lit("tamiss_torus_knot"), dict(directions=["v"], period=3.0,
-                     width=2.0, fade=0.3)),
+    "point-lights": (point_lit("tamiss_torus_knot", (2.0, 3.0, 0.5), (0.8, 0.8, 0.8), Light(
+                     kind="directional", direction=(0.0, 1.0, 0.3), color=(0.3, 0.3, 0.3))),
+                     dict(directions=["v"], period=3.0, width=2.0, fade=0.3)),
     "jitter-levels": ("teapot", dict(length=0.6, length_jitter=0.6, width_jitter=0.5,
                       max_level=2, layer_tones=[0.1, 0.4], period=6.0)),
     "spp4": ("tamiss_sphere", dict(period=4.0, density=1.0), 4),

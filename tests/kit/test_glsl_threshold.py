@@ -15,9 +15,6 @@ Two levels, so that a failure says where it comes from:
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -25,9 +22,10 @@ import pytest
 
 moderngl = pytest.importorskip("moderngl")  # the extra "glsl"; CI installs it
 
-REPO = Path(__file__).resolve().parents[2]
-SUITE = REPO / "golden" / "suite.toml"
-BACKEND = REPO / "backends" / "glsl"
+from refnpr.golden import load_suite  # noqa: E402
+from refnpr.scenes import load_scene  # noqa: E402
+
+from ._harness import SUITE, render_and_check, shade_pass, style_cases  # noqa: E402
 
 #: End-to-end failures with their cause (copied into docs/kit.md). Empty: every case passes.
 KNOWN_FAILURES: dict[str, str] = {}
@@ -73,34 +71,22 @@ VARIANTS = {
 }
 
 
-def _threshold_cases() -> tuple[list[str], list[str]]:
-    """Golden cases whose style (the case's or the scene's own) is ``threshold``, and those of
-    them that sample texture pyramids (source "image" or a bump map)."""
-    from refnpr.golden import load_suite
-    from refnpr.kit.styles import style_name
-    from refnpr.scenes import load_scene
-    from refnpr.styles import style_from_spec
+def _base_style(case, scene):
+    """The style refnpr renders ``case`` with, its contour layer unwrapped."""
+    from refnpr.kit.export import _style_of
 
-    out, textured = [], []
-    for case in load_suite(SUITE):
-        if case.kind != "image":
-            continue
-        spec = case.style
-        if spec is None:
-            spec = getattr(load_scene(case.scene), "style", None)
-        if spec is None:
-            continue
-        name = spec.get("name") if isinstance(spec, dict) else spec
-        style = style_from_spec(spec)
-        if name in ("threshold", "contoured") and style_name(style) == "threshold":
-            out.append(case.name)
-            base = style.base if style.name == "contoured" else style
-            if base.p.source == "image" or base.p.bump is not None:
-                textured.append(case.name)
-    return out, textured
+    style = _style_of(case, scene)
+    return style.base if style.name == "contoured" else style
 
 
-CASES, TEXTURED_CASES = _threshold_cases()
+def _textured(case) -> bool:
+    """Whether ``case`` samples texture pyramids (source "image" or a bump map)."""
+    base = _base_style(case, load_scene(case.scene))
+    return base.p.source == "image" or base.p.bump is not None
+
+
+CASES = [c.name for c in style_cases("threshold")]
+TEXTURED_CASES = [c.name for c in style_cases("threshold") if _textured(c)]
 
 
 @pytest.fixture(scope="module")
@@ -108,7 +94,7 @@ def threshold_kit(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The golden threshold cases and the variants, exported (refnpr kit export)."""
     from refnpr.kit import export_kit
 
-    d = tmp_path_factory.mktemp("threshold_kit")
+    d = tmp_path_factory.mktemp("threshold_kit") / "kit"  # renders go beside it
     export_kit(d, suite=SUITE, only=CASES)
     suite = d / "variants.toml"
     lines = ["[defaults]\nwidth = 96\nheight = 64\n"]
@@ -119,20 +105,6 @@ def threshold_kit(tmp_path_factory: pytest.TempPathFactory) -> Path:
     suite.write_text("\n".join(lines))
     export_kit(d, suite=suite)
     return d
-
-
-def _case_inputs(kit: Path, name: str):
-    """(golden-style case record, scene, base style) as refnpr renders the case."""
-    from refnpr.golden import load_suite
-    from refnpr.scenes import load_scene
-    from refnpr.styles import style_from_spec
-
-    suite = SUITE if name in CASES else kit / "variants.toml"
-    case = next(c for c in load_suite(suite) if c.name == name)
-    scene = load_scene(case.scene)
-    style = style_from_spec(case.style if case.style is not None else scene.style)
-    base = style.base if style.name == "contoured" else style
-    return case, scene, base
 
 
 def shade_both(
@@ -152,34 +124,16 @@ def shade_both(
     from refnpr.raster import rasterize
     from refnpr.styles.base import ShadeContext
 
-    case, scene, base = _case_inputs(kit, name)
+    suite = SUITE if name in CASES else kit / "variants.toml"
+    case = next(c for c in load_suite(suite) if c.name == name)
+    scene = load_scene(case.scene)
+    base = _base_style(case, scene)
     channels = sorted(base.requires(scene))
-    gb = rasterize(
-        scene,
-        scene.camera,
-        case.width,
-        case.height,
-        channels,
-        case.spp,
-        **base.raster_options(scene),
-    )
+    size = (case.width, case.height, channels, case.spp)
+    gb = rasterize(scene, scene.camera, *size, **base.raster_options(scene))
     ref = np.asarray(base.shade(ShadeContext(gb, scene)), dtype=np.float32)
-    textures = {}
-    for ch in gb:
-        a = np.asarray(gb[ch])
-        if a.dtype.kind in "iub":
-            textures[ch] = gl.texture_from_array(a.astype(np.int32), dtype="i4")
-        else:
-            textures[ch] = gl.texture_from_array(a.astype(np.float32), dtype="f4")
     kit_case = Case(case_json or kit / name / "case.json")
-    h, w = ref.shape[:2]
-    out = glsl_threshold.shade(
-        gl, kit_case, textures, (w, h), precision=precision, sampling=sampling
-    )
-    got = gl.read(out)
-    for t in textures.values():
-        t.release()
-    out.release()
+    got = shade_pass(gl, glsl_threshold, kit_case, gb, precision=precision, sampling=sampling)
     return ref, got, float(case.max_frac_over)
 
 
@@ -241,20 +195,14 @@ def test_shade_detects_a_wrong_parameter(gl, threshold_kit: Path, tmp_path: Path
         glsl_threshold.fragment_source(Case(dst / "case.json"), sampling="bilinear")
 
 
-def test_end_to_end_kit_check(threshold_kit: Path, tmp_path: Path):
+def test_end_to_end_kit_check(threshold_kit: Path):
     """The backend renders every threshold case (and variant) from the kit alone and each passes
     its own tolerance under ``refnpr kit check`` (except the listed known failures, which must
     fail)."""
-    from refnpr.kit.check import check_kit, format_table
+    from refnpr.kit.check import format_table
 
-    out = tmp_path / "renders"
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(BACKEND), env.get("PYTHONPATH", "")])
     names = CASES + sorted(VARIANTS)
-    cmd = [sys.executable, "-m", "refnpr_glsl", str(threshold_kit), str(out), "--only", *names]
-    proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=1200)
-    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-4000:]
-    results = [r for r in check_kit(threshold_kit, out) if r.name in names]
+    results = [r for n, r in render_and_check(threshold_kit, names).items() if n in names]
     print(format_table(results))
     assert {r.name for r in results} == set(names)
     wrong = [f"{r.name}: {r.message}" for r in results if r.passed == (r.name in KNOWN_FAILURES)]

@@ -17,14 +17,10 @@ Three levels:
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
-
-from refnpr.golden import load_suite
-from refnpr.scenes import load_scene
 
 from ._harness import (
     assert_passed,
@@ -32,11 +28,11 @@ from ._harness import (
     case_params,
     export_cases,
     isolated,
+    point_lit,
     render_and_check,
+    style_cases,
 )
 
-ROOT = Path(__file__).resolve().parents[2]
-SUITE = ROOT / "golden" / "suite.toml"
 STYLE = "xtoon"
 
 #: Per-sample agreement of the isolated pass: |GLSL - refnpr| on linear RGBA. Most cases agree
@@ -52,14 +48,7 @@ KNOWN_FAILURES: dict[str, str] = {}
 #: reads no screen derivatives, so the choice only reaches it through the rasterizer.
 QUAD_KNOWN_FAILURES: dict[str, str] = {}
 
-
-def _cases() -> list:
-    return [
-        c for c in load_suite(SUITE) if c.kind == "image" and (c.style or {}).get("name") == STYLE
-    ]
-
-
-CASES = _cases()
+CASES = style_cases(STYLE)
 NAMES = [c.name for c in CASES]
 
 
@@ -77,12 +66,12 @@ def test_shade_matches_refnpr_per_sample(gl, tmp_path, name):
 @pytest.fixture(scope="module")
 def exported_kit(tmp_path_factory) -> Path:
     """This style's golden cases exported as a kit (``refnpr kit export --only ...``)."""
-    return export_cases(tmp_path_factory, STYLE, SUITE, NAMES)
+    return export_cases(tmp_path_factory, STYLE, NAMES)
 
 
 @pytest.fixture(scope="module")
 def kit_results(exported_kit) -> dict:
-    return render_and_check(exported_kit, NAMES, "analytic")
+    return render_and_check(exported_kit, NAMES)
 
 
 @pytest.fixture(scope="module")
@@ -102,18 +91,10 @@ def test_kit_case_with_quad_derivatives(kit_results_quad, name):
     assert_passed(kit_results_quad, name)
 
 
-def _point_lit(name: str):
-    from refnpr.scenes.scene import Light
-
-    scene = load_scene(name)
-    eye = np.asarray(scene.camera.eye)
-    light = Light(kind="point", position=tuple(eye + (3.0, 4.0, 1.0)), color=(1.0, 1.0, 1.0))
-    return dataclasses.replace(scene, lights=(light,))
-
-
 def _variants() -> dict:
     """Parameter combinations no golden case uses, on the same scenes (48 x 36 unless noted)."""
     rng = np.random.default_rng(7)
+    lit = point_lit("xtoon_teapot", (3.0, 4.0, 1.0), (1.0, 1.0, 1.0))
     return {
         "map-per-pixel": ("xtoon_teapot", dict(texture="toon", detail="map",
                           detail_map=rng.random((36, 48))), 1),
@@ -124,10 +105,9 @@ def _variants() -> dict:
         "weight-map": ("xtoon_teapot", dict(texture="toon", detail="none", shape="sphere",
                        shape_blend="pixel", shape_weight=rng.random((36, 48)))),
         "modulate": ("teapot", dict(texture="toon", detail="orientation", modulate=True)),
-        "point-light-highlight": (_point_lit("xtoon_teapot"), dict(texture="metal",
-                                  detail="highlight", s=6.0)),
-        "point-light-vertex": (_point_lit("xtoon_teapot"), dict(texture="plastic",
-                               detail="highlight", detail_mode="vertex", tone="half_lambert")),
+        "point-light-highlight": (lit, dict(texture="metal", detail="highlight", s=6.0)),
+        "point-light-vertex": (lit, dict(texture="plastic", detail="highlight",
+                               detail_mode="vertex", tone="half_lambert")),
         "vertex-detail-weight": ("xtoon_row", dict(texture="loa_levels", detail="depth",
                                  detail_mode="vertex", z_min=18.0, r=3.0, shape="ellipsoid",
                                  shape_weight="detail")),

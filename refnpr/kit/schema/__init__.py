@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -21,11 +20,6 @@ def schema_path(name: str) -> Path:
     return _HERE / name
 
 
-@cache
-def _load(name: str) -> str:
-    return schema_path(name).read_text(encoding="utf-8")
-
-
 def load_schema(name: str = "case.schema.json") -> dict[str, Any]:
-    """The schema as a dict (a fresh copy)."""
-    return json.loads(_load(name))
+    """The schema as a dict."""
+    return json.loads(schema_path(name).read_text(encoding="utf-8"))

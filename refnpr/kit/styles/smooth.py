@@ -28,8 +28,8 @@ DERIVED = {
         "point: normalize(position_light - position)), V = normalize(camera.eye - position). "
         "f_d = max(N.L, 0) (not clamped above). f_s = 0 where N.L <= 0 or shininess <= 0, else "
         "max(B, 0)^shininess with B = N.normalize(L + V) (params.model 'blinn-phong') or B = "
-        "(2 (N.L) N - L).V ('phong'). refnpr computes in float64 (refnpr/styles/smooth.py, "
-        "refnpr/formulas/lighting.py)."
+        "(2 (N.L) N - L).V ('phong'). refnpr computes in float64 (refnpr/styles/lit/_kernels.py "
+        "shade_smooth, refnpr/formulas/lighting.py)."
     )
 }
 

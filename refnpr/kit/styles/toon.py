@@ -32,7 +32,8 @@ DERIVED = {
         "ceil(x n)) / n (Veryovka eq. 4, bounded by ceil(x n) / n: refnpr step_n). Lake mode: "
         "tone = ramp[min(floor(clamp(f_d, 0, 1) K), K - 1)] from the texture role 'ramp' "
         "(equivalently: the count of j in 0..n-1 with (j + t) / n <= (i + 0.5) / K, divided "
-        "by n, for texel i). refnpr computes in float64 (refnpr/styles/toon.py)."
+        "by n, for texel i). refnpr computes in float64 (refnpr/styles/lit/_kernels.py "
+        "shade_toon; the ramp: refnpr/styles/lit/shading.py lake_ramp)."
     )
 }
 

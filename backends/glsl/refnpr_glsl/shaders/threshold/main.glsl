@@ -1,5 +1,6 @@
 // threshold style (Veryovka 2002): per-sample shading pass. refnpr:
-// refnpr/styles/threshold/style.py (shade), sources.py, images.py, bump.py, strength.py.
+// refnpr/styles/threshold/style.py (shade), _kernels.py, images.py, bump.py;
+// refnpr/formulas/threshold/strength.py.
 // Generated constants (see refnpr_glsl/styles/threshold.py) come before this file.
 
 uniform isampler2D g_mesh_id;
