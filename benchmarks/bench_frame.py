@@ -358,19 +358,13 @@ def ab_worker() -> None:
 
 
 def _git_describe(path: Path) -> str:
+    def git(*args: str) -> str:
+        cmd = ["git", "-C", str(path), *args]
+        return subprocess.run(cmd, capture_output=True, text=True, timeout=30).stdout.strip()
+
     try:
-        head = subprocess.run(
-            ["git", "-C", str(path), "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            timeout=30,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "-C", str(path), "status", "--porcelain", "--untracked-files=no"],
-            capture_output=True,
-            text=True,
-            timeout=30,
-        ).stdout.strip()
+        head = git("rev-parse", "--short", "HEAD")
+        dirty = git("status", "--porcelain", "--untracked-files=no")
     except (OSError, subprocess.SubprocessError):
         return "not a git checkout"
     if not head:

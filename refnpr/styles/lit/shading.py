@@ -53,7 +53,11 @@ def _step_edges(
     k = np.arange(n + 2, dtype=np.float64)
     c = np.unique(np.concatenate([k / n, (k[: n + 1] + t) / n]))
     mid = np.concatenate([[-1.0], (c[:-1] + c[1:]) / 2, [2.0]])
-    tones = step_n(mid, t, n).astype(np.float64)
+    # T_n by the kernels' own device function, with their argument types (float64, float64,
+    # int64): the kernel then reuses this compilation; the numpy face would compile its
+    # elementwise loop (0.3 s of a cold start) for these few values
+    scalar = step_n.scalar
+    tones = np.array([scalar(float(m), float(t), int(n)) for m in mid], dtype=np.float64)
     tones[0] = tones[-1] = -1.0  # below 0 (unreachable), above every breakpoint
     if t == 0.0:
         tones[1] = -1.0

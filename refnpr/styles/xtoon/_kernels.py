@@ -121,14 +121,14 @@ def _shown(show, t, d):
 
 
 @njit
-def _lookup_row(style, texels, rows, mrow, diffuse, orow, span):
-    """The RGBA of the toon ``texels`` at ``(tone, D) = rows[0][x], rows[1][x]`` (times the
-    diffuse colour with ``style.modulate``) for ``x`` in ``span = (xs, xe)`` into ``orow``, the
-    row's ``(nW * 4,)`` view; 0 where ``mrow < 0`` (branch-free: that lookup is dropped)."""
+def _lookup_row(tex, texels, rows, mrow, diffuse, orow, span):
+    """The RGBA of the toon ``texels`` (``tex = (rows, cols, modulate)`` of the style record)
+    at ``(tone, D) = rows[0][x], rows[1][x]`` (times the diffuse colour with ``modulate``) for
+    ``x`` in ``span = (xs, xe)`` into ``orow``, the row's ``(nW * 4,)`` view; 0 where ``mrow <
+    0`` (branch-free: that lookup is dropped). Takes three numbers of the record, not the
+    record: it compiles faster."""
     tone_row, d_row = rows
-    tex_rows = style.rows
-    tex_cols = style.cols
-    modulate = style.modulate
+    tex_rows, tex_cols, modulate = tex
     for x in range(span[0], span[1]):
         mi = mrow[x]
         covered = mi >= 0
@@ -215,4 +215,8 @@ def shade_xtoon(lo, hi, frame, style, tables, out, bad_rows):
             for i in range(4 * max(xe, xs), 4 * nw):
                 orow[i] = 0.0
             if xe > xs:
-                _lookup_row(style, texels, (tone_row, d_row), mesh_id[y], diffuse, orow, (xs, xe))
+                # max(): an int64 span as numba first types it (xe alone starts as the
+                # literal 0, which compiled _lookup_row a second time)
+                span = (xs, max(xe, xs))
+                tex = (style.rows, style.cols, style.modulate)
+                _lookup_row(tex, texels, (tone_row, d_row), mesh_id[y], diffuse, orow, span)
