@@ -43,7 +43,7 @@ _BIN_BYTES_PER_TILE = 3 * 64 * 8 + 2 * 4
 #: Per-sample bytes of a style's own shading work (its temporaries and its float32 RGBA), by
 #: style name, measured with tracemalloc on the golden suite's scenes (the growth of the peak from
 #: the suite's sizes to twice their width and height), plus about 15 %; other styles get 300.
-#: toon and smooth shade in one numba pass (refnpr/styles/_shade_kernels.py): their float32 RGBA
+#: toon and smooth shade in one numba pass (refnpr/styles/lit/_kernels.py): their float32 RGBA
 #: plus the kernel's per-material tables, with a margin.
 SHADE_BYTES_PER_SAMPLE: dict[str, int] = {
     "toon": 24,

@@ -147,7 +147,7 @@ def test_halftone_light_orbit_binary_against_smooth():
     assert jump["binary"] > 0.005
     assert jump["smooth"] < 0.1 * jump["binary"]
     # flips (ink/paper crossings of Y = 0.5) are more frequent with binary, but only 1.7 x
-    # (measured 0.0349 / 0.0205), not the 3 x of the issue: the smooth ramp's edges cross 0.5
+    # (measured 0.0349 / 0.0205), not 3 x: the smooth ramp's edges cross 0.5
     # as the lines thicken too. Stated as measured, with margin:
     assert flip["binary"] > 1.3 * flip["smooth"]
     assert med(runs["binary"], "warp_error") > 1.3 * med(runs["smooth"], "warp_error")

@@ -722,3 +722,23 @@ def test_cubic_and_slope_are_horner_in_the_coefficients_type(dtype):
         assert got[i] == ((c3 * s[i] + c2) * s[i] + c1) * s[i] + c0
         k2, k3 = dtype(2), dtype(3)
         assert slope[i] == ((dtype(0) * s[i] + k3 * c3) * s[i] + k2 * c2) * s[i] + c1
+
+
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda: tamiss.layer_density(0.5, 0.2, "x"), "density"),
+        (lambda: tamiss.layer_density(0.5, 1.0, 1.0), "tone_lo"),
+        (lambda: tamiss.row_distance(0.5, 1, "x", 1.0), "rows"),
+        (lambda: tamiss.stroke_length(0.5, "x", 0.1, 1), "length"),
+        (lambda: tamiss.stroke_length(0.5, 1.0, None, 1), "jitter"),
+        (lambda: tamiss.dyadic_scale(1.0, None), "period"),
+        (lambda: tamiss.dyadic_scale(1.0, 0.0), "period"),
+        (lambda: tamiss.level_rule(1.0, "3"), "max_level"),
+        (lambda: tamiss.width_factor(0.5, "x"), "jitter"),
+        (lambda: tamiss.tam_opacity(0.5, 0.2, "x", False), "fade"),
+    ],
+)
+def test_field_faces_name_a_bad_argument(call, name):
+    with pytest.raises((ValueError, TypeError), match=f"^{name}: "):
+        call()

@@ -1,6 +1,6 @@
 """The bad-input catalogue: each case is an input a user could give and the outcome refnpr owes.
 
-Outcome classes (``Outcome``), as the hardening issue counts them:
+Outcome classes (``Outcome``):
 
 * ``clear``   -- the expected exception type (``ValueError``/``TypeError``, or the CLI's exit
   status 2 with one ``error:`` line), whose message matches the case's pattern: it names the
@@ -30,7 +30,7 @@ from typing import Any
 
 import pytest
 
-#: The classes of bad input (the issue's headings, plus what turned up on the way).
+#: The classes of bad input.
 CLASSES = ("sizes", "cache", "geometry", "messages", "nonsense", "files", "fuzz")
 OUTCOMES = ("clear", "correct", "unclear", "wrong", "crash")
 

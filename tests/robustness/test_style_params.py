@@ -74,7 +74,7 @@ def _channels(scene: str, style: str, **params: Any):
 
 M, N = "messages", "nonsense"
 CASES = [
-    # --- messages naming an inner variable (the quoted symptoms first) ----------------
+    # --- messages that once named an inner variable instead of the parameter -----------------
     Case(
         "halftone-uv-scale-1e300",
         M,

@@ -25,7 +25,7 @@ import numpy as np
 from refnpr._jit import njit
 
 from .._face import elementwise, face
-from .._validate import as_float, check_int, describe
+from .._validate import as_float, check_int, check_scalar, describe
 from ..lighting import luminance
 
 __all__ = [
@@ -228,7 +228,7 @@ def layer_frame(uv, duv_dx, duv_dy, uv_scale, angle) -> np.ndarray:
     layer at ``angle`` degrees (0: strokes along u) at each sample: uv' = uv * uv_scale,
     p = cos a u' + sin a v', q = -sin a u' + cos a v'. d_p, d_q are NaN where a gradient is 0 or
     not below 1e30 (no strokes there)."""
-    a = math.radians(float(angle))
+    a = math.radians(check_scalar("angle", angle))
     vecs = [_pairs(k, v) for k, v in (("uv", uv), ("duv_dx", duv_dx), ("duv_dy", duv_dy))]
     scale = _pairs("uv_scale", uv_scale)
     args = [(x[..., 0], x[..., 1]) for x in (*vecs, scale)]
@@ -244,7 +244,8 @@ def _dyadic_scale(d_q, period):
 def dyadic_scale(d_q, period: float) -> np.ndarray:
     """s = log2(d_q / (7 period)): the level at which rows (7 per cell) are ``period`` pixels
     apart, for d_q pixels per unit of q (Veryovka's eq. 5 for the coordinate across)."""
-    return elementwise(dyadic_scale.scalar, np.float64, as_float("d_q", d_q), float(period))
+    period = check_scalar("period", period, lo=0.0, lo_open=True)
+    return elementwise(dyadic_scale.scalar, np.float64, as_float("d_q", d_q), period)
 
 
 @njit
@@ -280,7 +281,7 @@ def level_rule(s, max_level: int) -> np.ndarray:
     ``max_level``, L = max_level and f = 0. Levels <= L are active, level L + 1 fades in with
     :func:`fade_in` (f)."""
     s_ = as_float("s", s, finite=True)
-    return elementwise(level_rule.scalar, np.float64, s_, int(max_level))
+    return elementwise(level_rule.scalar, np.float64, s_, check_int("max_level", max_level, lo=0))
 
 
 @njit
@@ -293,8 +294,11 @@ def _layer_density(darkness, tone_lo, density):
 def layer_density(darkness, tone_lo, density) -> np.ndarray:
     """rho = clip(density (d - d_k) / (1 - d_k), 0, 1): the fraction of a layer's strokes drawn
     at darkness d, for the layer starting at darkness d_k (``tone_lo``)."""
-    d = as_float("darkness", darkness)
-    return elementwise(layer_density.scalar, np.float64, d, as_float("tone_lo", tone_lo), density)
+    d, lo = as_float("darkness", darkness), as_float("tone_lo", tone_lo)
+    if np.any(lo >= 1.0):
+        raise ValueError(f"tone_lo: expected values < 1 (a layer must start below black), got {lo}")
+    rho = as_float("density", density)
+    return elementwise(layer_density.scalar, np.float64, d, lo, rho)
 
 
 @njit
@@ -306,7 +310,7 @@ def _row_distance(q, ry, rows, d_q):
 def row_distance(q, ry, rows, d_q) -> np.ndarray:
     """|q - ry / rows| d_q: pixels across from q to row ry of a level with ``rows`` rows per
     unit of q (7 2^level)."""
-    args = as_float("q", q), _ints("ry", ry), rows, as_float("d_q", d_q)
+    args = as_float("q", q), _ints("ry", ry), as_float("rows", rows), as_float("d_q", d_q)
     return elementwise(row_distance.scalar, np.float64, *args)
 
 
@@ -322,7 +326,8 @@ def _stroke_length(h, length, jitter, inv_scale):
 def stroke_length(h, length: float, jitter: float, level) -> np.ndarray:
     """lam (1 + j (2 h - 1)) 2^-level: a stroke's length along p, h its length hash."""
     inv = np.ldexp(1.0, -_ints("level", level))
-    return elementwise(stroke_length.scalar, np.float64, as_float("h", h), length, jitter, inv)
+    lam, j = as_float("length", length), as_float("jitter", jitter)
+    return elementwise(stroke_length.scalar, np.float64, as_float("h", h), lam, j, inv)
 
 
 @njit
@@ -361,7 +366,8 @@ def _width_factor(h, jitter):
 @face(_width_factor)
 def width_factor(h, jitter: float) -> np.ndarray:
     """1 + wj (2 h - 1): a stroke's width factor, h its width hash."""
-    return elementwise(width_factor.scalar, np.float64, as_float("h", h), float(jitter))
+    j = check_scalar("jitter", jitter)
+    return elementwise(width_factor.scalar, np.float64, as_float("h", h), j)
 
 
 @njit
@@ -376,7 +382,8 @@ def tam_opacity(limit, tau, fade: float, clip: bool) -> np.ndarray:
     """The TAM baseline's density decision of a stroke: 1 if tau < limit else 0 (``clip``), or
     clip((limit - tau) / fade, 0, 1); limit = rho * gain."""
     args = as_float("limit", limit), as_float("tau", tau)
-    return elementwise(tam_opacity.scalar, np.float64, *args, float(fade), bool(clip))
+    fade = check_scalar("fade", fade, lo=0.0, lo_open=not clip)
+    return elementwise(tam_opacity.scalar, np.float64, *args, fade, bool(clip))
 
 
 @njit

@@ -47,7 +47,7 @@ DERIVED = {
         "the flat values stay. orient_charts: with the triangle's chart symmetry M "
         "(_TAM_SYMMETRY of its vertices, row-major) and offset o (_TAM_OFFSET): uv = M uv + o, "
         "duv = M duv, uv_scale = |M| uv_scale; chart = _TAM_CHART (refnpr/styles/tamiss/"
-        "gather.py field_inputs, _kernels.smooth_duv)."
+        "gather.py field_inputs, _kernels._smooth_duv)."
     ),
     "tam-darkness": (
         "darkness = 1 - clip(luma . (m_a * ambient + sum_i m_d * f_d_i * color_i), 0, 1) with "

@@ -90,7 +90,7 @@ int wrap_index(int i, int n) {
 // lane's level when lod differs within a quad.
 ivec2 level_size(int which, int k) { return which == 0 ? screen_size[k] : normals_size[k]; }
 
-// GL_LINEAR / GL_REPEAT sample of level k (refnpr.texture._kernels._bilinear_into)
+// GL_LINEAR / GL_REPEAT sample of level k (refnpr.device.sampling.bilinear)
 real4 bilinear(sampler2D t, int which, int k, real2 uv) {
 #ifdef HW_FILTER
     return real4(textureLod(t, vec2(uv), float(k)));  // the sampler: LINEAR_MIPMAP_LINEAR, REPEAT
@@ -125,7 +125,7 @@ real4 trilinear(sampler2D t, int which, int levels, real2 uv, real lod) {
     return s;
 }
 
-// anisotropic footprint (refnpr.styles.halftone.screens.screen_footprint): probes and axis
+// anisotropic footprint (refnpr.device.sampling.footprint): probes and axis
 int probes;
 real2 axis;
 
@@ -160,7 +160,7 @@ real apply_lut(int k, real v) {
     return a + f * (b - a);
 }
 
-// bilinear clamp-to-edge indication sample (refnpr.styles.halftone.shading.sample_indication)
+// bilinear clamp-to-edge indication sample (refnpr.formulas.halftone.sample_indication)
 real sample_indication(real2 uv) {
     ivec2 sz = textureSize(t_indication, 0);
     int cols = sz.x, rows = sz.y;
@@ -231,7 +231,7 @@ void main() {
         cdy = real2(dot(cdy, d), real(0));
     }
 
-    // LOD and footprint (screens.screen_footprint)
+    // LOD and footprint (refnpr.device.sampling.footprint)
     ivec2 size0 = screen_size[0];
     real2 tex = real2(real(size0.x), real(size0.y));
     real px = length(cdx * tex), py = length(cdy * tex);
@@ -249,7 +249,7 @@ void main() {
     }
     lod += real(lod_offset);
 
-    // target intensity (shading.lit_intensity), with DOT3 stroke lighting (sec. 5.2)
+    // target intensity (refnpr/styles/halftone/_kernels.py lit_row), with DOT3 stroke lighting (sec. 5.2)
     bool bump = normals_levels > 0;
     real3 nmap = real3(0.5, 0.5, 1.0);
     real3 T = real3(0), B = real3(0);

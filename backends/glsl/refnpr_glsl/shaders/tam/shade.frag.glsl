@@ -3,8 +3,9 @@
 // TAM / RPTAM (the texture-space baseline of TAMISS, Szecsi et al.) in the fragment shader:
 // per sample, enumerate the strokes of the nested RPTAM seed field that cover it, draw them
 // anti-aliased across and at their ends with a per-sample density decision (clip or fade), and
-// composite the ink over the paper. Mirrors refnpr/styles/tamiss/_kernels.py (field_pass with
-// MODE_TAM_CLIP / MODE_TAM_FADE, _enumerate, smooth_duv) and gather.py (field_inputs, darkness).
+// composite the ink over the paper. Mirrors refnpr/styles/tamiss/_kernels.py (tam_pass with
+// the clip / fade opacity, _enumerate, _smooth_duv), gather.py (field_inputs) and
+// refnpr/formulas/tamiss/field.py (darkness, tam_opacity).
 // Configuration by #defines after the #version line (styles/tam.py):
 //   N_LAYERS, MAX_LEVEL, CAP, FADE_MODE (1 fade, 0 clip), SMOOTH (smooth derivatives),
 //   ORIENT (chart orientation), CONSTANT_TONE, HAS_PAPER, N_LIGHTS, N_OBJECTS,

@@ -1,7 +1,7 @@
 // TAMISS fragment gathering (Szecsi et al. sec. 3.1, fig. 6), one invocation per G-buffer sample.
 // mode 0: counts[i] = fragments of sample i; mode 1: write them at offsets[i] (refnpr's order:
 // layer, birth level, row, cell). Reproduces refnpr/styles/tamiss/gather.py field_inputs and
-// _kernels.py smooth_duv / _enumerate / field_pass (COUNT, EMIT) in double precision.
+// _kernels.py _smooth_duv / sample_inputs / _enumerate / field_gather in double precision.
 layout(local_size_x = 64) in;
 
 struct Frag { uint64_t id; float t; float x; float y; uint meta; };

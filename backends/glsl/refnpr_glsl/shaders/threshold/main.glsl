@@ -33,7 +33,7 @@ layout(location = 0) out vec4 frag;
 #define FILTER_PCF 1
 #define FILTER_ANALYTIC 2
 
-// ---- sampled thresholds (SampledThresholds.apply): T_n per threshold, weighted mean
+// ---- sampled thresholds (refnpr/styles/threshold/_kernels.py shade_threshold_for): T_n per threshold, weighted mean
 float T[NT_MAX];
 float W[NT_MAX];
 int n_t = 1;
