@@ -83,32 +83,24 @@ def _interp_parts(
     wanted: set[str], attributes: Mapping[str, int], s: int, f: int
 ) -> dict[str, int]:
     """Per-sample-grid buffers of the interpolation pass (mirrors ``raster/channels.py``)."""
-    attrs = set(attributes)
-    need_depth = "depth" in wanted
     parts: dict[str, int] = {}
-    if not needs_interpolation(wanted, attrs):
-        if need_depth:
-            parts["depth"] = s * f
-        return parts
-    need_uv_d = bool(_UV_D & wanted)
-    d_groups: list[int] = []
-    v_groups: list[int] = []
-    widths = {"uv": 2, "position": 3, **attributes}
-    for name, c in widths.items():
-        if {f"d{name}_dx", f"d{name}_dy"} & wanted or (name == "uv" and need_uv_d):
-            d_groups.append(c)
-        elif name in wanted:
-            v_groups.append(c)
-    # every family is written into its own arrays (the channel's, or a scratch one): no copies
-    dcols, vcols = sum(d_groups), sum(v_groups) + ("ndc_z" in wanted)
-    if dcols:  # value, d/dx and d/dy
-        parts["derivatives"] = 3 * dcols * s * f
-    if vcols:
-        parts["values"] = vcols * s * f
-    for name, comps in (("normal", 3), ("bary", 3)):
-        if name in wanted:
-            parts[name] = comps * s * f
-    if need_depth:
+    if needs_interpolation(wanted, set(attributes)):
+        # every family is written into its own arrays (the channel's, or a scratch one)
+        need_uv_d = bool(_UV_D & wanted)
+        dcols, vcols = 0, int("ndc_z" in wanted)
+        for name, c in {"uv": 2, "position": 3, **attributes}.items():
+            if {f"d{name}_dx", f"d{name}_dy"} & wanted or (name == "uv" and need_uv_d):
+                dcols += c
+            elif name in wanted:
+                vcols += c
+        if dcols:  # value, d/dx and d/dy
+            parts["derivatives"] = 3 * dcols * s * f
+        if vcols:
+            parts["values"] = vcols * s * f
+        for name in ("normal", "bary"):
+            if name in wanted:
+                parts[name] = 3 * s * f
+    if "depth" in wanted:
         parts["depth"] = s * f
     return parts
 
