@@ -55,6 +55,15 @@ def as_float(name: str, value, *, finite: bool = False) -> np.ndarray:
     return arr
 
 
+def as_vectors(name: str, value, k: int, *, finite: bool = False, hint: str = "") -> np.ndarray:
+    """``value`` as a float array of ``k``-vectors in its last axis, shape ``(..., k)``
+    (:func:`as_float`; ``ValueError`` naming ``name`` for another shape)."""
+    arr = as_float(name, value, finite=finite)
+    if arr.ndim < 1 or arr.shape[-1] != k:
+        raise ValueError(f"{name}: expected shape (..., {k}), got {describe(arr)}" + hint)
+    return arr
+
+
 def result_dtype(*values) -> np.dtype:
     """float32 if every array-valued floating input is float32 (Python scalars do not promote);
     float64 otherwise."""

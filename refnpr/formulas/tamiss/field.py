@@ -25,7 +25,7 @@ import numpy as np
 from refnpr._jit import njit
 
 from .._face import elementwise, face
-from .._validate import as_float, check_int, check_scalar, describe
+from .._validate import as_float, as_vectors, check_int, check_scalar, describe
 from ..lighting import luminance
 
 __all__ = [
@@ -215,13 +215,6 @@ def _layer_frame(uv, dx, dy, scale, ca, sa):
     return p, q, 1.0 / gp, 1.0 / gq
 
 
-def _pairs(name: str, value) -> np.ndarray:
-    arr = as_float(name, value)
-    if arr.ndim < 1 or arr.shape[-1] != 2:
-        raise ValueError(f"{name}: expected shape (..., 2), got {describe(arr)}")
-    return arr
-
-
 @face(_layer_frame)
 def layer_frame(uv, duv_dx, duv_dy, uv_scale, angle) -> np.ndarray:
     """(..., 4): p, q and the pixel spacings d_p = 1 / |grad p|, d_q = 1 / |grad q| of the
@@ -229,8 +222,8 @@ def layer_frame(uv, duv_dx, duv_dy, uv_scale, angle) -> np.ndarray:
     p = cos a u' + sin a v', q = -sin a u' + cos a v'. d_p, d_q are NaN where a gradient is 0 or
     not below 1e30 (no strokes there)."""
     a = math.radians(check_scalar("angle", angle))
-    vecs = [_pairs(k, v) for k, v in (("uv", uv), ("duv_dx", duv_dx), ("duv_dy", duv_dy))]
-    scale = _pairs("uv_scale", uv_scale)
+    vecs = [as_vectors(k, v, 2) for k, v in (("uv", uv), ("duv_dx", duv_dx), ("duv_dy", duv_dy))]
+    scale = as_vectors("uv_scale", uv_scale, 2)
     args = [(x[..., 0], x[..., 1]) for x in (*vecs, scale)]
     return elementwise(layer_frame.scalar, np.float64, *args, math.cos(a), math.sin(a))
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .._face import elementwise
-from .._validate import as_float, check_int, check_scalar, describe, result_dtype
+from .._validate import as_float, as_vectors, check_int, check_scalar, describe, result_dtype
 from .curve import cubic, cubic_slope
 from .moments import N_REGRESSORS, fragment_regressors, group_ids, normalize_t
 from .segments import visible_segments
@@ -204,9 +204,7 @@ def fit_strokes(
     if origin is None:
         o = np.zeros(batch + (2,), dtype=dt)
     else:
-        o = as_float("origin", origin, finite=True).astype(dt)
-        if o.shape[-1:] != (2,):
-            raise ValueError(f"origin: expected shape (..., 2), got {describe(o)}")
+        o = as_vectors("origin", origin, 2, finite=True).astype(dt)
         o = np.broadcast_to(o, batch + (2,))
     A = moment_matrix(M[..., _P])  # eq. 1: A = sum t_i t_i^T
     b = np.stack([M[..., _BX], M[..., _BY]], axis=-2)  # eq. 1: b = sum t_i x_i, sum t_i y_i

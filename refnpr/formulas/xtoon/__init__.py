@@ -22,7 +22,7 @@ from refnpr.device.scalars import clip01
 from refnpr.device.vectors import unit_scaled
 
 from .._face import Whole, elementwise, face
-from .._validate import as_float, check_scalar, describe, result_dtype
+from .._validate import as_float, as_vectors, check_scalar, describe, result_dtype
 from . import shapes, textures
 from .shapes import *  # noqa: F403
 from .textures import *  # noqa: F403
@@ -371,11 +371,7 @@ _TINY_FLOAT = float(np.finfo(np.float64).tiny)
 
 
 def _unit(name: str, value) -> np.ndarray:
-    arr = as_float(name, value, finite=True)
-    if arr.ndim < 1 or arr.shape[-1] != 3:
-        raise ValueError(
-            f"{name}: expected shape (..., 3), got {describe(arr)}; pass 3D vectors in the last axis"
-        )
+    arr = as_vectors(name, value, 3, finite=True, hint="; pass 3D vectors in the last axis")
     zero = np.all(arr == 0, axis=-1)
     if np.any(zero):
         i = int(np.flatnonzero(np.ravel(zero))[0])
