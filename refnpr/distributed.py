@@ -232,7 +232,18 @@ def render_sequence(
     bound = inspect.signature(_sequence.render_sequence).bind(*args, **kwargs)
     bound.apply_defaults()
     plan = _sequence._plan(**bound.arguments)
-    progress, todo, result = bound.arguments["progress"], plan.todo, plan.result()
+    with _sequence.claim(plan.out):
+        result = _run_sequence(
+            plan, bound.arguments["progress"], (client, workers, scheduler), chunk, warmup
+        )
+    result.seconds = time.perf_counter() - t_start
+    return result
+
+
+def _run_sequence(plan: Any, progress: Any, where: tuple, chunk: Any, warmup: int) -> Any:
+    """The missing frames of ``plan`` on the cluster of ``where`` (client, workers, scheduler)."""
+    client, workers, scheduler = where
+    todo, result = plan.todo, plan.result()
     missing = [f for f in todo if not plan.done(f)]
     for f in todo:
         if f not in missing:
@@ -262,7 +273,6 @@ def render_sequence(
                         _sequence._write_frame(plan, f, png, rgba, extra.get(f))
                         result._tick(f, "rendered", progress)
     result.rendered.sort()
-    result.seconds = time.perf_counter() - t_start
     return result
 
 

@@ -8,16 +8,23 @@ and files match is done. A stateless style skips done frames; a stateful one re-
 (or ``Style.state_frames()`` frames before the first frame still to render) up to the last frame
 still to render, without rewriting done frames. Either way the directory after any number of
 kills and restarts is byte-identical to an uninterrupted run (docs/animation.md).
+
+One run at a time writes a directory: a run holds an exclusive ``flock`` on ``DIR`` itself (POSIX;
+released when the run ends or its process dies; no file is left), and a second run on the same
+directory, in any process, is refused with a ValueError instead of removing the first run's
+temporary files under way.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import re
+import shutil
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,6 +37,11 @@ from .render import DEFAULT_STYLE, RenderContext, _check_args, as_scene
 from .scenes._params import check_int
 from .styles import Style, style_from_spec
 
+try:
+    import fcntl
+except ImportError:  # not POSIX: no lock
+    fcntl = None
+
 __all__ = [
     "SequenceResult",
     "frame_range",
@@ -39,11 +51,11 @@ __all__ = [
     "write_video",
 ]
 
-#: Frame file names: ``frame_00042.png`` / ``.exr`` / ``.json``.
+#: Frame file names: ``frame_00042.png`` / ``.exr`` / ``.json`` (six digits from frame 100000).
 FRAME_NAME = "frame_{:05d}"
 #: The temporary files of :func:`refnpr.image.atomic_file` for frame files (``.frame_00042.<10
 #: hex digits>.png``): removed when a run starts (left only by a SIGKILL).
-_TEMP_RE = re.compile(r"^\.frame_\d{5}\.[0-9a-f]{10}\.(png|exr|json)$")
+_TEMP_RE = re.compile(r"^\.frame_\d{5,}\.[0-9a-f]{10}\.(png|exr|json)$")
 
 #: progress(done, total, frame, status): status is "rendered", "skipped" or "state" (a frame
 #: shaded only to rebuild a stateful style's state).
@@ -199,8 +211,39 @@ def _write_exr(path: Path, rgba: np.ndarray) -> None:
     channels = {n: np.ascontiguousarray(arr[..., i]) for i, n in enumerate("RGBA")}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     with atomic_file(path, suffix=".exr") as tmp:
-        with OpenEXR.File(header, channels) as f:
-            f.write(str(tmp))
+        try:
+            with OpenEXR.File(header, channels) as f:
+                f.write(str(tmp))
+        except RuntimeError as exc:  # OpenEXR's I/O errors ("No space left on device")
+            _exr_write_failed(tmp, path, arr.shape, str(exc))
+        if not _reads_back(tmp, arr.shape):
+            _exr_write_failed(tmp, path, arr.shape, "the written file does not read back")
+
+
+def _reads_back(tmp: Path, shape: tuple) -> bool:
+    """Whether the EXR at ``tmp`` reads back with channels of ``shape[:2]``: OpenEXR's writer does
+    not always report a failed write (a full disk can leave a truncated file and no error)."""
+    import OpenEXR
+
+    try:
+        with OpenEXR.File(str(tmp)) as f:
+            got = [c.pixels.shape[:2] for c in f.channels().values()]
+    except Exception:  # any failure to read back is a failed write
+        return False
+    return bool(got) and all(tuple(g) == tuple(shape[:2]) for g in got)
+
+
+def _exr_write_failed(tmp: Path, path: Path, shape: tuple, detail: str) -> None:
+    """ValueError for an EXR frame that could not be written, naming ``path`` and the free space
+    where a full disk is the likely cause (the temporary file is then removed, ``path`` kept)."""
+    free = shutil.disk_usage(tmp.parent).free
+    full = "No space left" in detail or free < max(1 << 20, 16 * int(np.prod(shape)))
+    why = (
+        f"the file system is full ({free} bytes free); free some space or write elsewhere"
+        if full
+        else f"{detail}; check the disk and try again"
+    )
+    raise ValueError(f"exr: writing {str(path)!r} failed: {why}") from None
 
 
 def _check_style_tracks(scene: Any, spec: Any, style: Style, user_style: bool) -> list[str]:
@@ -305,7 +348,7 @@ def _plan(
     exr: bool,
     progress: Any,
 ) -> _Plan:
-    """Check the arguments of a sequence run, create ``out_dir`` and remove stray temporaries."""
+    """Check the arguments of a sequence run and create ``out_dir``."""
     width, height, spp = _check_args(width, height, spp)
     if not isinstance(exr, (bool, np.bool_)):
         raise TypeError(f"exr: expected a bool, got {type(exr).__name__} {exr!r}")
@@ -326,9 +369,6 @@ def _plan(
     if isinstance(spec, str):
         spec = {"name": spec}
     out.mkdir(parents=True, exist_ok=True)
-    for p in out.iterdir():  # the temporaries a SIGKILL left
-        if _TEMP_RE.match(p.name) and p.is_file():
-            p.unlink(missing_ok=True)
     return _Plan(
         scene=scene,
         spec=spec,
@@ -344,6 +384,40 @@ def _plan(
         spp=spp,
         exr=bool(exr),
     )
+
+
+@contextlib.contextmanager
+def claim(out: Path) -> Iterator[None]:
+    """Hold ``out``'s run lock for the block and remove the temporaries a killed run left.
+
+    Raises
+    ------
+    ValueError
+        Another run (of this or another process) holds the lock.
+    """
+    if fcntl is None:
+        _remove_temporaries(out)
+        yield
+        return
+    fd = os.open(out, os.O_RDONLY)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise ValueError(
+                f"out_dir: {str(out)!r} is being written by another `refnpr animate` run; wait "
+                "for it to end, or give another directory"
+            ) from None
+        _remove_temporaries(out)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+def _remove_temporaries(out: Path) -> None:
+    for p in out.iterdir():  # the temporaries a SIGKILL left
+        if _TEMP_RE.match(p.name) and p.is_file():
+            p.unlink(missing_ok=True)
 
 
 class _Shader:
@@ -443,6 +517,14 @@ def render_sequence(
     """
     t_start = time.perf_counter()
     plan = _plan(scene, style, width, height, spp, out_dir, frames, exr, progress)
+    with claim(plan.out):
+        result = _run(plan, progress)
+    result.seconds = time.perf_counter() - t_start
+    return result
+
+
+def _run(plan: _Plan, progress: SequenceProgress | None) -> SequenceResult:
+    """The frames of ``plan`` not done yet, rendered in order (module docstring)."""
     todo, result = plan.todo, plan.result()
     done_flags = {f: plan.done(f) for f in todo}
     missing = [f for f in todo if not done_flags[f]]
@@ -464,7 +546,6 @@ def render_sequence(
             continue
         _write_frame(plan, f, image.to_png_bytes(), image.rgba if plan.exr else None)
         result._tick(f, "rendered", progress)
-    result.seconds = time.perf_counter() - t_start
     return result
 
 

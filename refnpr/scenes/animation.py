@@ -32,6 +32,9 @@ from .tracks import (
 
 __all__ = ["Animation", "Track", "Keyframe", "check_keys_in_range", "parse_target"]
 
+#: The most frames an animation may have (a frame is a file; ~11.5 hours at 24 fps).
+MAX_FRAMES = 1_000_000
+
 _PARTS = {
     "camera": {"eye": 3, "target": 3, "up": 3, "fov_y": 1, "near": 1, "far": 1},
     "light": {"direction": 3, "position": 3, "color": 3},
@@ -197,7 +200,7 @@ class Animation:
     Attributes
     ----------
     frames : int
-        Number of frames (>= 1); frame numbers run over ``[0, frames - 1]``.
+        Number of frames (1 to :data:`MAX_FRAMES`); frame numbers run over ``[0, frames - 1]``.
     fps : float
         Frames per second (> 0): time = frame / fps.
     tracks : tuple of Track
@@ -209,7 +212,8 @@ class Animation:
     tracks: tuple[Track, ...] = ()
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "frames", check_int("frames", self.frames, minimum=1))
+        frames = check_int("frames", self.frames, minimum=1, maximum=MAX_FRAMES)
+        object.__setattr__(self, "frames", frames)
         object.__setattr__(self, "fps", check_real("fps", self.fps, positive=True))
         tracks = tuple(self.tracks)
         seen: set[str] = set()

@@ -64,7 +64,7 @@ from importlib import resources
 from pathlib import Path
 
 from ..raster import Camera
-from .animation import Animation, Track, check_keys_in_range
+from .animation import MAX_FRAMES, Animation, Track, check_keys_in_range
 from .registry import mesh_from_spec
 from .scene import Light, Material, Scene, SceneObject, transform_matrix
 from .tracks import Keyframe, quaternion_from_axis_angle
@@ -381,6 +381,11 @@ def parse_toml_bytes(
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise error(f"{source}: invalid TOML: {exc}") from None
+    except RecursionError:  # tomllib parses nested arrays and tables recursively
+        raise error(
+            f"{source}: invalid TOML: arrays or inline tables nested too deeply to parse (a scene "
+            "needs at most a few levels); check the file for runaway brackets"
+        ) from None
 
 
 def list_scenes() -> dict[str, str]:
@@ -396,8 +401,10 @@ def scene_frames(name: str) -> int:
     if animation is None:
         return 1
     frames = animation.get("frames") if isinstance(animation, Mapping) else None
-    if isinstance(frames, bool) or not isinstance(frames, int) or frames < 1:
-        raise SceneFileError(f"{path.name}: [animation]: frames: expected an integer >= 1")
+    if isinstance(frames, bool) or not isinstance(frames, int) or not 1 <= frames <= MAX_FRAMES:
+        raise SceneFileError(
+            f"{path.name}: [animation]: frames: expected an integer from 1 to {MAX_FRAMES}"
+        )
     return frames
 
 

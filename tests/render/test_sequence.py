@@ -390,3 +390,85 @@ def test_video_errors(tmp_path, monkeypatch):
         ValueError, match=r"needs ffmpeg from the imageio-ffmpeg package; .*refnpr\[video\]"
     ):
         write_video([Path("a.png")], tmp_path / "v.mp4", 12)
+
+
+# ------------------------------------------------------------------------------ shared directories
+def test_a_second_run_on_a_directory_in_use_is_refused(tmp_path):
+    from refnpr.sequence import claim
+
+    path = write_scene(tmp_path, frames=2)
+    out = tmp_path / "frames"
+    out.mkdir()
+    with claim(out):  # as a first run holds it, in any process (flock on the directory)
+        with pytest.raises(ValueError, match=r"out_dir: .*frames.* another `refnpr animate` run"):
+            render_sequence(path, None, W, H, 1, out_dir=out)
+        assert not list(out.iterdir())  # refused before any file was written or removed
+    assert render_sequence(path, None, W, H, 1, out_dir=out).rendered == [0, 1]
+    assert sorted(p.name for p in out.iterdir())[0] == "frame_00000.json"  # no lock file left
+
+
+def test_a_second_process_is_refused_while_a_run_holds_the_directory(tmp_path):
+    out = tmp_path / "frames"
+    out.mkdir()
+    holder = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import sys, time\nfrom pathlib import Path\nfrom refnpr.sequence import claim\n"
+            "with claim(Path(sys.argv[1])):\n    print('held', flush=True)\n    time.sleep(60)\n",
+            str(out),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        from refnpr.cli import main
+
+        path = write_scene(tmp_path, frames=2)
+        assert main(["animate", str(path), "-o", str(out), "--size", "8x6", "--spp", "1"]) == 2
+    finally:
+        holder.kill()
+        holder.wait(timeout=30)
+
+
+def test_temporaries_of_frames_past_99999_are_removed(tmp_path):
+    path = write_scene(tmp_path, frames=2)
+    out = tmp_path / "frames"
+    out.mkdir()
+    stray = [".frame_00001.0123456789.png", ".frame_123456.0123456789.exr"]
+    kept = [".frame_1.0123456789.png", "notes.frame_123456.0123456789.png"]  # not ours
+    for name in stray + kept:
+        (out / name).write_bytes(b"partial")
+    render_sequence(path, None, W, H, 1, out_dir=out, frames="0:1")
+    names = {p.name for p in out.iterdir()}
+    assert not names & set(stray)
+    assert set(kept) <= names
+
+
+def test_frame_counts_past_the_maximum_are_refused_up_front(tmp_path):
+    from refnpr.scenes.animation import MAX_FRAMES, Animation
+
+    path = write_scene(tmp_path, frames=2)
+    text = path.read_text().replace("frames = 2", "frames = 1000000000")
+    path.write_text(text)
+    with pytest.raises(ValueError, match=rf"frames: expected an integer <= {MAX_FRAMES}"):
+        render_sequence(path, None, W, H, 1, out_dir=tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+    assert Animation(MAX_FRAMES).frames == MAX_FRAMES
+
+
+def test_a_full_disk_while_writing_an_exr_frame_is_a_clear_error(tmp_path, monkeypatch):
+    import contextlib
+
+    import refnpr.sequence as sequence
+
+    @contextlib.contextmanager
+    def onto_a_full_disk(path, *, suffix=""):  # every write fails with ENOSPC
+        yield Path("/dev/full")
+
+    monkeypatch.setattr(sequence, "atomic_file", onto_a_full_disk)
+    rng = np.random.default_rng(1)
+    for rgba in (rng.random((30, 40, 4)), np.zeros((30, 40, 4))):  # large and tiny writes
+        with pytest.raises(ValueError, match=r"exr: writing '.*frame_00000\.exr' failed: "):
+            sequence._write_exr(tmp_path / "frame_00000.exr", rgba)

@@ -252,6 +252,11 @@ def test_minimal_scene_defaults(tmp_path):
             r"trip.toml: top level: ambient\[0\]: expected a number >= 0",
         ),
         ('name = "trip"', "name = [", r"trip.toml: invalid TOML"),
+        (  # tomllib parses nesting recursively: a RecursionError without the check
+            'name = "trip"',
+            "name = " + "[" * 100_000 + "]" * 100_000,
+            r"trip.toml: invalid TOML: arrays or inline tables nested too deeply",
+        ),
         ('description = "every feature once"', "objects = 1", "top level: unknown key 'objects'"),
     ],
 )
