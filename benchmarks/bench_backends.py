@@ -6,7 +6,7 @@ Usage::
     python benchmarks/bench_backends.py --repeat 5 --json benchmarks/results/backends.json
     python benchmarks/bench_backends.py --styles smooth,toon --size 640x360 --repeat 2   # quick
 
-Per style, the first golden case of that style (``golden/*.toml``) is re-exported as a kit case
+Per style, the first golden case of that style (``refnpr/suite/*.toml``) is re-exported as a kit case
 at ``--size`` (its scene, style table and spp unchanged; ``refnpr kit export`` into a temporary
 directory), then, alternating in one process:
 
@@ -50,7 +50,7 @@ from typing import Any
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
-SUITE = REPO / "golden" / "suite.toml"
+SUITE = REPO / "refnpr" / "suite" / "suite.toml"
 STYLES = ("smooth", "toon", "threshold", "halftone", "xtoon", "tam", "tamiss", "contours")
 
 

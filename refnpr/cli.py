@@ -13,7 +13,6 @@ from pathlib import Path
 
 __all__ = ["main"]
 
-DEFAULT_SUITE = Path("golden") / "suite.toml"
 DEFAULT_SIZE = (768, 432)  # `refnpr render`: a 16:9 frame, the default scene's framing
 DEFAULT_SPP = 4  # 2x2 samples per pixel: anti-aliased edges and contours
 
@@ -308,14 +307,17 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def _suite(args: argparse.Namespace) -> Path:
-    suite = Path(args.suite)
-    if args.suite == str(DEFAULT_SUITE) and not suite.exists():
+    """The --suite file, or the suite installed with refnpr (refnpr/suite/suite.toml)."""
+    if args.suite is not None:
+        return Path(args.suite)
+    from .golden import DEFAULT_SUITE
+
+    if not DEFAULT_SUITE.is_file():
         raise ValueError(
-            f"--suite: no suite file at {str(suite.absolute())!r} (the default is "
-            f"{str(DEFAULT_SUITE)!r}, relative to the current directory); run refnpr "
-            f"{_command(args)} in a refnpr checkout, or pass --suite FILE"
+            f"--suite: the suite installed with refnpr is missing ({str(DEFAULT_SUITE)!r} does "
+            "not exist): reinstall refnpr, or pass --suite FILE"
         )
-    return suite
+    return DEFAULT_SUITE
 
 
 def _cmd_golden(args: argparse.Namespace) -> int:
@@ -331,6 +333,9 @@ def _cmd_golden(args: argparse.Namespace) -> int:
         check_suite = functools.partial(distributed.check_suite, **cluster)
         update_suite = functools.partial(distributed.update_suite, **cluster)
     if args.update:
+        from .golden import check_writable_suite
+
+        check_writable_suite(suite)  # before a cluster starts
         update_suite(suite, only=args.only)
         return 0
     results = check_suite(suite, only=args.only)
@@ -422,9 +427,13 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_kit_export(args: argparse.Namespace) -> int:
+    from .golden import load_suite
     from .kit.export import export_kit
+    from .kit.provenance import describe_source
 
     suite = _suite(args)
+    load_suite(suite)  # a bad suite is reported before the line that names it
+    print(describe_source(suite))
     log = (lambda line: None) if args.quiet else print
     written = export_kit(args.dir, suite=suite, only=args.only, log=log)
     print(f"exported {len(written)} case(s) to {args.dir}")
@@ -444,7 +453,9 @@ def _add_style_options(p: argparse.ArgumentParser, style_help: str) -> None:
 
 def _add_suite_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "--suite", default=str(DEFAULT_SUITE), help="suite file (default golden/suite.toml)"
+        "--suite",
+        metavar="FILE",
+        help="suite file (default: the suite installed with refnpr, refnpr/suite/suite.toml)",
     )
     p.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
 
@@ -557,7 +568,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.set_defaults(func=_cmd_golden)
 
     c = sub.add_parser("compare", help="compare another backend's renders with reference images")
-    c.add_argument("reference", help="directory of reference PNGs (e.g. golden/)")
+    c.add_argument("reference", help="directory of reference PNGs (e.g. refnpr/suite/)")
     c.add_argument("candidate", help="directory of candidate PNGs with the same file names")
     c.add_argument("--out", help="write NAME.diff.png and report.json here")
     c.add_argument("--json", help="write the metrics as JSON to this file")
@@ -571,7 +582,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     gal.add_argument("out_dir", help="directory for the PNGs (e.g. docs/images/gallery)")
     gal.add_argument("--size", type=_size, default=(320, 240), help="WxH of each image (320x240)")
-    gal.add_argument("--suite", help="golden suite file (golden/suite.toml)")
+    gal.add_argument(
+        "--suite", metavar="FILE", help="golden suite file (default: the one installed with refnpr)"
+    )
     gal.add_argument("--spp", type=int, help="samples per pixel (the cases')")
     gal.add_argument("--only", nargs="+", metavar="FILE", help="only these entries (by file name)")
     gal.add_argument("--markdown", action="store_true", help="print the README table")
@@ -598,7 +611,39 @@ def build_parser() -> argparse.ArgumentParser:
     kc.add_argument("renders_dir", help="the backend's renders: <case>.png, <case>/<channel>.npy")
     kc.add_argument("--report", metavar="DIR", help="write index.html and masks")
     kc.add_argument("--json", metavar="FILE", help="write the metrics as JSON")
+    kc.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
+    kc.add_argument("--styles", nargs="+", metavar="NAME", help="only the cases of these styles")
+    kc.add_argument(
+        "--missing",
+        choices=("fail", "skip"),
+        default="fail",
+        help="a case without a render: fail (default) or skip; listed apart, last, either way",
+    )
     kc.set_defaults(func=_run_of("kit.check"))
+    kd = ksub.add_parser(
+        "diff",
+        help="list the cases that changed between two exported kits",
+        description=(
+            "List the cases added, removed and changed between two exported kits, and what "
+            "changed in each: its inputs, tolerance, expected images or only its derived texts "
+            "(with the case.json keys and files that differ). Both kits are read as untrusted "
+            "input. Exit status: 0 identical, 1 changed, 2 an error."
+        ),
+    )
+    kd.add_argument("old", help="the kit you tested against")
+    kd.add_argument("new", help="the updated kit")
+    kd.add_argument("--json", metavar="FILE", help="write the changes as JSON")
+    kd.set_defaults(func=_run_of("kit.diff"))
+    km = ksub.add_parser(
+        "mutants",
+        help="render a kit with refnpr under typical GPU-port bugs and show which cases catch them",
+    )
+    km.add_argument("kit_dir", help="an exported kit (refnpr kit export)")
+    km.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
+    km.add_argument("--bugs", nargs="+", metavar="BUG", help="only these bugs (default all)")
+    km.add_argument("--json", metavar="FILE", help="write the case x bug matrix as JSON")
+    km.add_argument("--markdown", action="store_true", help="print the matrix as a Markdown table")
+    km.set_defaults(func=_run_of("kit.mutants"))
 
     co = sub.add_parser(
         "coherence",

@@ -47,7 +47,7 @@ class GalleryEntry:
     caption: str
 
 
-#: The case that shows each paper best (read from golden/*.toml), in README order.
+#: The case that shows each paper best (read from refnpr/suite/*.toml), in README order.
 GALLERY: tuple[GalleryEntry, ...] = (
     GalleryEntry(
         "veryovka-fig6-vase-cross-filtered",
@@ -86,8 +86,10 @@ DEFAULT_SIZE = (320, 240)
 
 
 def default_suite() -> Path:
-    """``golden/suite.toml`` of the checkout this package lives in (an editable install)."""
-    return Path(__file__).resolve().parents[1] / "golden" / "suite.toml"
+    """The golden suite installed with refnpr (``refnpr/suite/suite.toml``)."""
+    from .golden import DEFAULT_SUITE  # imported on use: `refnpr --help` stays instant
+
+    return DEFAULT_SUITE
 
 
 def compact_pixels(rgba: np.ndarray) -> np.ndarray:

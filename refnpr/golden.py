@@ -1,8 +1,11 @@
-"""Golden-image suite: one module both checks and regenerates the ground truth in ``golden/``.
+"""Golden-image suite: one module both checks and regenerates the ground truth.
 
-``golden/suite.toml`` lists cases (scene x style x size). Each image case ``NAME`` is stored as
-``golden/NAME.png`` (8-bit sRGB RGBA). G-buffer cases (``kind = "gbuffer"``) store
-``golden/NAME.npz`` with float32 channels, for backends that compare their rasterizer itself.
+The suite ships inside the package, in ``refnpr/suite/`` (:data:`SUITE_DIR`), so an installed
+refnpr checks itself and exports the conformance kit from any directory. ``suite.toml`` there
+lists cases (scene x style x size). Each image case ``NAME`` is stored beside it as
+``NAME.png`` (8-bit sRGB RGBA). G-buffer cases (``kind = "gbuffer"``) store ``NAME.npz`` with
+float32 channels, for backends that compare their rasterizer itself. Any other suite file works
+the same way (its golden files beside it).
 
 * ``update_suite`` renders every case and writes its files (atomically).
 * ``check_suite`` re-renders and compares; a missing golden file is a failure, never a skip. On a
@@ -45,6 +48,7 @@ Suite format::
 from __future__ import annotations
 
 import re
+import tempfile
 from collections.abc import Callable, Iterable, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -60,6 +64,12 @@ from .render import render
 from .scenes.toml_format import parse_toml_bytes
 
 __all__ = [
+    "SUITE_DIR",
+    "DEFAULT_SUITE",
+    "source_checkout",
+    "is_packaged_suite",
+    "default_failure_dir",
+    "check_writable_suite",
     "GoldenCase",
     "CaseResult",
     "RenderCases",
@@ -93,6 +103,50 @@ _DEFAULTS: dict[str, Any] = {
     "description": "",
 }
 _NAME = re.compile(r"^[a-z0-9][a-z0-9_\-]*$")
+
+#: The golden suite shipped in the package: ``suite.toml``, the ``*.toml`` files it includes, the
+#: golden images (``*.png``) and G-buffers (``*.npz``).
+SUITE_DIR = Path(__file__).resolve().parent / "suite"
+#: The suite ``refnpr golden`` and ``refnpr kit export`` use when no ``--suite`` is given.
+DEFAULT_SUITE = SUITE_DIR / "suite.toml"
+
+
+def source_checkout() -> Path | None:
+    """The source tree refnpr runs from (a checkout, installed editable or put on ``sys.path``):
+    the directory that holds ``pyproject.toml`` beside the ``refnpr`` package. None for a
+    regular install (a wheel in site-packages)."""
+    root = Path(__file__).resolve().parent.parent
+    return root if (root / "pyproject.toml").is_file() else None
+
+
+def is_packaged_suite(suite_path: str | Path) -> bool:
+    """Whether ``suite_path`` is the suite file shipped in the package (:data:`DEFAULT_SUITE`)."""
+    try:
+        return Path(suite_path).resolve() == DEFAULT_SUITE
+    except (OSError, RuntimeError):  # a symlink loop
+        return False
+
+
+def default_failure_dir(suite_path: str | Path) -> Path:
+    """Where :func:`check_suite` writes a failing case's images by default: ``_failures/`` beside
+    the suite file, or, for the suite of an installed (not editable) refnpr, a
+    ``refnpr-golden-failures`` directory in the system temporary directory (site-packages is
+    no place for them, and may not be writable)."""
+    if is_packaged_suite(suite_path) and source_checkout() is None:
+        return Path(tempfile.gettempdir()) / "refnpr-golden-failures"
+    return Path(suite_path).parent / "_failures"
+
+
+def check_writable_suite(suite_path: str | Path) -> None:
+    """A ValueError if ``suite_path`` is the suite of an installed (not editable) refnpr: its
+    golden files are part of the package, and :func:`update_suite` must not rewrite them."""
+    if is_packaged_suite(suite_path) and source_checkout() is None:
+        raise ValueError(
+            f"suite: {str(suite_path)!r} is the golden suite installed with refnpr; updating it "
+            "would overwrite the package's reference images. Regenerate them in a refnpr "
+            "checkout (pip install -e .), or copy the directory "
+            f"{str(SUITE_DIR)!r} and pass --suite COPY/suite.toml"
+        )
 
 
 @dataclass(frozen=True)
@@ -129,7 +183,8 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
     if not path.is_file():
         raise ValueError(
             f"suite: {str(path)!r} does not exist (looked for {str(path.absolute())!r}); "
-            "expected a suite file such as golden/suite.toml of a refnpr checkout"
+            "give an existing suite file (TOML), or leave --suite out to use the suite "
+            "installed with refnpr"
         )
     data = _read_toml(path)
     unknown = set(data) - {"defaults", "case", "include"}
@@ -285,9 +340,16 @@ def update_suite(
     ``render_cases`` (see :data:`RenderCases`) renders the cases elsewhere (a Dask cluster:
     :func:`refnpr.distributed.update_suite`); each file is written as its render arrives.
     Returns the files in suite order.
+
+    Raises
+    ------
+    ValueError
+        The suite cannot be read, an unknown name in ``only``, or ``suite_path`` is the suite of
+        an installed (not editable) refnpr, whose golden files are part of the package.
     """
     suite_path = Path(suite_path)
     root = suite_path.parent
+    check_writable_suite(suite_path)
     cases = _select(load_suite(suite_path), only)
     written: dict[int, Path] = {}
     with _renders(render_cases, cases, catch=False) as renders:
@@ -369,13 +431,19 @@ def check_suite(
 ) -> list[CaseResult]:
     """Re-render every case and compare with its golden file. Missing golden files fail.
 
+    A failing image case's ``reference``, ``result`` and ``diff`` PNGs go to
+    ``failure_dir / NAME/`` (default: :func:`default_failure_dir`).
+
     ``render_cases`` (see :data:`RenderCases`) renders the cases elsewhere (a Dask cluster:
     :func:`refnpr.distributed.check_suite`); the comparison, the messages and the failure
     images are the same. Results are in suite order.
     """
     suite_path = Path(suite_path)
     root = suite_path.parent
-    fail_root = Path(failure_dir) if failure_dir is not None else root / "_failures"
+    if failure_dir is not None:
+        fail_root = Path(failure_dir)
+    else:
+        fail_root = default_failure_dir(suite_path)
     cases = _select(load_suite(suite_path), only)
     results: dict[int, CaseResult] = {}
     present = []

@@ -32,7 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_one_entry_per_paper_plus_the_tam_tamiss_pair():
     cases = {c.name: c for c in load_suite(default_suite())}
-    assert default_suite() == ROOT / "golden" / "suite.toml"
+    assert default_suite() == ROOT / "refnpr" / "suite" / "suite.toml"
     prefixes = [e.case.split("-")[0] for e in GALLERY]
     assert sorted(set(prefixes)) == ["halftone", "tamiss", "veryovka", "xtoon"]
     styles = set()

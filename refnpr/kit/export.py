@@ -2,12 +2,12 @@
 layout and every key: ``docs/kit.md``).
 
 Each case is built in a temporary directory beside its target and renamed into place, so a case
-directory is never partial; ``index.json`` is written last (atomically).
+directory is never partial; ``index.json`` is written last (atomically), with the provenance of
+the export and the content hashes of every case (refnpr.kit.provenance, refnpr.kit.content).
 """
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import tempfile
@@ -18,23 +18,31 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from ..golden import GoldenCase, load_suite
+from ..golden import DEFAULT_SUITE, GoldenCase, load_suite
 from ..image import atomic_file, read_image_file
 from ..raster import rasterize
 from . import KIT_FORMAT, KIT_VERSION
 from ._json import jsonable, write_json
 from .camera import camera_entry, sample_positions
+from .content import (
+    GROUPS,
+    case_files,
+    case_hashes,
+    digest,
+    is_digest,
+    list_files,
+    read_bytes,
+    read_json,
+)
 from .derived import channel_derived, generic_derived
 from .exr import write_exr
+from .provenance import provenance
 from .scene_export import kit_meshes, lights_entry, objects_entry
 from .schema import SCHEMA_FILES, schema_path
 from .styles import export_style, style_name
 from .tolerance import tolerance_entry
 
 __all__ = ["export_kit", "export_case", "DEFAULT_SUITE"]
-
-#: The suite exported when none is given (relative to the working directory).
-DEFAULT_SUITE = Path("golden") / "suite.toml"
 
 RESOLVE = {
     "filter": "box",
@@ -175,8 +183,8 @@ def _export_gbuffer(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) 
     opts = {"texture_size": tuple(case.texture_size)} if case.texture_size else {}
     data["textures"] = {}
     # the ground truth of the kit's own inputs: refnpr rasterizing the float32 kit meshes
-    # (golden/<name>.npz was rasterized from the float64 originals; "golden_frac_over" says
-    # how far apart the two are, measured with the case's rtol/atol)
+    # (the golden <name>.npz beside the suite file was rasterized from the float64 originals;
+    # "golden_frac_over" says how far apart the two are, measured with the case's rtol/atol)
     gb = rasterize(
         kit_meshes(scene), scene.camera, case.width, case.height, case.channels, case.spp, **opts
     )
@@ -271,7 +279,8 @@ def export_kit(
     dir : path
         The kit directory (created; an existing kit is updated case by case).
     suite : path, optional
-        The suite file (default ``golden/suite.toml``); golden files are read beside it.
+        The suite file (default: the suite installed with refnpr,
+        :data:`refnpr.golden.DEFAULT_SUITE`); golden files are read beside it.
     only : list of str, optional
         Case names to export (all when None).
     log : callable(str), optional
@@ -301,30 +310,86 @@ def export_kit(
             raise type(exc)(f"case {case.name!r}: {exc}") from exc
         if log is not None:
             log(f"wrote {written[-1]}")
-    _write_index(directory)
+    _write_index(directory, provenance(suite_path), {c.name for c in cases})
     return written
 
 
-def _write_index(directory: Path) -> None:
-    """index.json listing every case directory of the kit (those exported earlier too)."""
+def _earlier(directory: Path) -> tuple[dict[str, Any] | None, dict[str, Any]]:
+    """The provenance of the kit's previous index.json and its entries by case name (nothing
+    when there is none or it cannot be read: the cases it described then read as unknown)."""
+    try:
+        old = read_json(directory / "index.json", what="index.json")
+    except ValueError:
+        return None, {}
+    if not isinstance(old, dict) or not isinstance(old.get("cases"), list):
+        return None, {}
+    entries = {
+        e["name"]: e for e in old["cases"] if isinstance(e, dict) and isinstance(e.get("name"), str)
+    }
+    prov = old.get("provenance")
+    return (prov if isinstance(prov, dict) else None), entries
+
+
+def _carried(entry: Any, case_dir: Path, what: str) -> tuple[dict, dict] | None:
+    """The hashes and file digests an earlier index.json records for a case this export did not
+    write, when the entry is intact: the same file names, the same case.json (hashing the rest
+    of every earlier case again on each export would cost the whole kit's size)."""
+    if not isinstance(entry, dict):
+        return None
+    hashes, files = entry.get("hashes"), entry.get("files")
+    if not (
+        isinstance(hashes, dict)
+        and sorted(hashes) == sorted(GROUPS)
+        and all(is_digest(v) for v in hashes.values())
+        and isinstance(files, dict)
+        and all(is_digest(v) for v in files.values())
+    ):
+        return None
+    if list(files) != list(list_files(case_dir, what=what)):
+        return None
+    if files.get("case.json") != digest(read_bytes(case_dir / "case.json", what=what)):
+        return None
+    return hashes, files
+
+
+def _write_index(directory: Path, prov: dict[str, Any], exported: set[str]) -> None:
+    """index.json listing every case directory of the kit (those exported earlier too), with
+    ``prov`` and each case's content hashes. A case exported earlier, not now, keeps the
+    provenance it had (``null``: unknown) in its entry when that differs from ``prov``, and
+    its hashes when its earlier entry is intact (:func:`_carried`)."""
+    old_prov, old_entries = _earlier(directory)
     entries = []
     for case_json in sorted(directory.glob("*/case.json")):
-        if case_json.parent.name.startswith("."):
+        case_dir = case_json.parent
+        if case_dir.name.startswith("."):
             continue
-        data = json.loads(case_json.read_text(encoding="utf-8"))
+        what = f"case {case_dir.name!r}"
+        data = read_json(case_json, what=what)
+        name = data["name"]
+        kept = None if name in exported else _carried(old_entries.get(name), case_dir, what)
+        if kept is None:
+            files = case_files(case_dir, what=what)
+            kept = case_hashes(data, files), files
         style = data.get("style")
-        entries.append(
-            {
-                "name": data["name"],
-                "kind": data["kind"],
-                "style": style["name"] if style else None,
-                "case": f"{case_json.parent.name}/case.json",
-            }
-        )
+        entry = {
+            "name": name,
+            "kind": data["kind"],
+            "style": style["name"] if style else None,
+            "case": f"{case_dir.name}/case.json",
+            "hashes": kept[0],
+            "files": kept[1],
+        }
+        if name not in exported:
+            before = old_entries.get(name, {}).get("provenance", old_prov)
+            if before != prov:
+                entry["provenance"] = before if isinstance(before, dict) else None
+        entries.append(entry)
     index = {
         "format": KIT_FORMAT,
         "version": KIT_VERSION,
         "refnpr": __version__,
+        "provenance": prov,
+        "hashes": {"algorithm": "sha256", "groups": list(GROUPS)},
         "schema": "case.schema.json",
         "cases": entries,
     }

@@ -16,12 +16,12 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from refnpr.golden import load_suite
+from refnpr.golden import DEFAULT_SUITE, load_suite
 from refnpr.raster import rasterize
 from refnpr.scenes import load_scene
 from refnpr.styles import ShadeContext, style_from_spec
 
-SUITE = Path(__file__).resolve().parents[2] / "golden" / "suite.toml"
+SUITE = DEFAULT_SUITE
 
 
 @functools.cache

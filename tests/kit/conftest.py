@@ -18,8 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from refnpr.golden import DEFAULT_SUITE
+
 REPO = Path(__file__).resolve().parents[2]
-SUITE = REPO / "golden" / "suite.toml"
+SUITE = DEFAULT_SUITE
 
 
 def export_cases(directory: Path, names: list[str] | None = None) -> dict[str, str]:

@@ -3,21 +3,23 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import imageio.v3 as iio
 import jsonschema
 import numpy as np
 import pytest
 
+from refnpr import __version__
 from refnpr.cli import main
-from refnpr.golden import load_suite
+from refnpr.golden import SUITE_DIR, load_suite
 from refnpr.kit import export_kit
 from refnpr.kit.schema import load_schema
 from refnpr.kit.styles import unresolved
 
 from .conftest import REPO, SUITE, read_exr
 
-GOLDEN = REPO / "golden"
+GOLDEN = SUITE_DIR
 
 
 def _walk_strings(value, key=""):
@@ -116,7 +118,7 @@ def test_expected_png_is_the_golden_file_and_matches_the_linear_exr(kit_dir, kit
         assert same == data["expected"]["linear_matches_png"], name
         if not same:
             mismatched.append(name)
-    # a mismatch means golden/<name>.png is stale (refnpr golden --check fails on it too)
+    # a mismatch means refnpr/suite/<name>.png is stale (refnpr golden --check fails on it too)
     assert mismatched == []
 
 
@@ -244,9 +246,14 @@ def test_export_only_writes_those_cases_and_reexport_replaces_atomically(tmp_pat
         "sphere-toon3",
     ]  # no temporary directories left
     index = json.loads((tmp_path / "index.json").read_text())
-    assert index["cases"] == [
-        {"name": "sphere-toon3", "kind": "image", "style": "toon", "case": "sphere-toon3/case.json"}
-    ]
+    (entry,) = index["cases"]
+    assert {k: entry[k] for k in ("name", "kind", "style", "case")} == {
+        "name": "sphere-toon3",
+        "kind": "image",
+        "style": "toon",
+        "case": "sphere-toon3/case.json",
+    }
+    assert set(entry) == {"name", "kind", "style", "case", "hashes", "files"}
 
 
 def test_a_failing_case_leaves_the_previous_export_whole(tmp_path, monkeypatch):
@@ -284,7 +291,11 @@ def test_export_refuses_a_file_and_unknown_names(tmp_path):
 def test_cli_kit_export(tmp_path, capsys):
     args = ["kit", "export", str(tmp_path / "k"), "--suite", str(SUITE), "--only", "sphere-toon3"]
     assert main([*args, "-q"]) == 0
-    assert "exported 1 case(s)" in capsys.readouterr().out
+    out = capsys.readouterr().out.splitlines()
+    # first the refnpr that exports and the suite it exports (the packaged one: SUITE is it)
+    assert out[0].startswith(f"refnpr {__version__}, git "), out[0]
+    assert f"suite {str(SUITE.absolute())!r} (the suite installed with refnpr)" in out[0]
+    assert out[1:] == [f"exported 1 case(s) to {tmp_path / 'k'}"]
     assert (tmp_path / "k" / "sphere-toon3" / "case.json").is_file()
     (tmp_path / "f").write_text("x")
     assert main(["kit", "export", str(tmp_path / "f"), "--suite", str(SUITE)]) == 2
@@ -378,3 +389,125 @@ def test_unresolved_detects_auto():
     # the contour layer is checked whatever the style module's own check says
     found = unresolved("toon", {"contours": {"width": "auto"}})
     assert "params.contours.width = 'auto'" in found
+
+
+# -- provenance and content hashes ------------------------------------------------------------
+def test_index_records_provenance_and_the_hashes_of_the_files(tmp_path):
+    import numba
+
+    from refnpr.kit.content import GROUPS, canonical_json, case_hashes, digest
+    from refnpr.kit.provenance import git_commit
+
+    export_kit(tmp_path, suite=SUITE, only=["sphere-toon3", "gbuffer-default"])
+    index = json.loads((tmp_path / "index.json").read_text())
+    jsonschema.Draft202012Validator(load_schema("index.schema.json")).validate(index)
+    prov = index["provenance"]
+    assert prov["refnpr"] == __version__ == index["refnpr"]
+    assert prov["numpy"] == np.__version__ and prov["numba"] == numba.__version__
+    assert prov["git_commit"] == git_commit(REPO)  # this checkout's HEAD (None without .git)
+    assert prov["platform"] and prov["machine"] and prov["python"]
+    assert prov["suite"]["packaged"] is True and prov["suite"]["path"] == "refnpr/suite/suite.toml"
+    assert index["hashes"] == {"algorithm": "sha256", "groups": list(GROUPS)}
+    for entry in index["cases"]:
+        d = tmp_path / entry["name"]
+        on_disk = sorted(str(p.relative_to(d)) for p in d.rglob("*") if p.is_file())
+        assert sorted(entry["files"]) == on_disk
+        for rel, h in entry["files"].items():
+            assert h == digest((d / rel).read_bytes()), rel
+        case = json.loads((d / "case.json").read_text())
+        assert entry["hashes"] == case_hashes(case, entry["files"])
+        # the tolerance digest is the canonical JSON of the tolerance object, nothing else
+        assert entry["hashes"]["tolerance"] == digest(canonical_json(case["tolerance"]))
+    g = next(e for e in index["cases"] if e["name"] == "gbuffer-default")
+    expected = {f for f in g["files"] if f.startswith("expected/")}
+    assert expected and all(f.endswith(".npy") for f in expected)
+
+
+def test_cases_kept_from_an_earlier_export_keep_their_provenance(tmp_path):
+    from refnpr.kit.content import case_files
+
+    export_kit(tmp_path, suite=SUITE, only=["sphere-toon3"])
+    index = json.loads((tmp_path / "index.json").read_text())
+    older = {**index["provenance"], "refnpr": "0.0.9", "git_commit": None}
+    index["provenance"] = older  # as if an older refnpr had exported sphere-toon3
+    (tmp_path / "index.json").write_text(json.dumps(index))
+    export_kit(tmp_path, suite=SUITE, only=["vase-toon"])
+    entries = {e["name"]: e for e in json.loads((tmp_path / "index.json").read_text())["cases"]}
+    assert entries["sphere-toon3"]["provenance"] == older
+    assert "provenance" not in entries["vase-toon"]  # the index's own provenance
+    # the kept case's hashes are carried over, and are those of its files
+    kept = entries["sphere-toon3"]
+    assert kept["files"] == case_files(tmp_path / "sphere-toon3")
+    assert kept["hashes"] == index["cases"][0]["hashes"]
+    # ... unless its entry no longer describes it: then they are computed again
+    index = json.loads((tmp_path / "index.json").read_text())
+    index["cases"][0]["hashes"]["inputs"] = "sha256:" + "0" * 64
+    index["cases"][0]["files"]["extra.bin"] = "sha256:" + "0" * 64
+    (tmp_path / "index.json").write_text(json.dumps(index))
+    export_kit(tmp_path, suite=SUITE, only=["vase-toon"])
+    entries = {e["name"]: e for e in json.loads((tmp_path / "index.json").read_text())["cases"]}
+    assert entries["sphere-toon3"]["hashes"] == kept["hashes"]
+    assert entries["sphere-toon3"]["files"] == kept["files"]
+    # re-exported now: the entry's own provenance goes
+    export_kit(tmp_path, suite=SUITE, only=["sphere-toon3"])
+    index = json.loads((tmp_path / "index.json").read_text())
+    assert all("provenance" not in e for e in index["cases"])
+    # an index that cannot be read: what exported the cases kept is unknown (null)
+    (tmp_path / "index.json").write_text("[" * 100_000)
+    export_kit(tmp_path, suite=SUITE, only=["vase-toon"])
+    entries = {e["name"]: e for e in json.loads((tmp_path / "index.json").read_text())["cases"]}
+    assert entries["sphere-toon3"]["provenance"] is None
+    assert "provenance" not in entries["vase-toon"]
+
+
+def test_git_commit_is_read_from_dot_git_without_git(tmp_path):
+    from refnpr.kit.provenance import git_commit
+
+    sha, other = "0123456789abcdef0123456789abcdef01234567", "f" * 40
+    repo = tmp_path / "repo"
+    git = repo / ".git"
+    (git / "refs" / "heads").mkdir(parents=True)
+    assert git_commit(repo) is None  # no HEAD
+    (git / "HEAD").write_text("ref: refs/heads/main\n")
+    assert git_commit(repo) is None  # an unborn branch
+    (git / "packed-refs").write_text(f"# pack-refs with: peeled\n{other} refs/heads/main\n")
+    assert git_commit(repo) == other
+    (git / "refs" / "heads" / "main").write_text(sha + "\n")  # a loose ref wins
+    assert git_commit(repo) == sha
+    (git / "HEAD").write_text(other + "\n")  # detached
+    assert git_commit(repo) == other
+    for junk in ("ref: refs/../../etc/passwd", "ref: HEAD", "not a commit", "\x00" * 10):
+        (git / "HEAD").write_text(junk)
+        assert git_commit(repo) is None, junk
+    # a worktree: .git is a file naming the git directory, whose commondir holds the refs
+    wt = tmp_path / "wt"
+    wt.mkdir()
+    wt_git = git / "worktrees" / "wt"
+    wt_git.mkdir(parents=True)
+    (wt / ".git").write_text(f"gitdir: {wt_git}\n")
+    (wt_git / "HEAD").write_text("ref: refs/heads/main\n")
+    (wt_git / "commondir").write_text("../..\n")
+    assert git_commit(wt) == sha
+    assert git_commit(tmp_path / "nowhere") is None
+
+
+def test_the_installed_suite_is_read_only_and_fails_into_the_temporary_directory(monkeypatch):
+    import tempfile
+
+    import refnpr.golden as golden
+
+    assert golden.DEFAULT_SUITE == golden.SUITE_DIR / "suite.toml"
+    assert golden.DEFAULT_SUITE.is_file() and golden.is_packaged_suite(SUITE)
+    # from a checkout: failure images beside the suite, --update allowed
+    assert golden.source_checkout() == REPO
+    assert golden.default_failure_dir(golden.DEFAULT_SUITE) == golden.SUITE_DIR / "_failures"
+    golden.check_writable_suite(golden.DEFAULT_SUITE)
+    # installed from a wheel: the package's golden files are not to be rewritten
+    monkeypatch.setattr(golden, "source_checkout", lambda: None)
+    fail = golden.default_failure_dir(golden.DEFAULT_SUITE)
+    assert fail == Path(tempfile.gettempdir()) / "refnpr-golden-failures"
+    with pytest.raises(ValueError, match="installed with refnpr.*--suite COPY/suite.toml"):
+        golden.update_suite(golden.DEFAULT_SUITE, only=["sphere-toon3"])
+    other = Path(tempfile.gettempdir()) / "elsewhere" / "suite.toml"
+    assert golden.default_failure_dir(other) == other.parent / "_failures"
+    golden.check_writable_suite(other)  # any other suite may be updated

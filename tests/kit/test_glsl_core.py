@@ -23,10 +23,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from refnpr.golden import DEFAULT_SUITE
+
 moderngl = pytest.importorskip("moderngl")  # the extra "glsl"; CI installs it
 
 REPO = Path(__file__).resolve().parents[2]
-SUITE = REPO / "golden" / "suite.toml"
+SUITE = DEFAULT_SUITE
 
 #: Golden cases of the styles this file covers (smooth, toon) and the G-buffer case.
 GOLDEN = [

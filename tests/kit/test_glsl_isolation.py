@@ -17,10 +17,12 @@ from pathlib import Path
 
 import pytest
 
+from refnpr.golden import DEFAULT_SUITE
+
 pytest.importorskip("moderngl")  # the extra "glsl"; CI installs it
 
 REPO = Path(__file__).resolve().parents[2]
-SUITE = REPO / "golden" / "suite.toml"
+SUITE = DEFAULT_SUITE
 
 #: Installed first in the child: refnpr and refnpr.* cannot be imported at all.
 BLOCKER = """

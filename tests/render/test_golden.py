@@ -1,13 +1,11 @@
 """The golden suite itself (every case must match) and the harness's behaviour."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from refnpr.golden import check_suite, load_suite, update_suite
+from refnpr.golden import DEFAULT_SUITE, check_suite, load_suite, update_suite
 
-SUITE = Path(__file__).resolve().parents[2] / "golden" / "suite.toml"
+SUITE = DEFAULT_SUITE
 
 
 @pytest.mark.parametrize("case", [c.name for c in load_suite(SUITE)])

@@ -136,6 +136,13 @@ def _check_corrupt_cli(proc, tmp: Path) -> None:
     assert "1 passed, 1 failed" in proc.stdout, proc.stdout
 
 
+def _check_packaged_suite(proc, tmp: Path) -> None:
+    assert proc.returncode == 0, f"exit {proc.returncode}: {proc.stderr[-400:]}"
+    assert proc.stdout.startswith("PASS sphere-toon3"), proc.stdout
+    assert "1 passed, 0 failed" in proc.stdout, proc.stdout
+    assert not any(tmp.iterdir()), f"wrote into the working directory: {list(tmp.iterdir())}"
+
+
 def _golden_size(tmp: Path):
     from refnpr.golden import check_suite
 
@@ -576,10 +583,25 @@ CASES = [
     ),
     Case(
         "golden-outside-checkout",
-        "messages",
-        "refnpr golden run in a directory without golden/suite.toml",
-        lambda t: cli("golden", cwd=t),
-        Exits(2, r"error: .*/golden/suite\.toml.*--suite"),
+        "files",
+        "refnpr golden --check --only sphere-toon3 run in an empty directory (no --suite)",
+        lambda t: cli("golden", "--check", "--only", "sphere-toon3", cwd=t),
+        Correct(_check_packaged_suite),
+        notes="the suite installed with refnpr is the default, from any directory",
+    ),
+    Case(
+        "golden-suite-file-missing",
+        "files",
+        "refnpr golden --suite sub/suite.toml where sub/ does not exist",
+        lambda t: cli("golden", "--suite", "sub/suite.toml", cwd=t),
+        Exits(2, r"error: suite: 'sub/suite\.toml' does not exist.*leave --suite out"),
+    ),
+    Case(
+        "kit-export-suite-file-missing",
+        "files",
+        "refnpr kit export KIT --suite nowhere.toml",
+        lambda t: cli("kit", "export", str(t / "kit"), "--suite", "nowhere.toml", cwd=t),
+        Exits(2, r"error: suite: 'nowhere\.toml' does not exist"),
     ),
     Case(
         "golden-suite-directory",

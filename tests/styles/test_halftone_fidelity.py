@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import math
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy import ndimage
 
+from refnpr.golden import SUITE_DIR
 from refnpr.image import linear_to_srgb
 from refnpr.raster import rasterize
 from refnpr.render import render
@@ -23,7 +23,7 @@ from refnpr.texture import screens as S
 from .test_halftone_scenes import wall
 from .test_halftone_style import _trilinear
 
-GOLDEN = Path(__file__).resolve().parents[2] / "golden" / "halftone.toml"
+GOLDEN = SUITE_DIR / "halftone.toml"
 
 
 def _case_style(name: str) -> dict:

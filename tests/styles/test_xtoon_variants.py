@@ -10,17 +10,15 @@ small teapot triangles), where v.r < 0 for the one-sided highlight.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from refnpr.compare import compare_images, load_image
-from refnpr.golden import load_suite
+from refnpr.golden import SUITE_DIR, load_suite
 from refnpr.render import render
 from refnpr.scenes import load_scene
 
-GOLDEN = Path(__file__).resolve().parents[2] / "golden"
+GOLDEN = SUITE_DIR
 CASES = {c.name: c for c in load_suite(GOLDEN / "suite.toml")}
 
 #: (case, its variant, the least fraction of pixels over the tolerance between them)
@@ -28,7 +26,7 @@ PAIRS = [
     ("xtoon-fig7d-loa-receding", "xtoon-fig7d-loa-receding-vertex", 0.05),
     ("xtoon-fig6-flow", "xtoon-fig6-flow-vertex", 0.05),
     # on a closed surface the one-sided highlight differs only on a rim near the silhouettes
-    # (see golden/xtoon.toml): about 1% of the image, 18 x the suite's allowance
+    # (see refnpr/suite/xtoon.toml): about 1% of the image, 18 x the suite's allowance
     ("xtoon-fig11b-plastic", "xtoon-fig11b-plastic-one-sided", 0.005),
 ]
 IDS = [p[0] for p in PAIRS]
