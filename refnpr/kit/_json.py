@@ -1,4 +1,5 @@
-"""Conversion of parameter values to plain JSON (lists, numbers, strings, bools, null)."""
+"""JSON in the kit: conversion of parameter values to plain JSON (lists, numbers, strings,
+bools, null), writing it, and reading untrusted JSON with a depth limit."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import numpy as np
 
 from ..image import atomic_file
 
-__all__ = ["jsonable", "find_strings", "write_json"]
+__all__ = ["jsonable", "find_strings", "json_depth", "load_json", "write_json"]
 
 
 def write_json(path: str | Path, data: Any) -> Path:
@@ -84,3 +85,72 @@ def find_strings(value: Any, wanted: set[str], *, where: str = "params") -> list
         for k, v in value.items():
             out += find_strings(v, wanted, where=f"{where}.{k}")
     return out
+
+
+def json_depth(value: Any) -> int:
+    """How deeply JSON data nests: 0 for a scalar, 1 for ``[]`` or ``{"a": 1}``, 2 for
+    ``[[1]]``; measured without recursion (any depth)."""
+    deepest = 0
+    stack = [(value, 1)]
+    while stack:
+        v, d = stack.pop()
+        if isinstance(v, dict):
+            v = list(v.values())
+        if isinstance(v, list):
+            deepest = max(deepest, d)
+            stack.extend((x, d + 1) for x in v)
+    return deepest
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in pairs:
+        if k in out:
+            raise ValueError(f"the key {k!r} appears twice in one object; keys must be unique")
+        out[k] = v
+    return out
+
+
+def load_json(data: bytes, *, what: str, max_depth: int) -> Any:
+    """Parse untrusted JSON bytes (UTF-8).
+
+    Parameters
+    ----------
+    data : bytes
+        The file's contents (the caller bounds their size).
+    what : str
+        What the data is (a file name), the start of every message.
+    max_depth : int
+        Deepest nesting of arrays and objects allowed (see :func:`json_depth`).
+
+    Returns
+    -------
+    The parsed value. ``NaN``, ``Infinity`` and ``-Infinity`` (which JSON lacks) are read as
+    floats so that the caller's range check names the key that holds them.
+
+    Raises
+    ------
+    ValueError
+        Naming ``what``: not UTF-8, not JSON (with line and column), a key repeated in one
+        object, or nested deeper than ``max_depth`` (also when deeper than Python's recursion
+        limit: no RecursionError escapes).
+    """
+    too_deep = (
+        f"{what}: JSON nested deeper than {max_depth} levels of arrays and objects; "
+        "a kit file never nests that deep"
+    )
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(
+            f"{what}: not UTF-8 text (byte {exc.start}: {exc.reason}); expected a JSON file"
+        ) from None
+    try:
+        value = json.loads(text, object_pairs_hook=_unique_keys)
+    except RecursionError:
+        raise ValueError(too_deep) from None
+    except ValueError as exc:  # JSONDecodeError, a repeated key, an over-long integer
+        raise ValueError(f"{what}: not valid JSON: {exc}") from None
+    if json_depth(value) > max_depth:
+        raise ValueError(too_deep)
+    return value

@@ -10,625 +10,475 @@ An image case passes when the fraction of pixels failing the two-sided position-
 luminance at least ``tolerance.min_ssim``; a G-buffer case when every channel is within
 ``rtol``/``atol`` (discrete channels: exact but ``max_pixels``). docs/kit.md ("How ``refnpr kit
 check`` decides") states every rule and reported metric.
+
+A kit is untrusted input. Case names match :data:`CASE_NAME`; every path a kit gives is relative,
+without ``..``, and resolves (symbolic links followed) inside the kit; renders are read only
+inside the renders directory; only regular files are read, each size-capped; image and array
+sizes are read from the PNG / OpenEXR / ``.npy`` header and checked against the case before any
+pixel is decoded; JSON is size- and depth-limited; tolerances lie in documented ranges
+(:mod:`refnpr.kit.tolerance`); :mod:`refnpr.kit.limits` holds the other limits. A malformed
+case fails alone with status ``"kit"`` and a message naming the file and key; only a kit whose
+``index.json`` cannot be read, or whose case names are invalid or repeated, is refused whole.
+Per-case verdicts: :mod:`refnpr.kit.verdict`.
 """
 
 from __future__ import annotations
 
-import json
+import difflib
 import math
-from collections.abc import Iterator
-from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
+import os
+import re
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from . import KIT_FORMAT, KIT_VERSION, limits
+from ._json import load_json, write_json
+from ._untrusted import inside, printable, read_regular
+from .tolerance import validate_tolerance
+from .verdict import (
+    CaseCheck,
+    CaseError,
+    KitCase,
+    Visual,
+    check_gbuffer,
+    check_image,
+    composite_over_black,
+    failing_as,
+    position_tolerant_mismatch,
+    render_exists,
+)
 
-from ..compare import compare_images, load_image
-from ..image import linear_to_srgb
-from . import KIT_FORMAT, KIT_VERSION
-from ._json import jsonable, write_json
+__all__ = [
+    "CASE_NAME",
+    "MISSING_POLICIES",
+    "CaseCheck",
+    "Visual",
+    "case_style",
+    "check_kit",
+    "composite_over_black",
+    "format_table",
+    "position_tolerant_mismatch",
+    "run",
+    "summarize",
+]
 
-__all__ = ["CaseCheck", "Visual", "check_kit", "format_table", "position_tolerant_mismatch", "run"]
+#: A case name (``re.fullmatch``; also never containing ``..``): 1-128 characters of lower-case
+#: ASCII letters, digits, ``.``, ``_`` and ``-``, starting with a letter or digit. It names the
+#: case's render files, so it is one safe path component on every file system.
+CASE_NAME = re.compile(r"[a-z0-9][a-z0-9._-]{0,127}")
+#: ``--missing``: what a case without a render does to the exit status.
+MISSING_POLICIES = ("fail", "skip")
+
+_STYLE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
+
+
+def _valid_name(name: Any) -> bool:
+    return isinstance(name, str) and CASE_NAME.fullmatch(name) is not None and ".." not in name
+
+
+def _q(value: Any, limit: int = 100) -> str:
+    """``repr(value)`` (control characters escaped), shortened to ``limit`` characters."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+# -- reading the kit ---------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
-class CaseCheck:
-    """The verdict on one case.
+class _Entry:
+    """One entry of index.json: its position, a valid unique name, and the raw rest."""
 
-    Attributes
-    ----------
-    name, kind : str
-        The case and ``"image"`` or ``"gbuffer"``.
-    passed : bool
-        Whether the case meets its own tolerance (see the module docstring for the rule).
-    status : str
-        ``"ok"`` (compared; ``passed`` says the verdict), ``"missing"`` (no render),
-        ``"unreadable"`` (a render that cannot be decoded), ``"size"`` (a render of the wrong
-        size or shape), ``"channels"`` (a G-buffer channel missing) or ``"kit"`` (the kit's own
-        files for the case are missing or invalid).
-    message : str
-        Why it failed, or the deciding numbers against their limits when it was compared.
-    metrics : dict of str to float
-        Image cases: ``max_abs``, ``rmse``, ``frac_over``, ``frac_over_position``,
-        ``frac_over_position_cts``, ``ssim`` and, with an EXR render, ``linear_max_abs``,
-        ``linear_rmse``, ``linear_frac_over``. G-buffer cases: the worst channel's ``frac_bad``.
-    channels : dict of str to dict
-        G-buffer cases: per channel ``{"kind": "float"|"discrete", "max_abs", "bad_pixels",
-        "frac_bad" (float: fraction of bad elements; discrete: of bad pixels),
-        "allowed_frac"|"allowed_pixels", "nonfinite_mismatch" (float), "passed"}``.
-    tolerance : dict
-        The case's ``tolerance`` from ``case.json``.
-    images : dict of str to str
-        Report files of the case (``"reference"``, ``"result"``, ``"diff16"``, ``"mask"``),
-        relative to the report directory; filled by :func:`check_kit` when it writes a report.
-    """
-
+    index: int
     name: str
-    kind: str
-    passed: bool
-    status: str
-    message: str
-    metrics: dict[str, float] = field(default_factory=dict)
-    channels: dict[str, dict[str, Any]] = field(default_factory=dict)
-    tolerance: dict[str, Any] = field(default_factory=dict)
-    images: dict[str, str] = field(default_factory=dict)
-
-    @property
-    def error(self) -> float:
-        """One number to sort by: the deciding fraction of bad pixels (inf when not compared)."""
-        if self.status != "ok":
-            return math.inf
-        if self.kind == "gbuffer":
-            return float(self.metrics.get("frac_bad", 0.0))
-        return float(self.metrics.get("frac_over_position", math.inf))
-
-    def to_json(self) -> dict[str, Any]:
-        """A JSON-able dict (non-finite numbers as ``None``)."""
-        d = asdict(self)
-        d["error"] = self.error
-        return jsonable(d, where=self.name, nonfinite_as_none=True)
+    raw: dict[str, Any]
 
 
-# -- the position-tolerant compare -------------------------------------------------------------
-
-
-def _matches(
-    a: np.ndarray, b: np.ndarray, threshold: float, deviation: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """(H, W) bool: which pixels of ``a`` and of ``b`` match a pixel of the other image within
-    ``deviation`` (both directions in one pass: each pair is compared once, credited to both)."""
-    h, w = a.shape[:2]
-    ca = np.ascontiguousarray(np.moveaxis(a, -1, 0))  # (C, H, W): fast per-channel planes
-    cb = np.ascontiguousarray(np.moveaxis(b, -1, 0))
-    a_matched = np.zeros((h, w), dtype=bool)
-    b_matched = np.zeros((h, w), dtype=bool)
-    for dy in range(-deviation, deviation + 1):
-        ya = slice(max(0, -dy), h - max(0, dy))
-        yb = slice(max(0, dy), h - max(0, -dy))
-        for dx in range(-deviation, deviation + 1):
-            xa = slice(max(0, -dx), w - max(0, dx))
-            xb = slice(max(0, dx), w - max(0, -dx))
-            close = np.abs(ca[0, ya, xa] - cb[0, yb, xb]) <= threshold
-            for c in range(1, ca.shape[0]):
-                close &= np.abs(ca[c, ya, xa] - cb[c, yb, xb]) <= threshold
-            a_matched[ya, xa] |= close
-            b_matched[yb, xb] |= close
-    return a_matched, b_matched
-
-
-def position_tolerant_mismatch(
-    reference: np.ndarray,
-    result: np.ndarray,
-    *,
-    threshold: float,
-    deviation: int,
-    symmetric: bool = True,
-) -> np.ndarray:
-    """Pixels that fail the position-tolerant threshold compare (Vulkan CTS fuzzy compare).
-
-    Parameters
-    ----------
-    reference, result : (H, W, C) float
-        The images to compare, same shape (refnpr compares sRGB values composited over black,
-        alpha as the last channel).
-    threshold : float
-        Largest per-channel absolute difference that still matches.
-    deviation : int
-        N >= 0: a pixel matches when some pixel of the other image within Chebyshev distance N
-        (inside the image) is within ``threshold`` on every channel. N = 0 is the plain
-        per-pixel compare.
-    symmetric : bool
-        True (refnpr's rule): a pixel fails when the result pixel matches no reference pixel
-        within N or the reference pixel matches no result pixel within N. False: only the first
-        test (what the CTS does).
-
-    Returns
-    -------
-    (H, W) bool
-        True where the pixel fails.
-
-    Raises
-    ------
-    ValueError
-        Shapes that differ or are not (H, W, C); a negative or non-integer ``deviation``; a
-        negative or non-finite ``threshold``.
-    """
-    reference, result = np.asarray(reference), np.asarray(result)
-    if reference.ndim != 3 or reference.shape != result.shape:
-        raise ValueError(
-            f"reference, result: expected two (H, W, C) arrays of one shape, got "
-            f"{reference.shape} and {result.shape}"
-        )
-    if isinstance(deviation, bool) or not isinstance(deviation, (int, np.integer)) or deviation < 0:
-        raise ValueError(f"deviation: expected an integer >= 0 (pixels), got {deviation!r}")
-    if not (isinstance(threshold, (int, float)) and math.isfinite(threshold) and threshold >= 0):
-        raise ValueError(f"threshold: expected a finite number >= 0, got {threshold!r}")
-    result_ok, reference_ok = _matches(result, reference, threshold, int(deviation))
-    return ~(result_ok & reference_ok) if symmetric else ~result_ok
-
-
-def composite_over_black(rgba: np.ndarray) -> np.ndarray:
-    """(H, W, 4) float64: colour multiplied by alpha, alpha kept (what refnpr.compare compares)."""
-    out = np.array(rgba, dtype=np.float64)
-    out[..., :3] *= out[..., 3:4]
-    return out
-
-
-# -- reading the kit and the renders -----------------------------------------------------------
-
-
-class _CaseError(Exception):
-    """A case cannot be compared: carries the status and the message."""
-
-    def __init__(self, status: str, message: str) -> None:
-        super().__init__(message)
-        self.status = status
-        self.message = message
-
-
-@contextmanager
-def _failing(status: str) -> Iterator[None]:
-    """A ValueError inside (a file that cannot be read) fails the case with ``status``."""
-    try:
-        yield
-    except ValueError as exc:
-        raise _CaseError(status, str(exc)) from None
-
-
-def _read_exr_rgba(path: str | Path, *, what: str) -> np.ndarray:
-    """(H, W, 4) float32 RGBA of an OpenEXR file with R, G, B (A: 1 when absent) channels;
-    ValueError naming ``what`` and the file when it is missing, unreadable or lacks them."""
+def _dir(path: str | os.PathLike, what: str) -> Path:
     p = Path(path)
-    if not p.is_file():
-        why = "is a directory" if p.is_dir() else "does not exist"
-        raise ValueError(f"{what}: {str(p)!r} {why}; expected an OpenEXR file")
-    try:
-        import OpenEXR
-    except ImportError:  # pragma: no cover -- the kit extra installs it
-        raise ValueError(
-            f"{what}: cannot read {str(p)!r}: the OpenEXR package is missing; "
-            "pip install 'refnpr[kit]'"
-        ) from None
-    try:
-        with OpenEXR.File(str(p), separate_channels=True) as f:
-            ch = {k: np.asarray(v.pixels) for k, v in f.channels().items()}
-    except Exception as exc:  # noqa: BLE001 -- OpenEXR raises RuntimeError and others
-        first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-        raise ValueError(
-            f"{what}: cannot read {str(p)!r}: {first}; expected an OpenEXR file"
-        ) from None
-    if not {"R", "G", "B"} <= set(ch):
-        raise ValueError(f"{what}: {str(p)!r} has channels {sorted(ch)}; expected R, G, B (and A)")
-    a = ch.get("A", np.ones_like(ch["R"]))
-    return np.stack([ch["R"], ch["G"], ch["B"], a], axis=-1).astype(np.float32)
+    if not p.is_dir():
+        why = "it is a file" if p.exists() else "it does not exist"
+        raise ValueError(f"{what}: {_q(str(p))} is not a directory ({why})")
+    return p.resolve(strict=True)
 
 
-def _read_index(kit_dir: Path) -> list[dict[str, Any]]:
-    if not kit_dir.is_dir():
-        why = "it is a file" if kit_dir.exists() else "it does not exist"
-        raise ValueError(f"kit_dir: {str(kit_dir)!r} is not a directory ({why})")
-    index = kit_dir / "index.json"
-    if not index.is_file():
+def _read_index(kit_root: Path, kit_dir: Path) -> list[_Entry]:
+    """The cases of index.json; ValueError (the whole kit refused) when the file is not a kit
+    index or a case name is invalid or repeated (names choose the render files)."""
+    shown = _q(str(kit_dir / "index.json"))
+    if not os.path.lexists(kit_root / "index.json"):
         raise ValueError(
-            f"kit_dir: {str(kit_dir)!r} has no index.json; export a kit with `refnpr kit export DIR`"
+            f"kit_dir: {_q(str(kit_dir))} has no index.json; export a kit with "
+            "`refnpr kit export DIR`"
         )
     try:
-        data = json.loads(index.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{str(index)!r}: not valid JSON ({exc})") from None
+        path = inside(kit_root, "index.json", what="index.json", root_name="the kit")
+        data = load_json(
+            read_regular(path, what=shown, max_bytes=limits.MAX_JSON_BYTES),
+            what=shown,
+            max_depth=limits.MAX_JSON_DEPTH,
+        )
+    except ValueError as exc:
+        raise ValueError(f"kit_dir: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != KIT_FORMAT:
-        raise ValueError(f'{str(index)!r}: expected {{"format": "{KIT_FORMAT}", ...}}')
-    if data.get("version") != KIT_VERSION:
+        raise ValueError(f'{shown}: expected {{"format": "{KIT_FORMAT}", ...}}')
+    version = data.get("version")
+    if type(version) is not int or version != KIT_VERSION:
         raise ValueError(
-            f"{str(index)!r}: kit format version {data.get('version')!r}; this refnpr reads version {KIT_VERSION}"
+            f"{shown}: kit format version {_q(version)}; this refnpr reads version {KIT_VERSION}"
         )
     cases = data.get("cases")
     if not isinstance(cases, list) or not cases:
-        raise ValueError(f"{str(index)!r}: 'cases' must be a non-empty list, got {cases!r}")
+        raise ValueError(f"{shown}: 'cases' must be a non-empty list, got {_q(cases)}")
+    problems, entries, seen = [], [], {}
     for i, c in enumerate(cases):
-        if not isinstance(c, dict) or not isinstance(c.get("name"), str):
-            raise ValueError(f"{str(index)!r}: cases[{i}] has no 'name': {c!r}")
-    return cases
-
-
-def _read_case(kit_dir: Path, entry: dict[str, Any]) -> tuple[Path, dict[str, Any]]:
-    rel = entry.get("case", f"{entry['name']}/case.json")
-    path = kit_dir / rel
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise _CaseError("kit", f"the kit has no {str(path)!r}") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise _CaseError("kit", f"cannot read {str(path)!r}: {exc}") from None
-    if not isinstance(data, dict):
-        raise _CaseError("kit", f"{str(path)!r}: expected a JSON object")
-    return path, data
-
-
-def _number(tol: dict[str, Any], key: str, where: str, lo: float, hi: float, default=None) -> float:
-    v = tol.get(key, default)
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo <= v <= hi:
-        raise _CaseError(
-            "kit", f"{where}: tolerance.{key}: expected a number in [{lo}, {hi}], got {v!r}"
+        name = c.get("name") if isinstance(c, dict) else None
+        if not isinstance(c, dict):
+            problems.append(f"cases[{i}] is {_q(c, 40)}, not an object")
+        elif not _valid_name(name):
+            problems.append(f"cases[{i}].name {_q(name, 60)} is not a valid case name")
+        elif name in seen:
+            problems.append(
+                f"cases[{i}].name {name!r} repeats cases[{seen[name]}]; names must be unique"
+            )
+        else:
+            seen[name] = i
+            entries.append(_Entry(i, name, c))
+    if problems:
+        more = f" (and {len(problems) - 8} more)" if len(problems) > 8 else ""
+        raise ValueError(
+            f"{shown}: {'; '.join(problems[:8])}{more}. A case name matches "
+            f"{CASE_NAME.pattern!r} without '..' (it names the render files)"
         )
-    return float(v)
+    return entries
 
 
-def _count(v: Any, key: str, where: str) -> int:
-    if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-        raise _CaseError("kit", f"{where}: tolerance.{key}: expected an integer >= 0, got {v!r}")
+def _int_field(data: dict[str, Any], key: str, lo: int, hi: int, default: Any = None) -> int:
+    v = data.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+        got = "nothing (the key is missing)" if key not in data else _q(v)
+        raise ValueError(f"{key}: expected an integer in [{lo}, {hi}], got {got}")
     return v
 
 
-def _size_error(path: Path, got: tuple, want: tuple, extra: str = "") -> _CaseError:
-    return _CaseError(
-        "size",
-        f"render {str(path)!r} is {got[1]}x{got[0]}, the case is {want[1]}x{want[0]}{extra}",
-    )
+def case_style(data: dict[str, Any]) -> str | None:
+    """The style of a parsed case.json: ``style.name``, or ``"gbuffer"`` for a G-buffer case
+    (whose ``style`` is null); None when neither is there (or the name is not a plain word)."""
+    style = data.get("style")
+    name = style.get("name") if isinstance(style, dict) else None
+    if isinstance(name, str) and _STYLE_NAME.fullmatch(name):
+        return name
+    if style is None and data.get("kind") == "gbuffer":
+        return "gbuffer"
+    return None
 
 
-# -- image cases -------------------------------------------------------------------------------
+def _case_rel(entry: _Entry) -> Any:
+    return entry.raw.get("case", f"{entry.name}/case.json")
 
 
-@dataclass
-class Visual:
-    """What the report shows of a case besides its verdict (filled as far as the check got).
-
-    Attributes
-    ----------
-    reference, result : (H, W, 4) float64 or None
-        Image cases: sRGB values composited over black, alpha last. G-buffer cases: a gray
-        visualisation of one channel (``label`` says which), normalised by the expected range.
-    bad : (H, W) bool or None
-        The deciding per-pixel verdict (True: the pixel fails).
-    empty : (H, W) bool or None
-        Both pixels are background (image: the case's background colour; G-buffer: tri_id -1).
-    label : str
-        What ``reference``/``result`` show.
-    """
-
-    reference: np.ndarray | None = None
-    result: np.ndarray | None = None
-    bad: np.ndarray | None = None
-    empty: np.ndarray | None = None
-    label: str = "sRGB over black"
-
-
-def _check_image(
-    name: str, case_path: Path, case: dict[str, Any], tol: dict, renders_dir: Path, data: Visual
-) -> CaseCheck:
-    where = str(case_path)
-    threshold = _number(tol, "threshold", where, 0.0, 1.0)
-    max_frac = _number(tol, "max_frac_over", where, 0.0, 1.0)
-    min_ssim = _number(tol, "min_ssim", where, -1.0, 1.0)
-    dev = _count(tol.get("position_deviation", 0), "position_deviation", where)
-    expected = case.get("expected")
-    if not isinstance(expected, dict) or not isinstance(expected.get("png"), str):
-        raise _CaseError("kit", f"{where}: 'expected.png' must name the expected PNG")
-    ref_path = case_path.parent / expected["png"]
-    with _failing("kit"):
-        ref = load_image(ref_path, what="expected image (kit)")
-    data.reference = composite_over_black(ref)
-    res_path = renders_dir / f"{name}.png"
-    if not res_path.exists():
-        raise _CaseError("missing", f"no render {str(res_path)!r}")
-    with _failing("unreadable"):
-        res = load_image(res_path, what="render")
-    if res.shape != ref.shape:
-        raise _size_error(res_path, res.shape, ref.shape, f" ({str(ref_path)!r})")
-    data.result = composite_over_black(res)
-    m = compare_images(ref, res, name=name, tolerance=threshold)
-    result_ok, reference_ok = _matches(data.result, data.reference, threshold, dev)
-    bad = ~(result_ok & reference_ok)  # the two-sided verdict that decides
-    cts = ~result_ok  # the CTS's one-sided verdict, reported
-    data.bad = bad
-    data.empty = _empty(case, data.reference, data.result, threshold)
-    metrics = {
-        "max_abs": m.max_abs,
-        "rmse": m.rmse,
-        "frac_over": m.frac_over,
-        "frac_over_position": float(bad.mean()),
-        "frac_over_position_cts": float(cts.mean()),
-        "ssim": m.ssim,
-    }
-    ok = metrics["frac_over_position"] <= max_frac and metrics["ssim"] >= min_ssim
-    msg = (
-        f"frac_over_position={metrics['frac_over_position']:.5f} (allowed {max_frac:g}, "
-        f"N={dev}) ssim={metrics['ssim']:.4f} (min {min_ssim:g})"
-    )
-    exr_path = renders_dir / f"{name}.exr"
-    if exr_path.exists():
-        try:
-            metrics.update(_linear_metrics(case_path, expected, exr_path, ref.shape, threshold))
-        except _CaseError as exc:  # the PNG's metrics stay in the record
-            message = f"{exc.message} (PNG: {msg})"
-            return CaseCheck(name, "image", False, exc.status, message, metrics, tolerance=tol)
-    return CaseCheck(name, "image", ok, "ok", msg, metrics=metrics, tolerance=tol)
-
-
-def _empty(case: dict[str, Any], ref: np.ndarray, res: np.ndarray, threshold: float) -> np.ndarray:
-    """(H, W) bool: both pixels are the case's background (within the threshold)."""
-    bg = case.get("background", [0.0, 0.0, 0.0, 0.0])
-    try:
-        bg = np.asarray(bg, dtype=np.float64).reshape(4)
-    except (TypeError, ValueError):
-        bg = np.zeros(4)
-    enc = np.concatenate([linear_to_srgb(bg[:3]) * np.clip(bg[3], 0, 1), [np.clip(bg[3], 0, 1)]])
-    near = threshold + 0.5 / 255  # the background after 8-bit rounding
-    return (np.abs(ref - enc).max(axis=-1) <= near) & (np.abs(res - enc).max(axis=-1) <= near)
-
-
-def _linear_metrics(
-    case_path: Path, expected: dict[str, Any], exr_path: Path, shape: tuple, threshold: float
-) -> dict[str, float]:
-    lin = expected.get("linear")
-    if not isinstance(lin, str):
-        raise _CaseError("kit", f"{case_path}: 'expected.linear' must name the expected EXR")
-    with _failing("kit"):
-        ref = _read_exr_rgba(case_path.parent / lin, what="expected linear image (kit)")
-    with _failing("unreadable"):
-        res = _read_exr_rgba(exr_path, what="render (EXR)")
-    if res.shape != ref.shape or ref.shape[:2] != shape[:2]:
-        raise _size_error(exr_path, res.shape, ref.shape)
-    if not np.all(np.isfinite(res)):
-        raise _CaseError("unreadable", f"render {str(exr_path)!r} holds NaN or inf")
-    a, b = composite_over_black(ref), composite_over_black(res)
-    d = np.abs(a - b)
-
-    def enc(x: np.ndarray) -> np.ndarray:
-        return np.concatenate([linear_to_srgb(x[..., :3]), np.clip(x[..., 3:], 0, 1)], axis=-1)
-
-    return {
-        "linear_max_abs": float(d.max()),
-        "linear_rmse": float(np.sqrt(np.mean(d**2))),
-        "linear_frac_over": float(np.mean(np.abs(enc(a) - enc(b)).max(axis=-1) > threshold)),
-    }
-
-
-# -- G-buffer cases ----------------------------------------------------------------------------
-
-
-def _check_gbuffer(
-    name: str, case_path: Path, case: dict[str, Any], tol: dict, renders_dir: Path, data: Visual
-) -> CaseCheck:
-    where = str(case_path)
-    rtol = _number(tol, "rtol", where, 0.0, 1.0)
-    atol = _number(tol, "atol", where, 0.0, math.inf)
-    max_frac = _number(tol, "max_frac_over", where, 0.0, 1.0, default=0.0)
-    discrete = tol.get("discrete", {}) or {}
-    if not isinstance(discrete, dict):
-        raise _CaseError("kit", f"{where}: tolerance.discrete must be an object, got {discrete!r}")
-    expected = case.get("expected")
-    chans = expected.get("channels") if isinstance(expected, dict) else None
-    if not isinstance(chans, dict) or not chans:
-        raise _CaseError("kit", f"{where}: 'expected.channels' must map channel -> file")
-    missing = [c for c in chans if not (renders_dir / name / f"{c}.npy").is_file()]
-    if len(missing) == len(chans) and not (renders_dir / name).is_dir():
-        raise _CaseError("missing", f"no render directory {str(renders_dir / name)!r}")
-    if missing:
-        raise _CaseError(
-            "channels",
-            f"render {str(renders_dir / name)!r} lacks channel(s) {missing} (.npy files)",
+def _load_case(kit_root: Path, entry: _Entry) -> KitCase:
+    """case.json of ``entry``, read and checked (not its tolerance or expected files)."""
+    rel = _case_rel(entry)
+    with failing_as("kit", f"index.json, case {entry.name!r}: "):
+        path = inside(kit_root, rel, what="case", root_name="the kit")
+        rel = path.relative_to(kit_root).as_posix()
+        data = load_json(
+            read_regular(path, what=f"kit file {rel!r}", max_bytes=limits.MAX_JSON_BYTES),
+            what=f"kit file {rel!r}",
+            max_depth=limits.MAX_JSON_DEPTH,
         )
-    per: dict[str, dict[str, Any]] = {}
-    for ch, entry in chans.items():
-        file = entry.get("file") if isinstance(entry, dict) else entry
-        if not isinstance(file, str):
-            raise _CaseError("kit", f"{where}: expected.channels.{ch}: no 'file'")
-        exp = _load_npy(case_path.parent / file, "kit", "expected channel (kit)")
-        got = _load_npy(renders_dir / name / f"{ch}.npy", "unreadable", "render channel")
-        if got.shape != exp.shape:
-            raise _CaseError(
-                "size",
-                f"channel {ch!r}: render {str(renders_dir / name / (ch + '.npy'))!r} has shape "
-                f"{got.shape}, the kit {exp.shape}",
-            )
-        is_discrete = ch in discrete or exp.dtype.kind in "iub"
-        if is_discrete:
-            spec = discrete.get(ch, {})
-            allowed = spec.get("max_pixels", 0) if isinstance(spec, dict) else spec
-            allowed = _count(allowed, f"discrete.{ch}.max_pixels", where)
-            bad = exp != got
-            diff = np.abs(exp.astype(np.float64) - got.astype(np.float64))
-            rec = {"kind": "discrete", "allowed_pixels": allowed}
-        else:
-            fa, fb = np.isfinite(exp), np.isfinite(got)
-            pattern, both = fa != fb, fa & fb
-            close = np.isclose(got[both], exp[both], rtol=rtol, atol=atol)
-            frac = float(np.mean(~close)) if close.size else 0.0  # as refnpr.golden counts
-            bad = pattern.copy()
-            bad[both] = ~close
-            diff = np.zeros(exp.shape)
-            np.subtract(exp, got, out=diff, where=both, dtype=np.float64)
-            diff = np.abs(diff)
-            n_pattern = int(pattern.sum())
-            rec = {"kind": "float", "allowed_frac": max_frac, "nonfinite_mismatch": n_pattern}
-        bad_px = bad.any(axis=-1) if bad.ndim == 3 else bad
-        n_bad = int(bad_px.sum())
-        if is_discrete:
-            frac, passed = n_bad / max(bad_px.size, 1), n_bad <= allowed
-        else:
-            passed = frac <= max_frac and not pattern.any()
-        max_abs = float(diff.max()) if diff.size else 0.0
-        rec.update(max_abs=max_abs, bad_pixels=n_bad, frac_bad=frac, passed=bool(passed))
-        per[ch] = rec
-        _accumulate(data, ch, exp, got, bad_px)
-    failed = [c for c, r in per.items() if not r["passed"]]
-    worst = max((r["frac_bad"] for r in per.values()), default=0.0)
-    msg = (
-        "all channels within tolerance"
-        if not failed
-        else f"beyond rtol={rtol:g} atol={atol:g}: "
-        + "; ".join(_channel_failure(c, per[c]) for c in failed)
-    )
-    metrics = {"frac_bad": worst}
-    return CaseCheck(name, "gbuffer", not failed, "ok", msg, metrics, per, tol)
+    where = f"kit file {rel!r}: "
+    if not isinstance(data, dict):
+        raise CaseError("kit", f"{where}expected a JSON object, got {type(data).__name__}")
+    if "name" in data and data["name"] != entry.name:
+        raise CaseError(
+            "kit", f"{where}name: {_q(data['name'])} differs from the name in index.json"
+        )
+    kind = data.get("kind", entry.raw.get("kind", "image"))
+    if kind not in ("image", "gbuffer"):
+        raise CaseError("kit", f"{where}kind: expected 'image' or 'gbuffer', got {_q(kind)}")
+    with failing_as("kit", where):
+        width = _int_field(data, "width", 1, limits.MAX_IMAGE_SIDE)
+        height = _int_field(data, "height", 1, limits.MAX_IMAGE_SIDE)
+        spp = _int_field(data, "spp", 1, limits.MAX_SPP, default=1)
+    if width * height > limits.MAX_IMAGE_PIXELS:
+        raise CaseError(
+            "kit",
+            f"{where}width x height: {width} x {height} = {width * height} pixels, more than "
+            f"the {limits.MAX_IMAGE_PIXELS} allowed",
+        )
+    if math.isqrt(spp) ** 2 != spp:
+        raise CaseError("kit", f"{where}spp: expected a square number n * n, got {spp}")
+    style = case_style({**data, "kind": kind})
+    return KitCase(path, rel, data, kind, width, height, spp, style)
 
 
-def _channel_failure(ch: str, r: dict[str, Any]) -> str:
-    """One channel's failure in a few words: bad pixels against what was allowed."""
-    if r["kind"] == "discrete":
-        return f"{ch}: {r['bad_pixels']} bad pixel(s) (allowed {r['allowed_pixels']})"
-    text = f"{ch}: {r['bad_pixels']} bad pixel(s), frac {r['frac_bad']:.3g} (allowed {r['allowed_frac']:g})"
-    if r["nonfinite_mismatch"]:
-        text += f", {r['nonfinite_mismatch']} non-finite mismatch(es)"
-    return text
-
-
-def _accumulate(
-    data: Visual, ch: str, exp: np.ndarray, got: np.ndarray, bad_px: np.ndarray
-) -> None:
-    """Fold one channel into the case's visual: bad pixels, empty pixels, a gray preview."""
-    if data.bad is None:
-        data.bad = np.zeros(bad_px.shape[:2], dtype=bool)
-    if bad_px.shape[:2] != data.bad.shape:
-        return  # a channel on another grid (none in refnpr today) is not drawn in the mask
-    data.bad |= bad_px
-    if ch == "tri_id":
-        e = (exp == -1) & (got == -1)
-        data.empty = e.all(axis=-1) if e.ndim == 3 else e
-    preview = ch == "depth" or (data.reference is None and exp.dtype.kind == "f")
-    if preview:
-        a = exp.astype(np.float64)
-        a = a if a.ndim == 2 else np.linalg.norm(a, axis=-1)
-        b = got.astype(np.float64)
-        b = b if b.ndim == 2 else np.linalg.norm(b, axis=-1)
-        fin = a[np.isfinite(a)]
-        lo, hi = (float(fin.min()), float(fin.max())) if fin.size else (0.0, 1.0)
-        scale = 1.0 / (hi - lo) if hi > lo else 1.0
-
-        def gray(x: np.ndarray) -> np.ndarray:
-            g = np.clip(np.nan_to_num((x - lo) * scale, nan=0.0, posinf=1.0, neginf=0.0), 0, 1)
-            return np.stack([g, g, g, np.ones_like(g)], axis=-1)
-
-        data.reference, data.result = gray(a), gray(b)
-        data.label = f"{ch} (normalised{', |v|' if exp.ndim == 3 else ''})"
-
-
-def _load_npy(path: Path, status: str, what: str) -> np.ndarray:
-    try:
-        return np.load(path, allow_pickle=False)
-    except FileNotFoundError:
-        raise _CaseError(status, f"{what}: {str(path)!r} does not exist") from None
-    except Exception as exc:  # noqa: BLE001 -- numpy raises many types on corrupt files
-        first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-        raise _CaseError(status, f"{what}: cannot read {str(path)!r}: {first}") from None
+def _index_kind(entry: _Entry) -> str:
+    kind = entry.raw.get("kind")
+    return kind if kind in ("image", "gbuffer") else "?"
 
 
 # -- the whole kit -----------------------------------------------------------------------------
 
 
+def _names_list(value: Any, what: str) -> list[str] | None:
+    if value is None:
+        return None
+    if isinstance(value, str) or not all(isinstance(n, str) for n in value):
+        raise TypeError(f"{what}: expected a list of names, got {_q(value)}")
+    return list(value)
+
+
+def _unknown(what: str, unknown: list[str], known: list[str], noun: str) -> ValueError:
+    """The error for names the kit lacks: each with its close matches, then all the kit has."""
+    parts = []
+    for n in unknown:
+        near = difflib.get_close_matches(n, known, n=3)
+        parts.append(_q(n, 60) + (f" (did you mean {', '.join(near)}?)" if near else ""))
+    return ValueError(
+        f"{what}: unknown {noun} {', '.join(parts)}; the kit has {len(known)} {noun}: "
+        f"{', '.join(known)}"
+    )
+
+
+def _peek_style(kit_root: Path, entry: _Entry) -> str | None:
+    """The style of an entry for ``styles=`` (its case.json's; index.json's when case.json
+    cannot be read, which the check then reports)."""
+    try:
+        return _load_case(kit_root, entry).style
+    except CaseError:
+        style = entry.raw.get("style")
+        if isinstance(style, str) and _STYLE_NAME.fullmatch(style):
+            return style
+        return "gbuffer" if entry.raw.get("kind") == "gbuffer" else None
+
+
+def _select(
+    entries: list[_Entry], kit_root: Path, only: list[str] | None, styles: list[str] | None
+) -> list[_Entry]:
+    """The entries in ``only`` and of ``styles`` (each checked against the whole kit)."""
+    selected = entries
+    if only is not None:
+        names = [e.name for e in entries]
+        unknown = [n for n in dict.fromkeys(only) if n not in set(names)]
+        if unknown:
+            raise _unknown("only", unknown, names, "case names")
+        selected = [e for e in selected if e.name in set(only)]
+    if styles is not None:
+        found = {e.name: _peek_style(kit_root, e) for e in entries}
+        present = sorted({s for s in found.values() if s is not None})
+        unknown = [s for s in dict.fromkeys(styles) if s not in present]
+        if unknown:
+            raise _unknown("styles", unknown, present, "styles")
+        selected = [e for e in selected if found[e.name] in set(styles)]
+    if not selected:
+        raise ValueError("only, styles: no case of the kit is both in --only and of --styles")
+    return selected
+
+
+def _check_one(entry: _Entry, kit_root: Path, renders_root: Path) -> tuple[CaseCheck, Visual]:
+    """One case's verdict; every failure of the kit or the render is its message."""
+    vis = Visual()
+    kind, style, tol = _index_kind(entry), None, {}
+    try:
+        case = _load_case(kit_root, entry)
+        kind, style = case.kind, case.style
+        with failing_as("kit", f"kit file {case.rel!r}: "):
+            tol = validate_tolerance(case.data.get("tolerance"), case.kind)
+        check = check_image if case.kind == "image" else check_gbuffer
+        r = check(case, entry.name, tol, kit_root, renders_root, vis)
+    except CaseError as exc:
+        r = CaseCheck(entry.name, kind, False, exc.status, exc.message, tolerance=tol)
+    except MemoryError:
+        r = CaseCheck(entry.name, kind, False, "kit", "out of memory while checking the case")
+        vis = Visual()
+    except Exception as exc:  # noqa: BLE001 -- one case never aborts the check of the others
+        r = CaseCheck(
+            entry.name,
+            kind,
+            False,
+            "kit",
+            f"unexpected {type(exc).__name__} while checking the case (a refnpr bug; please "
+            f"report it): {_q(str(exc), 200)}",
+            tolerance=tol,
+        )
+    if style is not None:
+        r = replace(r, style=style)
+    return r, vis
+
+
+def _has_render(entry: _Entry, kit_root: Path, renders_root: Path) -> bool:
+    """Whether the case's render exists (True when case.json cannot say: the check reports)."""
+    try:
+        return render_exists(renders_root, _load_case(kit_root, entry), entry.name)
+    except CaseError:
+        return True
+
+
+def _stream(
+    entries: list[_Entry], kit_root: Path, renders_root: Path
+) -> Iterator[tuple[CaseCheck, Visual]]:
+    """(verdict, visual) per case: the cases with a render in index order, then those without
+    (checked last, so that no case's arrays wait in memory); one case's arrays at a time."""
+    later = []
+    for entry in entries:
+        if not _has_render(entry, kit_root, renders_root):
+            later.append(entry)
+            continue
+        r, vis = _check_one(entry, kit_root, renders_root)
+        if r.status == "missing":  # removed meanwhile
+            later.append(entry)
+            continue
+        yield r, vis
+        del vis
+    for entry in later:
+        yield _check_one(entry, kit_root, renders_root)
+
+
+def _overlap(a: Path, b: Path) -> bool:
+    return a == b or a.is_relative_to(b) or b.is_relative_to(a)
+
+
 def check_kit(
-    kit_dir: str | Path,
-    renders_dir: str | Path,
+    kit_dir: str | os.PathLike,
+    renders_dir: str | os.PathLike,
     *,
-    report_dir: str | Path | None = None,
-    json_path: str | Path | None = None,
+    report_dir: str | os.PathLike | None = None,
+    json_path: str | os.PathLike | None = None,
+    only: Iterable[str] | None = None,
+    styles: Iterable[str] | None = None,
+    missing: str = "fail",
 ) -> list[CaseCheck]:
-    """Compare a backend's renders with every case of an exported kit.
+    """Compare a backend's renders with the cases of an exported kit.
 
     Parameters
     ----------
     kit_dir : str or path
         An exported kit (``refnpr kit export``): ``index.json`` and ``<case>/case.json``.
+        Untrusted: see the module docstring for what is refused.
     renders_dir : str or path
         The backend's output: ``<case>.png`` (optionally ``<case>.exr``) per image case,
         ``<case>/<channel>.npy`` per G-buffer case.
     report_dir : str or path, optional
-        Writes ``index.html`` and, per case, ``cases/<case>/{reference,result,diff16,mask}.png``.
+        Writes the HTML report there (:func:`refnpr.kit.report.write_report`), case by case as
+        they are checked. It may not be, lie in or hold the kit or the renders directory.
     json_path : str or path, optional
-        Writes ``{"kit", "renders", "summary": {cases, passed, failed}, "cases": [...]}``, each
-        case as :meth:`CaseCheck.to_json`.
+        Writes ``{"kit", "renders", "selection": {only, styles}, "summary": {cases, passed,
+        failed, missing, missing_policy}, "cases": [...]}``, each case as
+        :meth:`CaseCheck.to_json`. It may not lie inside the kit.
+    only : list of str, optional
+        Check only these cases (names of index.json).
+    styles : list of str, optional
+        Check only the cases of these styles (:func:`case_style`: ``style.name`` of
+        case.json, ``"gbuffer"`` for G-buffer cases). With ``only``: the cases in both.
+    missing : {"fail", "skip"}
+        What a case without a render counts as (:func:`summarize`, the exit status of
+        :func:`run`); either way it is listed apart, after the compared cases, with status
+        ``"missing"`` and ``passed`` False.
 
     Returns
     -------
     list of CaseCheck
-        One per case, in ``index.json`` order. A case whose render is missing, unreadable or of
-        the wrong size fails with the reason; so does a case whose kit files are broken.
+        One per selected case: the compared cases in ``index.json`` order, then the cases
+        without a render. A case whose render is unreadable or of the wrong size fails with the
+        reason; so does a case whose kit files are broken.
 
     Raises
     ------
     ValueError
-        ``kit_dir`` is not a kit (no or invalid ``index.json``), ``renders_dir`` is not a
-        directory, ``report_dir`` is a file or ``json_path`` is a directory.
+        ``kit_dir`` is not a kit (no or invalid ``index.json``, or case names that are invalid
+        or repeated); ``renders_dir`` is not a directory; ``report_dir`` is a file or overlaps
+        the kit or the renders; ``json_path`` is a directory or inside the kit; ``only`` or
+        ``styles`` name something the kit lacks, or select nothing; ``missing`` is neither
+        ``"fail"`` nor ``"skip"``.
+    TypeError
+        ``only`` or ``styles`` is not a list of strings.
     """
-    kit_dir, renders_dir = Path(kit_dir), Path(renders_dir)
-    entries = _read_index(kit_dir)
-    if not renders_dir.is_dir():
-        why = "it is a file" if renders_dir.exists() else "it does not exist"
-        raise ValueError(f"renders_dir: {str(renders_dir)!r} is not a directory ({why})")
-    if report_dir is not None and Path(report_dir).exists() and not Path(report_dir).is_dir():
-        raise ValueError(f"report_dir: {str(report_dir)!r} is a file; expected a directory")
-    if json_path is not None and Path(json_path).is_dir():
-        raise ValueError(
-            f"json_path: {str(json_path)!r} is a directory; give a file name such as "
-            f"{str(Path(json_path) / 'check.json')!r}"
-        )
-    results: list[CaseCheck] = []
-    report_cases = []
-    for entry in entries:
-        name = entry["name"]
-        kind = entry.get("kind", "image")
-        data = Visual()
-        try:
-            case_path, case = _read_case(kit_dir, entry)
-            kind = case.get("kind", kind)
-            check = {"image": _check_image, "gbuffer": _check_gbuffer}.get(kind)
-            if check is None:
-                raise _CaseError(
-                    "kit", f"{case_path}: kind must be 'image' or 'gbuffer', got {kind!r}"
+    if missing not in MISSING_POLICIES:
+        raise ValueError(f"missing: expected 'fail' or 'skip', got {_q(missing)}")
+    only, styles = _names_list(only, "only"), _names_list(styles, "styles")
+    kit_root = _dir(kit_dir, "kit_dir")
+    entries = _read_index(kit_root, Path(kit_dir))
+    renders_root = _dir(renders_dir, "renders_dir")
+    if report_dir is not None:
+        rp = Path(report_dir)
+        if rp.exists() and not rp.is_dir():
+            raise ValueError(f"report_dir: {_q(str(rp))} is a file; expected a directory")
+        for root, what in ((kit_root, "the kit"), (renders_root, "the renders directory")):
+            if _overlap(rp.resolve(), root):
+                raise ValueError(
+                    f"report_dir: {_q(str(rp))} overlaps {what} ({_q(str(root))}); write the "
+                    "report to a directory of its own"
                 )
-            tol = case.get("tolerance")
-            if not isinstance(tol, dict):
-                raise _CaseError("kit", f"{case_path}: 'tolerance' must be an object, got {tol!r}")
-            r = check(name, case_path, case, tol, renders_dir, data)
-        except _CaseError as exc:
-            r = CaseCheck(name, str(kind), False, exc.status, exc.message)
-        results.append(r)
-        report_cases.append((r, data))
+    if json_path is not None:
+        jp = Path(json_path)
+        if jp.is_dir():
+            raise ValueError(
+                f"json_path: {_q(str(jp))} is a directory; give a file name such as "
+                f"{_q(str(jp / 'check.json'))}"
+            )
+        if jp.resolve().is_relative_to(kit_root):
+            raise ValueError(f"json_path: {_q(str(jp))} lies inside the kit; write it elsewhere")
+    selected = _select(entries, kit_root, only, styles)
+    cases = _stream(selected, kit_root, renders_root)
     if report_dir is not None:
         from .report import write_report
 
         results = write_report(
-            Path(report_dir), report_cases, kit_dir=kit_dir, renders_dir=renders_dir
+            Path(report_dir), cases, kit_dir=Path(kit_dir), renders_dir=Path(renders_dir)
         )
+    else:
+        results = [r for r, _ in cases]
     if json_path is not None:
-        passed = sum(r.passed for r in results)
-        summary = {"cases": len(results), "passed": passed, "failed": len(results) - passed}
-        cases = [r.to_json() for r in results]
-        doc = {"kit": str(kit_dir), "renders": str(renders_dir), "summary": summary, "cases": cases}
+        doc = {
+            "kit": str(kit_dir),
+            "renders": str(renders_dir),
+            "selection": {"only": only, "styles": styles},
+            "summary": summarize(results, missing=missing),
+            "cases": [r.to_json() for r in results],
+        }
         write_json(json_path, doc)
     return results
 
 
-def format_table(results: list[CaseCheck]) -> str:
-    """Plain-text table: one line per case and the reason under each failure."""
+def summarize(results: list[CaseCheck], *, missing: str = "fail") -> dict[str, Any]:
+    """Counts of a check: ``cases``, ``passed``, ``failed`` (compared or broken cases that did
+    not pass, not counting the missing ones), ``missing`` (no render) and ``missing_policy``."""
+    n_missing = sum(r.status == "missing" for r in results)
+    passed = sum(r.passed for r in results)
+    return {
+        "cases": len(results),
+        "passed": passed,
+        "failed": len(results) - passed - n_missing,
+        "missing": n_missing,
+        "missing_policy": missing,
+    }
+
+
+def _summary_line(s: dict[str, Any]) -> str:
+    line = f"{s['cases']} cases: {s['passed']} passed, {s['failed']} failed"
+    if s["missing"]:
+        how = "skipped" if s["missing_policy"] == "skip" else "failing; --missing skip skips them"
+        line += f", {s['missing']} missing ({how})"
+    return line
+
+
+def format_table(results: list[CaseCheck], *, missing: str = "fail") -> str:
+    """Plain-text table: one line per compared case and the reason under each failure, then
+    the cases without a render, then the summary line (:func:`summarize`). Every field is
+    printable (control characters escaped)."""
     lines = [
         f"{'case':44s} {'kind':7s} {'result':6s} {'status':10s} {'max_abs':>8s} {'rmse':>8s} "
         f"{'frac>thr':>9s} {'pos.frac':>9s} {'ssim':>7s}"
     ]
+    absent = []
     for r in results:
+        if r.status == "missing":
+            absent.append(r)
+            continue
         m = r.metrics
         nums = " ".join(
             f"{m[k]:{w}.{p}f}" if k in m else f"{'-':>{w}s}"
@@ -643,36 +493,57 @@ def format_table(results: list[CaseCheck]) -> str:
         if r.kind == "gbuffer" and r.status == "ok":
             nums = f"{'':8s} {'':8s} {'':9s} {m.get('frac_bad', 0.0):9.5f} {'':7s}"
         verdict = "PASS" if r.passed else "FAIL"
-        lines.append(f"{r.name:44s} {r.kind:7s} {verdict:6s} {r.status:10s} {nums}")
+        lines.append(
+            f"{printable(r.name):44s} {printable(r.kind):7s} {verdict:6s} "
+            f"{printable(r.status):10s} {nums}"
+        )
         if not r.passed:
-            lines.append(f"    {r.message}")
-    passed = sum(r.passed for r in results)
-    lines.append(f"{len(results)} cases: {passed} passed, {len(results) - passed} failed")
+            lines.append(f"    {printable(r.message)}")
+    if absent:
+        how = "skipped" if missing == "skip" else "each fails"
+        lines.append(f"missing: {len(absent)} case(s) without a render ({how}):")
+        lines += [f"    {printable(r.name):44s} {printable(r.message)}" for r in absent]
+    lines.append(_summary_line(summarize(results, missing=missing)))
     return "\n".join(lines)
+
+
+#: Most file names listed in the note on renders without a case.
+_EXTRA_LISTED = 20
 
 
 def run(args: Any) -> int:
     """The ``refnpr kit check`` command: print the table, write the report/JSON, exit status.
 
-    ``args`` has ``kit_dir``, ``renders_dir``, ``report`` (directory or None) and ``json``
-    (file or None). Returns 0 when every case passes, 1 otherwise.
+    ``args`` has ``kit_dir``, ``renders_dir``, ``report`` (directory or None), ``json`` (file
+    or None) and optionally ``only``, ``styles`` (lists or None) and ``missing`` (``"fail"``,
+    the default, or ``"skip"``). Returns 0 when every selected case passes (with ``--missing
+    skip``: every case that has a render), 1 otherwise.
     """
+    policy = getattr(args, "missing", None) or "fail"
     results = check_kit(
         args.kit_dir,
         args.renders_dir,
         report_dir=getattr(args, "report", None),
         json_path=getattr(args, "json", None),
+        only=getattr(args, "only", None),
+        styles=getattr(args, "styles", None),
+        missing=policy,
     )
-    print(format_table(results))
-    names = {r.name for r in results}
+    print(format_table(results, missing=policy))
+    kit_root = Path(args.kit_dir).resolve()
+    names = {e.name for e in _read_index(kit_root, Path(args.kit_dir))}
     extra = sorted(
-        p.name for p in Path(args.renders_dir).glob("*.png") if p.name[: -len(".png")] not in names
+        e.name
+        for e in os.scandir(args.renders_dir)
+        if e.name.endswith(".png") and e.name[: -len(".png")] not in names
     )
     if extra:
+        shown = ", ".join(printable(n) for n in extra[:_EXTRA_LISTED])
+        more = f" and {len(extra) - _EXTRA_LISTED} more" if len(extra) > _EXTRA_LISTED else ""
         print(
-            f"note: {len(extra)} render(s) without a case in the kit, not compared: "
-            + ", ".join(extra)
+            f"note: {len(extra)} render(s) without a case in the kit, not compared: {shown}{more}"
         )
     if getattr(args, "report", None) is not None:
-        print(f"report: {Path(args.report) / 'index.html'}")
-    return 0 if all(r.passed for r in results) else 1
+        print(f"report: {printable(Path(args.report) / 'index.html')}")
+    s = summarize(results, missing=policy)
+    return 0 if s["failed"] == 0 and (s["missing"] == 0 or policy == "skip") else 1

@@ -65,3 +65,24 @@ def test_rgb_and_gray_pngs_load_as_rgba(tmp_path):
 def test_not_a_directory(tmp_path):
     with pytest.raises(ValueError, match="candidate_dir: .* is not a directory"):
         compare_dirs(tmp_path, tmp_path / "nope")
+
+
+def test_a_threshold_of_k_levels_accepts_every_difference_of_k_levels():
+    """Float64 puts |33/255 - 31/255| an ulp above 2/255 for 65 of the 254 pairs; a difference
+    of k 8-bit levels must match a threshold of k/255 whatever the two values are, and one
+    level more must not (refnpr.compare and the kit's position-tolerant compare alike)."""
+    from refnpr.kit.verdict import position_tolerant_mismatch
+
+    levels = np.arange(256)
+    for k in (1, 2, 3):
+        lo = levels[: 256 - k]
+        a = np.ones((1, lo.size, 4))
+        a[..., :3] = lo[None, :, None] / 255
+        b, c = a.copy(), a.copy()
+        b[..., :3] = (lo[None, :, None] + k) / 255
+        c[..., :3] = (lo[None, :, None] + k - 1) / 255
+        assert compare_images(a, b, tolerance=k / 255).frac_over == 0.0
+        assert compare_images(a, b, tolerance=(k - 1) / 255).frac_over == 1.0
+        assert not position_tolerant_mismatch(a, b, threshold=k / 255, deviation=0).any()
+        assert position_tolerant_mismatch(a, b, threshold=(k - 1) / 255, deviation=0).all()
+        assert not position_tolerant_mismatch(a, c, threshold=(k - 1) / 255, deviation=0).any()
