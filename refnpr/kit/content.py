@@ -29,6 +29,7 @@ import stat
 from pathlib import Path
 from typing import Any
 
+from ._untrusted import printable
 from .limits import MAX_FILE_BYTES, MAX_JSON_BYTES, MAX_JSON_DEPTH
 
 __all__ = [
@@ -37,7 +38,7 @@ __all__ = [
     "MAX_FILE_BYTES",
     "MAX_CASE_FILES",
     "GROUPS",
-    "escape",
+    "printable",
     "quote",
     "canonical_json",
     "digest",
@@ -65,28 +66,9 @@ _BRACKET = re.compile(r"[\[\]{}]")
 _CHUNK = 1 << 20
 
 
-def escape(text: str) -> str:
-    """``text`` safe to print: control, format (bidirectional overrides) and other unprintable
-    characters and backslashes as Python escapes (``\\x1b``, ``\\u202e``)."""
-    if text.isprintable() and "\\" not in text:
-        return text
-    out = []
-    for c in text:
-        n = ord(c)
-        if c == "\\":
-            out.append("\\\\")
-        elif c.isprintable():
-            out.append(c)
-        else:
-            out.append(
-                f"\\x{n:02x}" if n < 0x100 else f"\\u{n:04x}" if n < 0x10000 else f"\\U{n:08x}"
-            )
-    return "".join(out)
-
-
 def quote(text: str) -> str:
-    """``text`` escaped (:func:`escape`) in single quotes, for messages."""
-    return f"'{escape(text)}'"
+    """``text`` escaped (:func:`printable`) in single quotes, for messages."""
+    return f"'{printable(text)}'"
 
 
 def canonical_json(value: Any) -> bytes:
@@ -226,7 +208,7 @@ def read_json(
     except RecursionError:
         raise ValueError(f"{where}: nested too deeply to read") from None
     except ValueError as exc:  # JSONDecodeError, our hooks, int digit limits
-        raise ValueError(f"{where} is not valid JSON: {escape(str(exc))[:300]}") from None
+        raise ValueError(f"{where} is not valid JSON: {printable(str(exc))[:300]}") from None
 
 
 def list_files(case_dir: str | Path, *, what: str = "case") -> dict[str, Path]:

@@ -27,8 +27,8 @@ from .content import (
     case_files,
     case_hashes,
     digest,
-    escape,
     is_digest,
+    printable,
     quote,
     read_bytes,
     read_json,
@@ -189,9 +189,11 @@ class KitDiff:
         lines += [f"note: {n}" for n in self.notes]
         lines += [f"warning: {w}" for w in self.warnings]
         if self.added:
-            lines.append(f"added ({len(self.added)}): {', '.join(map(escape, self.added))}")
+            lines.append(f"added ({len(self.added)}): {', '.join(map(printable, self.added))}")
         if self.removed:
-            lines.append(f"removed ({len(self.removed)}): {', '.join(map(escape, self.removed))}")
+            lines.append(
+                f"removed ({len(self.removed)}): {', '.join(map(printable, self.removed))}"
+            )
         if self.changed:
             lines.append(f"changed ({len(self.changed)}):")
             for c in self.changed:
@@ -214,15 +216,15 @@ def _kit_line(side: str, k: KitContent) -> str:
 
 def _change_lines(c: CaseChange) -> list[str]:
     words = dict(PART_WORDS, expected="expected arrays") if c.kind == "gbuffer" else PART_WORDS
-    out = [f"  {escape(c.name)}: {', '.join(words[p] for p in c.parts)}"]
+    out = [f"  {printable(c.name)}: {', '.join(words[p] for p in c.parts)}"]
     for key, old, new in c.keys[:SHOWN_KEY_CHANGES]:
-        out.append(f"    {escape(key)}: {_change_text(old, new)}")
+        out.append(f"    {printable(key)}: {_change_text(old, new)}")
     more = c.more_keys + max(0, len(c.keys) - SHOWN_KEY_CHANGES)
     if more:
         out.append(f"    ... and {more} more key change(s) in case.json")
     for what in ("changed", "added", "removed"):
         if c.files[what]:
-            shown = ", ".join(escape(f) for f in c.files[what][:8])
+            shown = ", ".join(printable(f) for f in c.files[what][:8])
             extra = len(c.files[what]) - 8
             out.append(f"    files {what}: {shown}" + (f" and {extra} more" if extra > 0 else ""))
     return out
@@ -403,7 +405,7 @@ def _check_recorded(
     off = [g for g in GROUPS if rec_h[g] != hashes[g]]
     off_files = sorted(k for k in set(rec_f) | set(files) if rec_f.get(k) != files.get(k))
     if off or off_files:
-        detail = ", ".join(off + [escape(f) for f in off_files[:5]])
+        detail = ", ".join(off + [printable(f) for f in off_files[:5]])
         kit.warnings.append(
             f"{kit.label}: case {name!r}: its files do not match the hashes index.json records "
             f"({detail}): changed after export; the files are what is compared"
@@ -480,7 +482,7 @@ def diff_kits(old: str | os.PathLike | KitContent, new: str | os.PathLike | KitC
     notes = []
     for k in (a, b):
         if not k.recorded and k.cases:
-            made = f"exported by refnpr {escape(k.refnpr[:40])}" if k.refnpr else "exported"
+            made = f"exported by refnpr {printable(k.refnpr[:40])}" if k.refnpr else "exported"
             notes.append(
                 f"{k.label} kit {quote(str(k.path))}: its index.json records no content "
                 f"hashes for some or all cases ({made} before kits carried them); their files "

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from .content import escape
+from .content import printable
 
 __all__ = ["git_commit", "provenance", "suite_entry", "describe_source", "describe"]
 
@@ -170,7 +170,7 @@ def describe(prov: Any) -> str:
         if isinstance(commit, str) and _SHA.fullmatch(commit)
         else "git unknown"
     )
-    return f"refnpr {escape(prov['refnpr'][:40])}, {git}"
+    return f"refnpr {printable(prov['refnpr'][:40])}, {git}"
 
 
 def describe_source(suite_path: str | Path) -> str:
