@@ -26,8 +26,8 @@ CONVENTIONS: dict[str, str | float] = {
     "W x H image, not per sample-grid pixel: on the n W x n H sample grid a backend multiplies "
     "its per-sample-pixel derivatives (dFdx, dFdy) by n; d/dy = -dFdy when the render target's "
     "y axis points up",
-    "fill_rule": "top-left, on vertices snapped to 1/256 sample-grid pixel (8 sub-pixel bits); "
-    "attributes interpolated from the unsnapped positions",
+    "fill_rule": "top-left, on vertices snapped to 1/256 of an image pixel (floor(256 x + 0.5), "
+    "round half up); attributes interpolated from the unsnapped positions",
     "front_face": "counter-clockwise seen from outside in world space; refnpr draws both faces "
     "(no culling)",
 }

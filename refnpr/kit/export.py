@@ -111,6 +111,7 @@ def raster_options(options: dict[str, Any], channels: list[str]) -> dict[str, An
     }
     out = dict(options)
     out.setdefault("cull_backfaces", defaults["cull_backfaces"])
+    out.setdefault("dtype", defaults["dtype"])
     if "dyadic_scale" in channels:
         for key in ("line_period", "dyadic_coord"):
             out.setdefault(key, defaults[key])

@@ -2,9 +2,11 @@
 
 A style ``NAME`` is exported by ``refnpr.kit.styles.NAME.export(style, scene, case_dir, *,
 width, height, spp) -> StyleExport`` when that module exists, else by :mod:`._generic`
-(``params()`` as they are). A module may also define ``unresolved(params) -> list[str]``: the key
-paths of exported params that still hold something only refnpr could resolve (the kit tests call
-it; the generic check looks for "auto" strings).
+(``params()`` as they are). The module's ``derived(style, scene, *, width, height, spp)`` gives
+the case's derived texts without building any texture (``export`` returns the same texts);
+:func:`derived_texts` dispatches to it. A module may also define ``unresolved(params) ->
+list[str]``: the key paths of exported params that still hold something only refnpr could
+resolve (the kit tests call it; the generic check looks for "auto" strings).
 
 The ``contoured`` wrapper (a style with ``contours = {...}``) is unwrapped here: its base style is
 exported by the base's module, then the contour layer by :func:`.contours.export_contours` (same
@@ -22,7 +24,14 @@ from typing import Any
 from . import _generic, contours
 from ._export import StyleExport
 
-__all__ = ["StyleExport", "export_style", "exporter_module", "unresolved", "style_name"]
+__all__ = [
+    "StyleExport",
+    "export_style",
+    "derived_texts",
+    "exporter_module",
+    "unresolved",
+    "style_name",
+]
 
 
 def exporter_module(name: str) -> ModuleType:
@@ -84,6 +93,33 @@ def export_style(
             f"{mod.__name__}.export returned {type(out).__name__}; expected a StyleExport"
         )
     return out
+
+
+def derived_texts(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
+    """The style's derived texts for one case, as :func:`export_style` gives them, without
+    writing or building any texture (cheap: no pyramid, no table).
+
+    Parameters
+    ----------
+    style : refnpr.styles.Style
+        The style the case renders with (``contoured``: the base style's texts, then the
+        contour layer's).
+    scene : refnpr.scenes.Scene
+    width, height, spp : int
+        Image size and samples per pixel of the case.
+
+    Returns
+    -------
+    dict
+        name -> paragraph; empty for a style exported by the generic module.
+    """
+    size = {"width": width, "height": height, "spp": spp}
+    if style.name == "contoured":
+        out = derived_texts(style.base, scene, **size)
+        out.update(contours.derived(style.layer, scene, **size))
+        return out
+    make = getattr(exporter_module(style.name), "derived", None)
+    return {} if make is None else dict(make(style, scene, **size))
 
 
 def unresolved(name: str, params: dict[str, Any]) -> list[str]:

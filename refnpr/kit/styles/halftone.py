@@ -37,47 +37,96 @@ from .._json import jsonable
 from ..textures import ORIENTATION_ROW0_V0, write_pyramid, write_table
 from ._export import StyleExport
 
-__all__ = ["export"]
+__all__ = ["export", "derived", "DERIVED"]
 
-_DERIVED = {
+_BILINEAR = (
+    "B_k(s) = the GL_LINEAR / GL_REPEAT sample of level k (cols_k x rows_k): x = (s_u - "
+    "floor(s_u)) cols_k - 0.5, y = (s_v - floor(s_v)) rows_k - 0.5, i = floor(x), j = "
+    "floor(y), f_x = x - i, f_y = y - j, columns i, i + 1 and rows j, j + 1 taken modulo "
+    "cols_k / rows_k, weights (1 - f_x)(1 - f_y), f_x (1 - f_y), (1 - f_x) f_y, f_x f_y summed "
+    "in that order"
+)
+
+DERIVED = {
     "halftone-intensity": (
-        "Target intensity per sample (Freudenberg sec. 3, lighting of Veryovka eq. 1): "
-        "I = clip(luma . (m_a l_a + sum_i m_d f_d l_i + sum_i m_s f_s l_i), 0, 1) with luma = "
-        "params.luma (Rec. 709), f_d = min(max(N.L, 0), 1) with N the G-buffer normal and L the unit "
-        "direction towards the light (point lights: normalize(position - P)), f_s Blinn-Phong "
-        "max(N.H, 0)^shininess clipped to [0, 1] with H = normalize(L + V), V = normalize(eye - "
-        "P), and f_s = 0 where N.L <= 0; the specular sum only when params.specular. With a stroke "
-        "normal map (screen.normals_role) f_d is replaced, where the tangent frame is valid, by "
-        "clip(normalize(2 nmap - 1) . normalize(L.T, L.B, L.N), 0, 1) (sec. 5.2), nmap the "
-        "filtered normal map at the screen coordinates and LOD. T, B: dP/du = (dP/dx dv/dy - "
-        "dP/dy dv/dx) / det, dP/dv = (dP/dy du/dx - dP/dx du/dy) / det with det = du/dx dv/dy - "
-        "du/dy dv/dx of the UNSCALED uv derivatives, then Gram-Schmidt against N (T first, B "
-        "against N and T); invalid where |det| <= 1e-20 or a tangent length <= 1e-30 "
-        "(refnpr/styles/halftone/shading.py)."
+        "Target intensity per covered sample of object o (mesh_id = o; m = objects[o].material of "
+        "case.json), in float64 (Freudenberg sec. 3 with the lighting of Veryovka eq. 1): N = the "
+        "normal channel, P = the position channel, L_i = lights[i].direction (directional) or "
+        "normalize(lights[i].position - P) (point), V = normalize(camera.eye - P), normalize(v) = "
+        "v / |v| (zero stays zero); f_d,i = min(max(normalize(N) . normalize(L_i), 0), 1); f_s,i "
+        "= min(max(normalize(N) . normalize(normalize(L_i) + V), 0), 1)^m.shininess where "
+        "normalize(N) . normalize(L_i) > 0 and m.shininess > 0, else 0 (Blinn-Phong). rgb = "
+        "m.ambient * ambient, then for each light i in order rgb += m.diffuse f_d,i "
+        "lights[i].color and, when params.specular, rgb += m.specular f_s,i lights[i].color; I = "
+        "clip((rgb_r 0.2126 + rgb_g 0.7152) + rgb_b 0.0722, 0, 1) (Rec. 709, params.luma). Stroke "
+        "lighting (sec. 5.2), for a screen with a normal map "
+        "(params.objects[o].screen.normals_role not null): where the tangent frame is valid, "
+        "f_d,i is replaced by clip(normalize(2 nm - 1) . normalize((L_i . T, L_i . B, L_i . N)), "
+        "0, 1), nm the RGB of the normals role looked up exactly as the screen "
+        "(halftone-screen-lookup: the same coordinates, LOD and probes; trilinear, never per "
+        "level). Tangent frame from the UNSCALED uv derivatives (du/dx, dv/dx) = duv_dx, (du/dy, "
+        "dv/dy) = duv_dy and N as stored: det = du/dx dv/dy - du/dy dv/dx, dP/du = (dP/dx dv/dy - "
+        "dP/dy dv/dx) / det, dP/dv = (dP/dy du/dx - dP/dx du/dy) / det (dP/dx = dposition_dx, "
+        "dP/dy = dposition_dy), T = normalize(dP/du - (dP/du . N) N), B = normalize(dP/dv - "
+        "(dP/dv . N) N - (dP/dv . T) T) (Gram-Schmidt, T first); valid where |det| > 1e-20 and "
+        "both lengths before normalizing > 1e-30. Indication map (sec. 5.1, "
+        "params.objects[o].indication_role not null): I = clip(I + ind(u * "
+        "params.objects[o].indication_scale[0], v * params.objects[o].indication_scale[1]), 0, 1) "
+        "with (u, v) the UNSCALED uv and ind the bilinear clamp-to-edge lookup of that role (rows "
+        "x cols, row 0 at v = 0): x = clip(u cols - 0.5, 0, cols - 1), y = clip(v rows - 0.5, 0, "
+        "rows - 1), x0 = min(floor(x), cols - 1), x1 = min(x0 + 1, cols - 1), y0, y1 alike, f_x = "
+        "x - x0, f_y = y - y0, ind = (t[y0][x0] (1 - f_x) + t[y0][x1] f_x) (1 - f_y) + (t[y1][x0] "
+        "(1 - f_x) + t[y1][x1] f_x) f_y."
     ),
     "halftone-screen-lookup": (
-        "Screen coordinates: s = uv * uv_scale (engraving: (s . direction, 0.5), derivatives "
-        "(ds/dx . direction, 0) and likewise for y). LOD: P = |d/dx * size|, |d/dy * size| in "
-        "level-0 texels ((cols, rows)); anisotropy 1: lod = log2(max(P)); N > 1: probes = "
-        "clip(ceil(Pmax/Pmin - 1e-9), 1, N), lod = log2(Pmax / probes), the mean of probes "
-        "trilinear samples at s + axis ((j + 1/2)/probes - 1/2), axis = the longer derivative "
-        "vector (dx on ties). Then lod += lod_offset. Trilinear: lod clamped to [0, L-1], "
-        "k0 = floor, k1 = min(k0 + 1, L-1), bilinear GL_REPEAT with texel centres at (i + 0.5)/"
-        "size on each level, weight frac(lod). per_level: threshold the two level samples "
-        "separately and blend the results with frac(lod); equalize: first map each level "
-        "sample v through its level's tone LUT row (linear interpolation at v * 2047, clamped)."
+        "Screen lookup of object o (texture role params.objects[o].screen.role, its levels 0 .. L "
+        "- 1 as exported: do not regenerate them; level 0 cols x rows texels): s = (u su, v sv) "
+        "with (su, sv) = params.objects[o].uv_scale, screen derivatives ds/dx = (du/dx su, dv/dx "
+        "sv) and ds/dy = (du/dy su, dv/dy sv) from the duv_dx / duv_dy channels, per IMAGE pixel "
+        "(NOT divided by n = params.samples_per_axis). Engraving screens "
+        "(params.objects[o].screen.direction = (d_0, d_1) not null): s = (s . direction, 0.5), "
+        "ds/dx = (ds/dx . direction, 0), ds/dy likewise. LOD (OpenGL 4.6 sec. 8.14): P_x = "
+        "hypot(ds_u/dx cols, ds_v/dx rows), P_y likewise with d/dy; with A = "
+        "params.objects[o].anisotropy: A = 1: lod = log2(max(max(P_x, P_y), 1e-30)), one probe at "
+        "s; A > 1: probes q = min(max(ceil(P_max / max(P_min, 1e-30) - 1e-9), 1), A), lod = "
+        "log2(max(P_max / q, 1e-30)), axis = ds/dx if P_x >= P_y else ds/dy, probe j at s + axis "
+        "((j + 0.5) / q - 0.5), j = 0 .. q - 1, the probes' values summed in order and divided by "
+        "q. Then lod += params.lod_offset (= params.lod_bias, minus log2(n) when "
+        "params.sample_lod: each sample then has its own footprint, as a render at n times the "
+        "resolution; else every sample of a pixel has the pixel's lod). Levels: lod clamped to "
+        "[0, L - 1], k0 = floor(lod), k1 = min(k0 + 1, L - 1), w = lod - k0; " + _BILINEAR + ". "
+        "params.objects[o].per_level false (params.mip 'trilinear' and no tone correction): per "
+        "probe S = (1 - w) B_k0 + w B_k1 (the second term only where w > 0), then the probe mean. "
+        "params.objects[o].per_level true (params.mip 'per_level', or "
+        "params.objects[o].equalize): the two level values S0 = B_k0 and S1 = B_k1 (each a probe "
+        "mean) are thresholded apart (halftone-threshold); with params.objects[o].equalize "
+        "(params.tone_correct, never for stroke screens) each is first mapped through its level's "
+        "row of the role params.objects[o].tone_lut_role: S_k = interp(S_k, linspace(0, 1, C), "
+        "row k) (C columns; piecewise linear, clamped at the ends)."
     ),
     "halftone-threshold": (
-        "binary: white where screen + (I - 0.5) > 0.5 (sec. 3.1); smooth: clip(top - c (1 - "
-        "screen - I), 0, 1), top = 0.5 when centred else 1 (sec. 3.2); c_mode fwidth: c = 1 / "
-        "max(fw, 1e-6), fw = sum over d in (ds/dx / n, ds/dy / n) of |S(s + d) - S(s - d)| / 2 "
-        "(S the filtered screen, n samples per pixel axis), top = 0.5. I first gets the "
-        "indication map: I = clip(I + ind(uv * indication_scale), 0, 1), ind bilinear clamp-to-"
-        "edge with texel centres at (i + 0.5)/size. Output colour: paper * t + ink * (1 - t); "
-        "show screen / intensity: the raw value x as the linear grey whose sRGB encoding is x; "
-        "show normals: the normal map's RGB the same way ((0.5, 0.5, 1) without a normal map)."
+        "Threshold (Freudenberg sec. 3) of a screen value S and the intensity I: binary "
+        "(params.threshold 'binary', sec. 3.1): out = 1 if S + (I - 0.5) > 0.5 else 0; smooth "
+        "(sec. 3.2): out = clip(top - (1 - S - I) c, 0, 1) with top = 0.5 when params.centred or "
+        "params.c_mode is 'fwidth', else 1, and c = params.c (c_mode 'constant') or, c_mode "
+        "'fwidth', per sample c = 1 / max(fw, 1e-6), fw = sum over d in (ds/dx / n, ds/dy / n) (n "
+        "= params.samples_per_axis; the screen derivatives of halftone-screen-lookup) of |S3(s + "
+        "d) - S3(s - d)| / 2, S3 the trilinear probe-mean lookup at the sample's lod (whatever "
+        "params.mip). params.objects[o].per_level: out = (1 - w) out(S0) + w out(S1); else "
+        "out(S). Colour (params.show 'color'): rgb = clip(out paper + (1 - out) ink, 0, 1) per "
+        "channel (params.paper, params.ink), alpha 1; samples outside every object (mesh_id < 0): "
+        "(0, 0, 0, 0). params.show 'screen', 'intensity', 'normals': the value x (the trilinear "
+        "probe-mean S3 / I after the indication map / the normal map's RGB, (0.5, 0.5, 1) without "
+        "a normal map) as the grey srgb_to_linear(clip(x, 0, 1)) per channel, srgb_to_linear(x) = "
+        "x / 12.92 for x <= 0.04045, else ((x + 0.055) / 1.055)^2.4 (the displayed sRGB grey is "
+        "x), alpha 1 on covered samples, (0, 0, 0, 0) elsewhere."
     ),
 }
+
+
+def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
+    """The derived texts of a ``halftone`` case (the same for every case)."""
+    return dict(DERIVED)
 
 
 def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int):
@@ -181,4 +230,5 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
         "objects": objects,
     }
     params = jsonable(params, where="style 'halftone' params")
-    return StyleExport(params=params, textures=textures, derived=dict(_DERIVED))
+    size = {"width": width, "height": height, "spp": spp}
+    return StyleExport(params=params, textures=textures, derived=derived(style, scene, **size))

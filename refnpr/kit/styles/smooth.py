@@ -15,23 +15,29 @@ from refnpr.styles.lit.params import SMOOTH
 from .._json import jsonable
 from ._export import StyleExport
 
-__all__ = ["export", "unresolved", "DERIVED"]
+__all__ = ["export", "derived", "unresolved", "DERIVED"]
 
 #: How a backend shades a sample (collected into docs/kit.md).
 DERIVED = {
     "smooth_shading": (
-        "Per covered sample (mesh_id >= 0; m = objects[mesh_id].material): rgb = m.ambient * "
-        "ambient + sum over lights of m.diffuse * f_d * light.color + (params.specular) "
-        "m.specular * f_s * light.color (Veryovka eq. 1), clipped to [0, 1], alpha 1; empty "
-        "samples (0, 0, 0, 0). N = the normal channel as stored (already unit length; not "
-        "renormalized), L = the light's unit direction (directional: direction / |direction|; "
-        "point: normalize(position_light - position)), V = normalize(camera.eye - position). "
-        "f_d = max(N.L, 0) (not clamped above). f_s = 0 where N.L <= 0 or shininess <= 0, else "
-        "max(B, 0)^shininess with B = N.normalize(L + V) (params.model 'blinn-phong') or B = "
-        "(2 (N.L) N - L).V ('phong'). refnpr computes in float64 (refnpr/styles/lit/_kernels.py "
-        "shade_smooth, refnpr/formulas/lighting.py)."
+        "Per covered sample (mesh_id >= 0; m = objects[mesh_id].material), in float64: rgb = "
+        "m.ambient * ambient; then for each light i in the order of case.lights: rgb += "
+        "m.diffuse * f_d * lights[i].color, then, when params.specular and m.shininess > 0 and "
+        "f_d > 0, rgb += m.specular * f_s * lights[i].color; finally each channel clipped to "
+        "[0, 1], alpha 1. Empty samples (mesh_id < 0) are (0, 0, 0, 0). N = the normal channel "
+        "as stored (unit length; not renormalized), P = the position channel, L = the light's "
+        "unit direction (directional: lights[i].direction; point: normalize(lights[i].position "
+        "- P)), V = normalize(camera.eye - P), normalize(v) = v / |v| (zero stays zero). f_d = "
+        "max(N.L, 0) (not clamped above). f_s = base^m.shininess with base = max(N.H, 0), H = "
+        "normalize(L + V) (params.model 'blinn-phong'), or base = max(R.V, 0), R = 2 (N.L) N - "
+        "L (params.model 'phong'); base is not clamped above."
     )
 }
+
+
+def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
+    """The derived texts of a ``smooth`` case (the same for every case)."""
+    return dict(DERIVED)
 
 
 def export(
@@ -39,7 +45,9 @@ def export(
 ) -> StyleExport:
     """Every parameter of the declaration as used (``specular``, ``model``); no textures."""
     params = jsonable(SMOOTH.resolved(style.p), where="smooth params")
-    return StyleExport(params=params, derived=dict(DERIVED))
+    return StyleExport(
+        params=params, derived=derived(style, scene, width=width, height=height, spp=spp)
+    )
 
 
 def unresolved(params: dict[str, Any]) -> list[str]:

@@ -33,61 +33,102 @@ import numpy as np
 from .._json import jsonable
 from ._export import StyleExport
 
-__all__ = ["export", "DERIVED"]
+__all__ = ["export", "derived", "DERIVED"]
+
+#: splitmix64 and hash01 as the TAM and TAMISS texts define them.
+HASH01 = (
+    "hash01(id, salt) = (splitmix64((uint64(id) + salt) mod 2^64) >> 11) / 2^53, splitmix64(z): "
+    "z = z + m1; z = (z ^ (z >> 30)) * m2; z = (z ^ (z >> 27)) * m3; return z ^ (z >> 31), all "
+    "uint64 modulo 2^64 (uint64(id): the two's-complement bits of the int64 id)"
+)
+#: The stroke id of a seed, as the TAM and TAMISS texts define it.
+PACK_ID = (
+    "id = ((((chart * 4 + k) * 16 + lev) * 2^22 + (gx + 2^21)) * 2^22 + (gy + 2^21)) * 8 + r "
+    "as int64 (bits: chart 10 | layer 2 | level 4 | gx + 2^21 22 | gy + 2^21 22 | row 3)"
+)
+#: The level rule of the dyadic scale S.
+LEVELS = (
+    "L = floor(S), f = S - L, thin = 1; if L < 0: thin = 2^S, L = 0, f = 0; if L >= "
+    "params.max_level: L = params.max_level, f = 0. Levels lev = 0 .. L, plus L + 1 when f > "
+    "0; gain = thin for lev <= L, 2^f - 1 for lev = L + 1"
+)
+#: The skip rule of inherited seeds.
+BORN = (
+    "a seed of level lev > 0 is inherited (skipped: it was enumerated at its birth level) when "
+    "((gx & 1) == (kx & 1)) and ((gy & 1) == (r & 1)), & the bitwise AND of two's-complement "
+    "integers, evaluated before =="
+)
 
 DERIVED = {
     "tam-inputs": (
-        "Per covered sample (tri_id >= 0): uv, duv_dx, duv_dy from the G-buffer (the "
-        "rasterizer's flat per-triangle derivatives) and uv_scale = the object's material "
-        "uv_scale. derivatives 'smooth': F = sum_k bary_k [_TAM_FRAME_U, _TAM_FRAME_V]_k over "
-        "the triangle's vertices (a 3 x 2 frame), A = F^T F, det = a00 a11 - a01^2; where det > "
-        "1e-12 a00 a11 and det > 0, and with D = position - eye, n = the G-buffer normal, "
-        "|n.D| >= 0.05 |D| |n| and |D| > 0: for each of dP = dposition_dx, dposition_dy: dP_n = "
-        "dP - (n.dP / n.D) D, r = F^T dP_n, duv = A^-1 r (replaces duv_dx / duv_dy); elsewhere "
-        "the flat values stay. orient_charts: with the triangle's chart symmetry M "
-        "(_TAM_SYMMETRY of its vertices, row-major) and offset o (_TAM_OFFSET): uv = M uv + o, "
-        "duv = M duv, uv_scale = |M| uv_scale; chart = _TAM_CHART (refnpr/styles/tamiss/"
-        "gather.py field_inputs, _kernels._smooth_duv)."
+        "Per covered sample (tri_id >= 0; o = mesh_id; V_0, V_1, V_2 the triangle's vertices in "
+        "index-buffer order, per tri_id and objects[o].first_tri_id), in float64 (the G-buffer "
+        "is float64: raster_options.dtype): uv, duv_dx, duv_dy from the channels (per image "
+        "pixel) and (su, sv) = objects[o].material.uv_scale. params.derivatives 'smooth': g_u = "
+        "sum_c bary_c _TAM_FRAME_U(V_c), g_v = sum_c bary_c _TAM_FRAME_V(V_c) (c = 0, 1, 2 in "
+        "order), a00 = g_u . g_u, a01 = g_u . g_v, a11 = g_v . g_v, det = a00 a11 - a01^2; D = "
+        "position - camera.eye, n = the normal channel; where det > 1e-12 (a00 a11) and det > 0 "
+        "and |n . D| >= 0.05 |D| |n| and |D| > 0, for each of dP = dposition_dx, dposition_dy: "
+        "lam = (n . dP) / (n . D), dP_n = dP - lam D, r0 = g_u . dP_n, r1 = g_v . dP_n, du = "
+        "(a11 r0 - a01 r1) / det, dv = (a00 r1 - a01 r0) / det (these replace duv_dx, duv_dy); "
+        "elsewhere the channels' values stay. Charts: _TAM_SYMMETRY (M00, M01, M10, M11, "
+        "row-major), _TAM_OFFSET (o_0, o_1) and _TAM_CHART are equal on the three vertices of a "
+        "triangle (read them at V_0); params.orient_charts: uv = (M00 u + M01 v + o_0, M10 u + "
+        "M11 v + o_1), each derivative d = (M00 d_u + M01 d_v, M10 d_u + M11 d_v), (su, sv) = "
+        "(|M00| su + |M01| sv, |M10| su + |M11| sv); with orient_charts false they are left as "
+        "they are (the attributes hold the identity and 0). chart = _TAM_CHART(V_0) as an "
+        "integer. The darkness to reproduce: params.constant_tone when not null, else "
+        "tam-darkness."
     ),
     "tam-darkness": (
-        "darkness = 1 - clip(luma . (m_a * ambient + sum_i m_d * f_d_i * color_i), 0, 1) with "
-        "m_a, m_d the object's material ambient and diffuse, f_d = min(max(normalize(N) . "
-        "normalize(L), 0), 1), N the G-buffer normal, L towards light i (point: position_i - P); "
-        "or params.constant_tone when not null."
+        "darkness = 1 - clip(Y, 0, 1), Y = (r 0.2126 + g 0.7152) + b 0.0722 (params.luma) of "
+        "rgb = m.ambient * ambient + sum over the lights i in order of m.diffuse * f_d,i * "
+        "lights[i].color (m = objects[mesh_id].material), f_d,i = min(max(normalize(n) . L_i, "
+        "0), 1), n the normal channel, L_i = lights[i].direction (directional) or "
+        "normalize(lights[i].position - P) (point, P the position channel), normalize(v) = v / "
+        "|v|; or params.constant_tone when not null."
     ),
     "tam-field": (
-        "Per layer k (angle directions[k], cos_a/sin_a as given): rho = clip((darkness - "
-        "layer_tones[k]) / (1 - layer_tones[k]) density, 0, 1), skip when rho <= 0; u = uv_u "
-        "scale_u, v = uv_v scale_v (derivatives likewise), p = c u + s v, q = -s u + c v, gp = "
-        "|grad p|, gq = |grad q| (skip unless both in (0, 1e30)), d_p = 1 / gp, d_q = 1 / gq, "
-        "s = log2(d_q / (7 period)). Enumerate strokes exactly as refnpr/styles/tamiss/"
-        "_kernels.py _enumerate (hw_px = width (1 + width_jitter) / 2 + 0.5, end_px = 0.5): "
-        "L = floor(s), f = s - L; s < 0: thin = 2^s, L = 0, f = 0; L >= max_level: L = "
-        "max_level, f = 0; levels 0 .. L (+1 when f > 0), gain = thin for lev <= L else 2^f - "
-        "1; rows = 7 2^lev; rows ry from floor((q - hw_px / d_q) rows) to floor((q + hw_px / "
-        "d_q) rows) + 1, dist = |q - ry / rows| d_q <= hw_px; gy = floor(ry / 7), r = ry - 7 gy, "
-        "kx = kx[r]; cells gx from floor(ps - h) to floor(ps + h) + 1 with ps = p 2^lev - kx / 7, "
-        "h = length (1 + length_jitter) / 2 + end_px / d_p 2^lev; skip inherited seeds (lev > 0 "
-        "and gx & 1 == kx & 1 and gy & 1 == r & 1); id = pack(chart, k, lev, gx, gy, r) = "
-        "((((chart 4 + k) 16 + lev) << 22 + gx + 2^21) << 22 + gy + 2^21) 8 + r (int64); hash01"
-        "(id, salt) = (splitmix64(uint64(id) + salt) >> 11) 2^-53 with splitmix64(z): z += m1; "
-        "z = (z ^ z >> 30) m2; z = (z ^ z >> 27) m3; z ^ z >> 31 (wrapping uint64); stroke "
-        "length lam = length (1 + length_jitter (2 hash01(id, salts.length) - 1)) / 2^lev, "
-        "p_start = (gx + kx / 7) / 2^lev - lam / 2, t = (p - p_start) / lam, beyond = max(-t, t"
-        " - 1) lam d_p, skip when beyond > end_px; at most `cap` candidates per sample and "
-        "layer (in this order). Each candidate: tau = hash01(id, salts.tone), limit = rho gain, "
-        "opacity = 1 if tau < limit else 0 (density_mode clip) or clip((limit - tau) / fade, 0,"
-        " 1) (fade), skipped when <= 0; wf = 1 + width_jitter (2 hash01(id, salts.width) - 1); "
-        "a = clip(width wf / 2 - dist + 0.5, 0, 1) clip(0.5 - beyond, 0, 1) opacity; ink = ink "
-        "+ a (1 - ink)."
+        "Per covered sample, ink = 0; for each layer k in order (params.directions[k], c = "
+        "params.cos_a[k], s = params.sin_a[k] as given): rho = clip((darkness - "
+        "params.layer_tones[k]) / (1 - params.layer_tones[k]) * params.density, 0, 1), the "
+        "layer skipped when rho <= 0. With u = uv_0 su, v = uv_1 sv and their derivatives "
+        "scaled alike: p = c u + s v, q = -s u + c v, gp = hypot(c du/dx + s dv/dx, c du/dy + s "
+        "dv/dy), gq = hypot(-s du/dx + c dv/dx, -s du/dy + c dv/dy); the layer is skipped unless "
+        "0 < gp < 1e30 and 0 < gq < 1e30; d_p = 1 / gp, d_q = 1 / gq (pixels per unit of p, q); S "
+        "= log2(d_q / (7 params.period)). " + LEVELS + "; limit = rho gain, a level skipped when "
+        "limit <= 0. Constants: hw = params.width (1 + params.width_jitter) / 2 + 0.5 px across, "
+        "e = 0.5 px past the ends, hw_q = hw / d_q, KX = params.kx. Each level in order: R = 7 "
+        "2^lev rows per unit of q; rows ry = floor((q - hw_q) R) .. floor((q + hw_q) R) + 1 "
+        "(inclusive, in order); dist = |q - ry / R| d_q, the row skipped when dist > hw; gy = "
+        "floor(ry / 7), r = ry - 7 gy, kx = KX[r]; ps = p 2^lev - kx / 7, hc = params.length (1 + "
+        "params.length_jitter) / 2 + (e / d_p) 2^lev; cells gx = floor(ps - hc) .. floor(ps + hc) "
+        "+ 1 (inclusive, in order); " + BORN + ". " + PACK_ID + ". " + HASH01 + "; m1, m2, m3 = "
+        "params.splitmix, the salts params.salts (64-bit numbers as hex strings). Stroke: lam = "
+        "params.length (1 + params.length_jitter (2 hash01(id, salts.length) - 1)) / 2^lev, "
+        "p_start = (gx + kx / 7) / 2^lev - lam / 2, t = (p - p_start) / lam, beyond = max(-t, t "
+        "- 1) lam d_p; skipped when beyond > e. Cap: the strokes that pass the beyond test are "
+        "counted; at the (params.cap + 1)-th the sample's layer ends (its later cells, rows and "
+        "levels are not visited). Each counted stroke: tau = hash01(id, salts.tone); opacity = "
+        "1 if tau < limit else 0 (params.density_mode 'clip') or clip((limit - tau) / "
+        "params.fade, 0, 1) ('fade'), skipped when <= 0; wf = 1 + params.width_jitter (2 "
+        "hash01(id, salts.width) - 1); a = clip(params.width wf / 2 - dist + 0.5, 0, 1) * "
+        "clip(0.5 - beyond, 0, 1) * opacity; ink = ink + a (1 - ink). The layers ink the same "
+        "value, layer after layer."
     ),
     "tam-composite": (
-        "Output straight-alpha RGBA per sample: a = clip(ink, 0, 1); under = (paper, 1) on "
-        "covered samples when paper is not null, else (0, 0, 0, 0); alpha = a + a_u (1 - a); "
-        "rgb = clip((ink_color a + under_rgb a_u (1 - a)) / alpha, 0, 1) where alpha > 0, else "
-        "0 (refnpr/styles/tamiss/compose.py composite_ink)."
+        "Output straight-alpha RGBA per sample, in float64 (stored as float32): a = clip(ink, 0, "
+        "1); under = (paper, 1) on covered samples (tri_id >= 0) when params.paper is not null "
+        "(paper clipped to [0, 1] and rounded to float32), else (0, 0, 0, 0); k = a_under (1 - "
+        "a), alpha = a + k, rgb = clip((params.ink a + under_rgb k) / alpha, 0, 1) where alpha > "
+        "0, else 0: samples without ink show the paper (covered samples) or nothing."
     ),
 }
+
+
+def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
+    """The derived texts of a ``tam`` case (the same for every case)."""
+    return dict(DERIVED)
 
 
 def _unwrap(style: Any) -> Any:
@@ -164,6 +205,6 @@ def export(
     )
     return StyleExport(
         params=jsonable(params, where="style 'tam' params"),
-        derived=dict(DERIVED),
+        derived=derived(style, scene, width=width, height=height, spp=spp),
         vertex_attributes=_vertex_attributes(scene, style.values.orient_charts),
     )

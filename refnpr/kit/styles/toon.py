@@ -19,23 +19,39 @@ from .._json import jsonable
 from ..textures import write_table
 from ._export import StyleExport
 
-__all__ = ["export", "unresolved", "DERIVED"]
+__all__ = ["export", "derived", "unresolved", "DERIVED"]
 
-DERIVED = {
-    "toon_shading": (
-        "Per covered sample (mesh_id >= 0; m = objects[mesh_id].material): rgb = m.ambient * "
-        "ambient + sum over lights of m.diffuse * tone * light.color (+ in step mode with "
-        "params.specular: m.specular * T_n(f_s, t) * light.color), clipped to [0, 1], alpha 1. "
-        "f_d = max(N.L, 0) with N the normal channel as stored and L the light's unit "
-        "direction; f_s as in the smooth style (Blinn-Phong, per-object shininess). Step mode: "
-        "tone = T_n(f_d, t) with T_n(x, t) = min(floor(x n) + [x n - floor(x n) >= t], "
-        "ceil(x n)) / n (Veryovka eq. 4, bounded by ceil(x n) / n: refnpr step_n). Lake mode: "
-        "tone = ramp[min(floor(clamp(f_d, 0, 1) K), K - 1)] from the texture role 'ramp' "
-        "(equivalently: the count of j in 0..n-1 with (j + t) / n <= (i + 0.5) / K, divided "
-        "by n, for texel i). refnpr computes in float64 (refnpr/styles/lit/_kernels.py "
-        "shade_toon; the ramp: refnpr/styles/lit/shading.py lake_ramp)."
-    )
-}
+#: What every toon case computes (the step or the Lake text follows).
+COMMON = (
+    "Per covered sample (mesh_id >= 0; m = objects[mesh_id].material), in float64: rgb = "
+    "m.ambient * ambient; then for each light i in the order of case.lights: rgb += m.diffuse "
+    "* tone * lights[i].color, then, in step mode with params.specular and m.shininess > 0, rgb "
+    "+= m.specular * f_s * lights[i].color; finally each channel clipped to [0, 1], alpha 1. "
+    "Empty samples (mesh_id < 0) are (0, 0, 0, 0): the background shows there. N = the normal "
+    "channel as stored (unit length; not renormalized), P = the position channel, L = the "
+    "light's unit direction (directional: lights[i].direction; point: "
+    "normalize(lights[i].position - P)), V = normalize(camera.eye - P), normalize(v) = v / |v| "
+    "(zero stays zero); f_d = max(N.L, 0) (not clamped above)."
+)
+STEP = (
+    " Step mode (params.mode 'step', Veryovka eqs. 2-4): T_n(x, t) = min(floor(x n) + (1 if x n "
+    "- floor(x n) >= t else 0), ceil(x n)) / n with n = params.n, t = params.t (eq. 4, bounded by "
+    "ceil(x n) / n); tone = T_n(f_d, t); the specular term is Blinn-Phong thresholded the same "
+    "way: f_s = T_n(base^m.shininess, t) with base = max(N.H, 0), H = normalize(L + V) (base not "
+    "clamped above) where f_d > 0, and f_s = 0 where f_d = 0."
+)
+LAKE = (
+    " Lake mode (params.mode 'lake', Lake et al. 2000; params.specular is false): tone = "
+    "ramp[min(floor(min(f_d, 1) K), K - 1)], ramp the texture role params.ramp (K = "
+    "params.ramp_size texels, nearest); texel i of the ramp holds the count of j in 0 .. n - 1 "
+    "with (j + t) / n <= (i + 0.5) / K, divided by n (n = params.n, t = params.t)."
+)
+DERIVED = {"toon_shading": COMMON + STEP}
+
+
+def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
+    """The derived text of a ``toon`` case: the step mode's or the Lake ramp's."""
+    return {"toon_shading": COMMON + (LAKE if style.mode == "lake" else STEP)}
 
 
 def export(
@@ -57,7 +73,9 @@ def export(
         params["ramp"] = "ramp"
         params["ramp_size"] = ramp.shape[-1]
     return StyleExport(
-        params=jsonable(params, where="toon params"), textures=textures, derived=dict(DERIVED)
+        params=jsonable(params, where="toon params"),
+        textures=textures,
+        derived=derived(style, scene, width=width, height=height, spp=spp),
     )
 
 

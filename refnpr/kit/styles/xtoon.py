@@ -30,65 +30,102 @@ from ..textures import ORIENTATION_ROW0_TOP, write_pyramid, write_table
 from . import _generic
 from ._export import StyleExport
 
-__all__ = ["export", "unresolved", "DERIVED"]
+__all__ = ["export", "derived", "unresolved", "DERIVED"]
 
 #: The name of the per-vertex abstracted normal attribute (glTF ``_ABSTRACT_NORMAL``).
 ABSTRACT_NORMAL = "abstract_normal"
 
 DERIVED = {
     "xtoon-tone": (
-        "Tone (X-Toon sec. 3): with n the shading normal and l the unit direction towards light "
-        "params.light of case.lights (point lights: normalize(position - P), P the G-buffer "
-        "position), tone = clip(n.l, 0, 1), or (n.l + 1) / 2 when params.tone = 'half_lambert'. "
-        "Without shape abstraction n = normalize(G-buffer normal) (zero stays zero)."
+        "Tone (X-Toon sec. 3), per covered sample (mesh_id >= 0), in float64: tone = clip(n . "
+        "l, 0, 1) (params.tone 'clamped') or (n . l + 1) / 2 ('half_lambert', not clipped: the "
+        "lookup clips it), n the unit shading normal (without shape abstraction n = "
+        "normalize(the normal channel), a zero normal staying zero; else xtoon-shape), l the "
+        "unit direction towards the light case.lights[params.light]: its direction "
+        "(directional) or normalize(light.position - P) (point; P the position channel), "
+        "normalize(v) = v / |v|."
     ),
     "xtoon-detail": (
-        "Detail D (sec. 3.1, 3.2, 5), clamped to [0, 1]. depth: z = view-axis distance "
-        "(params.distance 'axis': the G-buffer depth per sample, or -(V P)_z per vertex) or "
-        "|P - eye| ('eye'), z = max(z, tiny), D = 1 - ln(z / z_min) / ln(r). focus: the same z, "
-        "with z_c = params.z_focus: z < z_c: D = 1 - ln(z / (z_c - z_min)) / ln((z_c - r z_min) "
-        "/ (z_c - z_min)), else D = 1 - ln(z / (z_c + z_min)) / ln((z_c + r z_min) / (z_c + "
-        "z_min)). orientation: v = (eye - P) / max(|eye - P|, tiny), D = min(|clip(n.v, -1, 1)"
-        "|, 1)^r. highlight: refl = 2 (n.l) n - l, x = clip(v.refl, -1, 1), D = min(|x|, 1)^s "
-        "(one_sided: max(x, 0)^s). flow: f = pix(P, camera) - pix(P, prev_camera) with pix the "
-        "pixel position of P through projection_matrix @ view_matrix of a width x height image "
-        "(x = (ndc_x + 1) W / 2, y = (1 - ndc_y) H / 2; W, H the IMAGE size, not the sample "
-        "grid); where w_clip <= 0 for either camera f = (flow_behind, 0); D = 1 - clip((|f| - "
-        "flow_min) / (flow_max - flow_min), 0, 1). map: D = the texture params.detail_map at the "
-        "pixel (per-pixel map) or sample (per-sample map). none: D = 1."
+        "Detail D of params.detail (sec. 3.1, 3.2, 5), each clamped to [0, 1], from a point P "
+        "with unit normal n (per sample: the position channel and the shading normal; per "
+        "vertex in xtoon-vertex-mode). 'depth': z = the view-axis distance (params.distance "
+        "'axis': the depth channel per sample, -(row 2 of view_matrix . (P, 1)) per vertex) or "
+        "|P - camera.eye| ('eye'), z = max(z, params.tiny), D = clip(1 - ln(z / params.z_min) / "
+        "ln(params.r), 0, 1) (z_min and r resolved for this frame). 'focus': the same z, z_c = "
+        "params.z_focus: z < z_c: D = clip(1 - ln(z / (z_c - z_min)) / ln((z_c - r z_min) / (z_c "
+        "- z_min)), 0, 1), else D = clip(1 - ln(z / (z_c + z_min)) / ln((z_c + r z_min) / (z_c + "
+        "z_min)), 0, 1). 'orientation': v = (camera.eye - P) / max(|camera.eye - P|, "
+        "params.tiny), D = min(|clip(n . v, -1, 1)|, 1)^params.r. 'highlight': l as in "
+        "xtoon-tone, refl = 2 (n . l) n - l, x = clip(v . refl, -1, 1), D = min(|x|, 1)^params.s "
+        "(params.one_sided: max(x, 0)^params.s). 'flow': f = pix(P, camera) - pix(P, "
+        "params.prev_camera), pix the continuous pixel position of P through projection_matrix "
+        "@ view_matrix of the W x H IMAGE (x = (x_c / w + 1) W / 2, y = (1 - y_c / w) H / 2; not "
+        "the sample grid); f = (params.flow_behind, 0) where w <= 0 for either camera; D = 1 - "
+        "clip((|f| - params.flow_min) / (params.flow_max - params.flow_min), 0, 1). 'map': D = "
+        "the texture role params.detail_map at the pixel (an H x W map) or the sample (an n H x "
+        "n W map), nearest (texelFetch). 'none': D = 1."
     ),
     "xtoon-vertex-mode": (
-        "detail_mode 'vertex' (the paper's vertex shader): D (for flow: the displacement f) is "
-        "evaluated at the three vertices of the sample's triangle (tri_id -> object via "
-        "first_tri_id, glTF index order) from the vertex POSITION and the unit NORMAL (or the "
-        "vertex-blended shape normal, below), then interpolated with the G-buffer bary "
-        "(perspective-correct barycentrics): D_s = sum_k bary_k D_k, clamped; for flow D from |"
-        "sum_k bary_k f_k|. A point light gives each vertex its own l."
+        "params.detail_mode 'vertex' (the paper's vertex shader; the maps 'map' and 'none' stay "
+        "per sample): D (for 'flow': the displacement f) is evaluated at each vertex V_k of the "
+        "sample's triangle (tri_id -> object via first_tri_id, V_0, V_1, V_2 in index-buffer "
+        "order) from its POSITION and its unit normal (NORMAL / |NORMAL|, zero staying zero; "
+        "with shape abstraction the vertex-blended normal of xtoon-shape, normalized), with the "
+        "light direction at that vertex (a point light gives each vertex its own l). Each "
+        "vertex's D_k is clamped to [0, 1] BEFORE the interpolation (every map of xtoon-detail "
+        "clamps); then D_s = clip(sum_k bary_k D_k, 0, 1) with the bary channel. 'flow': f_s = "
+        "sum_k bary_k f_k (f_k = (params.flow_behind, 0) for a vertex behind either camera) and "
+        "D_s = 1 - clip((|f_s| - params.flow_min) / (params.flow_max - params.flow_min), 0, 1)."
     ),
     "xtoon-shape": (
-        "Shape abstraction (sec. 4) with n_abs = the vertex attribute _ABSTRACT_NORMAL (unit; "
-        "objects outside shape_objects carry their own unit normals). shape_blend 'vertex': per "
-        "vertex m = (1 - w) normalize(NORMAL) + w n_abs (w = shape_weight.value, or 'detail': w = "
-        "1 - D at the vertex evaluated with the mesh normal), interpolated with bary, then n = "
-        "normalize(m). shape_blend 'pixel': n0 = normalize(G-buffer normal), na = sum_k bary_k "
-        "n_abs_k (na = n0 where |na| = 0; n0 = na, or (0, 0, 1), where |n0| = 0), w per sample "
-        "(value; 'detail': 1 - D(n0) per sample; 'texture': clip(bilinear GL_REPEAT sample of "
-        "texture shape_weight at uv * uv_scale, texel centres, 0, 1); 'map': the texture "
-        "shape_weight at the pixel/sample), n = normalize((1 - w) normalize(n0) + w "
-        "normalize(na)) (where that blend vanishes: normalize(n0) if w < 0.5 else "
-        "normalize(na))."
+        "Shape abstraction (sec. 4), params.shape not null: n_abs = the vertex attribute "
+        "_ABSTRACT_NORMAL (unit; objects outside params.shape_objects carry their own unit "
+        "normals), n_v = NORMAL / |NORMAL|, normalize(v) = v / |v|. params.shape_blend "
+        "'vertex': per vertex m = (1 - w) normalize(n_v) + w normalize(n_abs) with w = "
+        "params.shape_weight.value (kind 'global'), w = 1 - D at the vertex with n_v (kind "
+        "'detail', D of xtoon-detail per vertex), w = 0 (kinds 'texture' and 'map', per-sample "
+        "weights); n = normalize(sum_k bary_k m_k) per sample. params.shape_blend 'pixel': n0 = "
+        "normalize(the normal channel), na = sum_k bary_k n_abs(V_k); where |na| = 0: na = n0; "
+        "where |n0| = 0: n0 = na, or n0 = na = (0, 0, 1) if |na| = 0 too; w per sample: the value "
+        "(kind 'global'), 1 - D(n0) (kind 'detail', D of xtoon-detail per sample with n0), "
+        "clip(B(uv * params.shape_weight.uv_scale), 0, 1) (kind 'texture': B the GL_LINEAR / "
+        "GL_REPEAT sample of level 0 of the role params.shape_weight.texture: x = (u - floor(u)) "
+        "cols - 0.5, y = (v - floor(v)) rows - 0.5, four texels modulo the size, weights (1 - "
+        "f_x)(1 - f_y), f_x (1 - f_y), (1 - f_x) f_y, f_x f_y), or the map's value at the "
+        "pixel / sample (kind 'map', nearest); m = (1 - w) normalize(n0) + w normalize(na), n = "
+        "m / |m| where |m| > 2.2250738585072014e-308, else normalize(n0) if w < 0.5 else "
+        "normalize(na). n is the shading normal of xtoon-tone and of the per-sample detail maps."
     ),
     "xtoon-lookup": (
-        "Colour: the toon texture (rows grow with D, columns with tone) sampled bilinearly with "
-        "clamp-to-edge at x = clip(clip(tone, 0, 1) cols - 0.5, 0, cols - 1), y = clip(clip(D, 0,"
-        " 1) rows - 0.5, 0, rows - 1), j0 = min(floor(x), max(cols - 2, 0)), i0 likewise, j1 = "
-        "min(j0 + 1, cols - 1), weights x - j0, y - i0. Output straight-alpha RGBA: rgb = "
-        "clip(texel rgb (times the object's material diffuse when modulate), 0, 1), alpha = "
-        "clip(texel alpha, 0, 1); empty samples (mesh_id < 0) are (0, 0, 0, 0). show 'detail' | "
-        "'inverse_detail' | 'tone': opaque grey g = srgb_to_linear(clip(value, 0, 1)) with value "
-        "D, 1 - D or the tone (so that the displayed sRGB grey is the value)."
+        "Colour: the toon texture (role 'toon', rows x cols texels of RGBA, rows grow with D, "
+        "columns with tone) sampled bilinearly with clamp-to-edge: x = clip(clip(tone, 0, 1) cols "
+        "- 0.5, 0, cols - 1), y = clip(clip(D, 0, 1) rows - 0.5, 0, rows - 1), j0 = min(floor(x), "
+        "max(cols - 2, 0)), i0 = min(floor(y), max(rows - 2, 0)), j1 = min(j0 + 1, cols - 1), i1 "
+        "= min(i0 + 1, rows - 1), f_x = x - j0, f_y = y - i0, value = (t[i0][j0] (1 - f_x) + "
+        "t[i0][j1] f_x) (1 - f_y) + (t[i1][j0] (1 - f_x) + t[i1][j1] f_x) f_y per channel. Output "
+        "straight-alpha RGBA: rgb = clip(value_rgb (times objects[mesh_id].material.diffuse when "
+        "params.modulate), 0, 1), alpha = clip(value_a, 0, 1); empty samples (mesh_id < 0) are "
+        "(0, 0, 0, 0). params.show 'detail' | 'inverse_detail' | 'tone': opaque grey g = "
+        "clip(srgb_to_linear(clip(x, 0, 1)), 0, 1) with x = D, 1 - D or the tone "
+        "(srgb_to_linear(x) = x / 12.92 for x <= 0.04045, else ((x + 0.055) / 1.055)^2.4: the "
+        "displayed sRGB grey is x)."
     ),
 }
+
+#: The texts a case carries per what it uses (the others are left out).
+_ALWAYS = ("xtoon-tone", "xtoon-detail", "xtoon-lookup")
+
+
+def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
+    """The derived texts of an ``xtoon`` case: tone, detail and lookup, and the vertex mode
+    and the shape abstraction where the case uses them."""
+    p = style._cfg.p
+    names = list(_ALWAYS)
+    if p.detail_mode == "vertex":
+        names.append("xtoon-vertex-mode")
+    if p.shape is not None:
+        names.append("xtoon-shape")
+    return {k: DERIVED[k] for k in DERIVED if k in names}
 
 
 def _map(case_dir: Path, role: str, array: Any, used_for: str) -> dict[str, Any]:
@@ -208,7 +245,7 @@ def export(
     return StyleExport(
         params=jsonable(params, where="style 'xtoon' params"),
         textures=textures,
-        derived=dict(DERIVED),
+        derived=derived(style, scene, width=width, height=height, spp=spp),
         vertex_attributes=vertex_attributes,
         frames=frames,
     )
