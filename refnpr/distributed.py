@@ -13,6 +13,7 @@ error or KeyboardInterrupt the futures are cancelled and a cluster started here 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import inspect
 import math
 import time
@@ -161,7 +162,7 @@ def _as_completed(client: Any, futures: list[Any]) -> Iterator[Any]:
 
 def _chunk_task(
     plan: Any, start: int, stop: int, wanted: Sequence[int]
-) -> list[tuple[int, bytes, np.ndarray | None]]:
+) -> list[tuple[int, bytes, Any]]:
     """Worker: frames ``start .. stop - 1`` from the style's initial state at ``start`` (one
     frame of a stateless style, its previous still from the animation); only the ``wanted``
     frames are returned (the others are warm-up or done)."""
@@ -170,8 +171,9 @@ def _chunk_task(
     for f in range(start, stop):
         image = shader.shade(f)
         if f in wanted:
-            rgba = np.array(image.rgba, dtype=np.float32) if plan.exr else None  # reused buffer
-            out.append((f, image.to_png_bytes(), rgba))
+            # the EXR's image with its passes; rgba copied (the context reuses its buffer)
+            frame = dataclasses.replace(image, rgba=np.array(image.rgba)) if plan.exr else None
+            out.append((f, image.to_png_bytes(), frame))
     return out
 
 
@@ -269,8 +271,8 @@ def _run_sequence(plan: Any, progress: Any, where: tuple, chunk: Any, warmup: in
                 for fut in arrived:
                     payload = fut.result()
                     fut.release()  # the workers forget it (an EXR frame's RGBA is large)
-                    for f, png, rgba in payload:
-                        _sequence._write_frame(plan, f, png, rgba, extra.get(f))
+                    for f, png, frame in payload:
+                        _sequence._write_frame(plan, f, png, frame, extra.get(f))
                         result._tick(f, "rendered", progress)
     result.rendered.sort()
     return result

@@ -216,7 +216,8 @@ def gallery_markdown(
 
 def run(args: Namespace) -> int:
     """``refnpr gallery``: build the gallery from the parsed options (``out_dir``, ``size``,
-    ``suite``, ``spp``, ``only``, ``markdown``); 0 on success (errors: ValueError)."""
+    ``suite``, ``spp``, ``only``, ``markdown``, ``quiet``: no line per image); 0 on success
+    (errors: ValueError)."""
     entries = GALLERY
     if args.only:
         unknown = [n for n in args.only if n not in {e.file for e in GALLERY}]
@@ -225,7 +226,7 @@ def run(args: Namespace) -> int:
                 f"--only: unknown gallery entries {unknown}; choose from {[e.file for e in GALLERY]}"
             )
         entries = tuple(e for e in GALLERY if e.file in args.only)
-    log = functools.partial(print, file=sys.stderr)
+    log = None if getattr(args, "quiet", False) else functools.partial(print, file=sys.stderr)
     build_gallery(args.out_dir, args.size, suite=args.suite, entries=entries, spp=args.spp, log=log)
     if args.markdown:
         print(gallery_markdown(Path(args.out_dir).as_posix(), entries), end="")

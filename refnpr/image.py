@@ -327,10 +327,16 @@ class Image:
         background (so alpha is 1 wherever the background is opaque).
     timings : dict of str to float
         Seconds per phase (rasterize, shade, resolve, ...).
+    passes : dict of str to array, or None
+        Per-pixel G-buffer channels, ``(H, W)`` or ``(H, W, C)`` of the channel's dtype, keyed
+        by channel name (``depth``, ``normal``, ``uv``, ``position``, ``tri_id``, ...), one
+        sample per pixel (:func:`refnpr.exr.pixel_passes`): what ``render(..., passes=True)``
+        attaches and :meth:`save` writes to an EXR. None: an image without passes.
     """
 
     rgba: np.ndarray
     timings: dict[str, float] = field(default_factory=dict)
+    passes: dict[str, np.ndarray] | None = None
 
     def __post_init__(self) -> None:
         a = np.asarray(self.rgba)
@@ -338,15 +344,34 @@ class Image:
             raise ValueError(f"rgba: expected shape (H, W, 4), got {a.shape}")
         if not np.all(np.isfinite(a)):
             raise ValueError("rgba: image contains NaN or inf; a style produced invalid values")
+        if self.passes is not None:
+            if not isinstance(self.passes, dict):
+                raise TypeError(
+                    f"passes: expected a dict of channel name to array or None, got "
+                    f"{type(self.passes).__name__}"
+                )
+            for name, p in self.passes.items():
+                shape = np.shape(p)
+                if len(shape) not in (2, 3) or tuple(shape[:2]) != a.shape[:2]:
+                    raise ValueError(
+                        f"passes: {name!r} has shape {shape}; expected ({a.shape[0]}, "
+                        f"{a.shape[1]}) or ({a.shape[0]}, {a.shape[1]}, C), the image's size"
+                    )
 
     @classmethod
-    def _of_finite(cls, rgba: np.ndarray, timings: dict[str, float]) -> Image:
+    def _of_finite(
+        cls,
+        rgba: np.ndarray,
+        timings: dict[str, float],
+        passes: dict[str, np.ndarray] | None = None,
+    ) -> Image:
         """An Image of pixels already known to be finite (H, W, 4) float32, without the
         full-image scan of ``__post_init__`` (~4 ms at 1920x1080): for ``render``, whose
         ``composite_resolve`` checked every sample and every pixel it wrote."""
         image = object.__new__(cls)
         object.__setattr__(image, "rgba", rgba)
         object.__setattr__(image, "timings", timings)
+        object.__setattr__(image, "passes", passes)
         return image
 
     width = property(lambda self: int(self.rgba.shape[1]), doc="Pixels per row.")
@@ -360,7 +385,33 @@ class Image:
         return out
 
     def save(self, path: str | os.PathLike) -> Path:
-        """Save as 8-bit sRGB PNG with alpha (atomic write)."""
+        """Save as 8-bit sRGB PNG with alpha, or (a ``.exr`` name) as a linear float OpenEXR
+        file with the image's passes (atomic write either way).
+
+        The EXR is one part: ``R``, ``G``, ``B`` (linear, premultiplied by ``A``), ``A`` and
+        each of :attr:`passes` named as compositing tools expect (``depth.Z``,
+        ``normal.X/Y/Z``, ``uv.U/V``, ``position.X/Y/Z``, ``tri_id``, ``mesh_id``, ...; the
+        layout: :mod:`refnpr.exr`). An image without passes writes RGBA only.
+
+        Parameters
+        ----------
+        path : str or path
+            Ending in ``.png`` or ``.exr`` (the EXR needs the OpenEXR package).
+
+        Returns
+        -------
+        Path
+        """
+        if Path(path).suffix.lower() == ".exr":
+            from .exr import check_exr_path, image_channels, write_exr_channels
+
+            target = check_exr_path(path)
+            return write_exr_channels(target, image_channels(self.rgba, self.passes))
+        if Path(path).suffix.lower() != ".png" and not Path(path).is_dir():
+            raise ValueError(
+                f"path: expected a .png file name (8-bit sRGB) or a .exr one (linear float with "
+                f"the G-buffer passes), got {os.fspath(path)!r}"
+            )
         return write_png_atomic(path, self.to_srgb8())
 
     def to_png_bytes(self) -> bytes:

@@ -58,7 +58,9 @@ def _style_of(style: Any, scene: Any) -> Style:
     )
 
 
-def _check_args(width, height, spp, camera=None, progress=None, gbuf=False, copy=False):
+def _check_args(
+    width, height, spp, camera=None, progress=None, gbuf=False, copy=False, passes=False
+):
     """render's own arguments, checked before any scene work (spp's square-ness: rasterize)."""
     width = check_int("width", width, minimum=1)
     height = check_int("height", height, minimum=1)
@@ -73,7 +75,7 @@ def _check_args(width, height, spp, camera=None, progress=None, gbuf=False, copy
             "progress: expected a callable progress(phase: str, fraction: float) or None, "
             f"got {type(progress).__name__} {progress!r}"
         )
-    for name, flag in (("return_gbuffer", gbuf), ("copy", copy)):
+    for name, flag in (("return_gbuffer", gbuf), ("copy", copy), ("passes", passes)):
         if not isinstance(flag, (bool, np.bool_)):
             raise TypeError(f"{name}: expected a bool, got {type(flag).__name__} {flag!r}")
     return width, height, spp
@@ -178,6 +180,7 @@ def render(
     camera: Camera | None = None,
     progress: Progress | None = None,
     return_gbuffer: bool = False,
+    passes: bool = False,
 ) -> Image | tuple[Image, Any]:
     """Render a scene with a style.
 
@@ -198,6 +201,11 @@ def render(
         Called at phase boundaries ("rasterize", "shade", "resolve", "done").
     return_gbuffer : bool
         Also return the G-buffer the style was shaded from.
+    passes : bool
+        Also rasterize the G-buffer passes of :data:`refnpr.exr.EXR_PASSES` (depth, position,
+        tri_id, mesh_id; normal and uv where every mesh has them) and attach every channel the
+        frame computed to the image, one sample per pixel (``Image.passes``, see
+        :func:`refnpr.exr.pixel_passes`), for ``image.save("x.exr")``. The pixels are the same.
 
     Returns
     -------
@@ -205,8 +213,8 @@ def render(
         ``rgba`` (H, W, 4) float32 linear straight-alpha, composited over ``scene.background``.
     """
     t0 = time.perf_counter()
-    _check_args(width, height, spp, camera, progress, return_gbuffer)
-    got = RenderContext(scene, style, width, height, spp).render(
+    _check_args(width, height, spp, camera, progress, return_gbuffer, passes)
+    got = RenderContext(scene, style, width, height, spp, passes=passes).render(
         camera, progress=progress, return_gbuffer=return_gbuffer
     )
     image = got[0] if return_gbuffer else got
@@ -234,8 +242,8 @@ class RenderContext:
 
     Parameters
     ----------
-    scene, style, width, height, spp
-        As for :func:`render`.
+    scene, style, width, height, spp, passes
+        As for :func:`render` (``passes``: every frame's image carries its passes, new arrays).
 
     Notes
     -----
@@ -244,18 +252,35 @@ class RenderContext:
     """
 
     def __init__(
-        self, scene: Any, style: Any = None, width: int = 512, height: int = 512, spp: int = 1
+        self,
+        scene: Any,
+        style: Any = None,
+        width: int = 512,
+        height: int = 512,
+        spp: int = 1,
+        *,
+        passes: bool = False,
     ) -> None:
-        width, height, spp = _check_args(width, height, spp)
+        width, height, spp = _check_args(width, height, spp, passes=passes)
         self.scene = _still(as_scene(scene))
         self.style = _style_of(style, self.scene)
         self.width, self.height, self.spp = width, height, spp
-        self.channels = sorted(self.style.requires(self.scene))
+        self.passes = bool(passes)
+        self.channels = self._channels(self.scene, self.style)
         _check_memory(self.scene, self.style, self.channels, width, height, spp)
         self._options = self.style.raster_options(self.scene)
         self._gb = None
         self._out = None
         self._samples: np.ndarray | None = None  # lent to the styles (ShadeContext.rgba_out)
+
+    def _channels(self, scene: Any, style: Style) -> list[str]:
+        """The style's channels, with the EXR passes the scene's meshes can give if ``passes``."""
+        wanted = set(style.requires(scene))
+        if self.passes:
+            from .exr import passes_for
+
+            wanted |= passes_for(scene.world_meshes())
+        return sorted(wanted)
 
     def __repr__(self) -> str:
         return (
@@ -333,7 +358,7 @@ class RenderContext:
         _check_args(self.width, self.height, self.spp, None, progress, return_gbuffer, copy)
         scene = as_scene(scene)
         style = self.style if style is None else style_from_spec(style)
-        channels = sorted(style.requires(scene))
+        channels = self._channels(scene, style)
         options = style.raster_options(scene)
         gb_out = self._gb
         if channels != self.channels or not _same_options(options, self._options):
@@ -378,6 +403,11 @@ class RenderContext:
         }
         tell("done", 1.0)
         self._gb, self._out = gb, out
-        image = Image._of_finite(out.copy() if copy else out, timings)  # resolve checked them
+        pixel = None
+        if self.passes:
+            from .exr import pixel_passes
+
+            pixel = pixel_passes(gb)
+        image = Image._of_finite(out.copy() if copy else out, timings, pixel)  # checked them
         timings["total"] = time.perf_counter() - t0  # with the copy: what the caller waits for
         return image, gb

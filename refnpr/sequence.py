@@ -1,7 +1,7 @@
 """Render frames of an animated scene to a directory, restartably (``refnpr animate``).
 
 Frame ``f`` is ``DIR/frame_00000.png`` (8-bit sRGB RGBA), optionally ``.exr`` (linear float32
-RGBA), and ``.json``, the restart record, written last; every file through a temporary file and
+RGBA and the frame's G-buffer passes, the layout of :mod:`refnpr.exr`), and ``.json``, the restart record, written last; every file through a temporary file and
 an atomic rename (a SIGKILL's temporaries are removed by the next run). A record holds a hash of
 everything the pixels depend on and the SHA-256 of the files it describes; a frame whose record
 and files match is done. A stateless style skips done frames; a stateful one re-runs from frame 0
@@ -22,7 +22,6 @@ import hashlib
 import json
 import os
 import re
-import shutil
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -32,7 +31,8 @@ from typing import Any
 import numpy as np
 
 from . import __version__
-from .image import atomic_file
+from .exr import image_channels, write_exr_channels
+from .image import Image, atomic_file
 from .render import DEFAULT_STYLE, RenderContext, _check_args, as_scene
 from .scenes._params import check_int
 from .styles import Style, style_from_spec
@@ -198,52 +198,15 @@ def _file_sha(path: Path) -> str | None:
         return None
 
 
-def _write_exr(path: Path, rgba: np.ndarray) -> None:
-    """Linear float32 RGBA as OpenEXR (ZIP, scanlines): the convention of the conformance kit."""
-    try:
-        import OpenEXR
-    except ImportError:
-        raise ValueError(
-            "exr: writing EXR frames needs the OpenEXR package; install it with "
-            "`pip install 'refnpr[kit]'` (or leave out --exr)"
-        ) from None
-    arr = np.asarray(rgba, dtype=np.float32)
-    channels = {n: np.ascontiguousarray(arr[..., i]) for i, n in enumerate("RGBA")}
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with atomic_file(path, suffix=".exr") as tmp:
-        try:
-            with OpenEXR.File(header, channels) as f:
-                f.write(str(tmp))
-        except RuntimeError as exc:  # OpenEXR's I/O errors ("No space left on device")
-            _exr_write_failed(tmp, path, arr.shape, str(exc))
-        if not _reads_back(tmp, arr.shape):
-            _exr_write_failed(tmp, path, arr.shape, "the written file does not read back")
-
-
-def _reads_back(tmp: Path, shape: tuple) -> bool:
-    """Whether the EXR at ``tmp`` reads back with channels of ``shape[:2]``: OpenEXR's writer does
-    not always report a failed write (a full disk can leave a truncated file and no error)."""
-    import OpenEXR
-
-    try:
-        with OpenEXR.File(str(tmp)) as f:
-            got = [c.pixels.shape[:2] for c in f.channels().values()]
-    except Exception:  # any failure to read back is a failed write
-        return False
-    return bool(got) and all(tuple(g) == tuple(shape[:2]) for g in got)
-
-
-def _exr_write_failed(tmp: Path, path: Path, shape: tuple, detail: str) -> None:
-    """ValueError for an EXR frame that could not be written, naming ``path`` and the free space
-    where a full disk is the likely cause (the temporary file is then removed, ``path`` kept)."""
-    free = shutil.disk_usage(tmp.parent).free
-    full = "No space left" in detail or free < max(1 << 20, 16 * int(np.prod(shape)))
-    why = (
-        f"the file system is full ({free} bytes free); free some space or write elsewhere"
-        if full
-        else f"{detail}; check the disk and try again"
-    )
-    raise ValueError(f"exr: writing {str(path)!r} failed: {why}") from None
+def _write_exr(path: Path, rgba: Any) -> None:
+    """A frame's EXR (:mod:`refnpr.exr`): ``rgba`` is an ``(H, W, 4)`` linear straight-alpha
+    array (RGBA only) or an Image (its RGBA and passes). A failed write (a full disk) is a
+    ValueError naming the file and the free space."""
+    if isinstance(rgba, Image):
+        channels = image_channels(rgba.rgba, rgba.passes)
+    else:
+        channels = image_channels(np.asarray(rgba, dtype=np.float32))
+    write_exr_channels(path, channels, opener=atomic_file)
 
 
 def _check_style_tracks(scene: Any, spec: Any, style: Style, user_style: bool) -> list[str]:
@@ -439,16 +402,19 @@ class _Shader:
             prev = plan.scene.at(f - 1) if f > 0 else None
         frame_style = plan.style_of(f).for_frame(still, prev)
         if self.ctx is None:
-            self.ctx = RenderContext(still, frame_style, plan.width, plan.height, plan.spp)
+            self.ctx = RenderContext(
+                still, frame_style, plan.width, plan.height, plan.spp, passes=plan.exr
+            )
         image, self.state = self.ctx.render_frame(still, frame_style, self.state)
         self.last = (f, still)
         return image
 
 
 def _write_frame(
-    plan: _Plan, f: int, png: bytes, rgba: np.ndarray | None, extra: dict[str, Any] | None = None
+    plan: _Plan, f: int, png: bytes, frame: Any, extra: dict[str, Any] | None = None
 ) -> None:
-    """Write frame ``f``: its PNG (and EXR from ``rgba``), then its record, each atomically.
+    """Write frame ``f``: its PNG (and EXR from ``frame``: the frame's Image, with its passes, or
+    its ``(H, W, 4)`` pixels, RGBA only), then its record, each atomically.
 
     ``extra`` adds keys to the record (not to its hash): a distributed chunk's ``state_from``.
     """
@@ -469,7 +435,7 @@ def _write_frame(
         **(extra or {}),
     }
     if plan.exr:
-        _write_exr(out / f"{stem}.exr", rgba)
+        _write_exr(out / f"{stem}.exr", frame)
         record["exr_sha256"] = _file_sha(out / f"{stem}.exr")
     with atomic_file(out / f"{stem}.json", suffix=".json") as tmp:
         tmp.write_text(json.dumps(record, indent=1, sort_keys=True))
@@ -503,7 +469,8 @@ def render_sequence(
     frames : None, range, (A, B) or "A:B"
         Frames A .. B - 1 (default: all; see :func:`frame_range`).
     exr : bool
-        Also write ``frame_NNNNN.exr`` (linear float32 RGBA; needs OpenEXR).
+        Also write ``frame_NNNNN.exr`` (linear float32 RGBA and the frame's G-buffer passes,
+        :mod:`refnpr.exr`; needs OpenEXR).
     progress : callable(done, total, frame, status), optional
         Called after each frame of the range (and each state-only frame before it).
 
@@ -544,7 +511,7 @@ def _run(plan: _Plan, progress: SequenceProgress | None) -> SequenceResult:
         if done or f not in todo:  # shaded for the state only (done: its files are this frame)
             result._tick(f, "skipped" if done else "state", progress)
             continue
-        _write_frame(plan, f, image.to_png_bytes(), image.rgba if plan.exr else None)
+        _write_frame(plan, f, image.to_png_bytes(), image if plan.exr else None)
         result._tick(f, "rendered", progress)
     return result
 

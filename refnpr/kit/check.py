@@ -466,10 +466,13 @@ def _summary_line(s: dict[str, Any]) -> str:
     return line
 
 
-def format_table(results: list[CaseCheck], *, missing: str = "fail") -> str:
+def format_table(
+    results: list[CaseCheck], *, missing: str = "fail", failures_only: bool = False
+) -> str:
     """Plain-text table: one line per compared case and the reason under each failure, then
-    the cases without a render, then the summary line (:func:`summarize`). Every field is
-    printable (control characters escaped)."""
+    the cases without a render, then the summary line (:func:`summarize`, of every case).
+    Every field is printable (control characters escaped). ``failures_only`` (``-q``): the
+    lines of passing cases are left out."""
     lines = [
         f"{'case':44s} {'kind':7s} {'result':6s} {'status':10s} {'max_abs':>8s} {'rmse':>8s} "
         f"{'frac>thr':>9s} {'pos.frac':>9s} {'ssim':>7s}"
@@ -490,6 +493,8 @@ def format_table(results: list[CaseCheck], *, missing: str = "fail") -> str:
                 ("ssim", 7, 4),
             )
         )
+        if failures_only and r.passed:
+            continue
         if r.kind == "gbuffer" and r.status == "ok":
             nums = f"{'':8s} {'':8s} {'':9s} {m.get('frac_bad', 0.0):9.5f} {'':7s}"
         verdict = "PASS" if r.passed else "FAIL"
@@ -529,7 +534,8 @@ def run(args: Any) -> int:
         styles=getattr(args, "styles", None),
         missing=policy,
     )
-    print(format_table(results, missing=policy))
+    quiet = bool(getattr(args, "quiet", False))
+    print(format_table(results, missing=policy, failures_only=quiet))
     kit_root = Path(args.kit_dir).resolve()
     names = {e.name for e in _read_index(kit_root, Path(args.kit_dir))}
     extra = sorted(
@@ -537,7 +543,7 @@ def run(args: Any) -> int:
         for e in os.scandir(args.renders_dir)
         if e.name.endswith(".png") and e.name[: -len(".png")] not in names
     )
-    if extra:
+    if extra and not quiet:
         shown = ", ".join(printable(n) for n in extra[:_EXTRA_LISTED])
         more = f" and {len(extra) - _EXTRA_LISTED} more" if len(extra) > _EXTRA_LISTED else ""
         print(

@@ -2,7 +2,9 @@
 
 Channel naming (what a backend reads): 1 component ``Y``; 2 components ``R``, ``G``; 3
 components ``R``, ``G``, ``B``; 4 components ``R``, ``G``, ``B``, ``A``. Pixel type FLOAT
-(32-bit), ZIP compression (lossless), scanline image, row 0 = the array's row 0 (top).
+(32-bit), ZIP compression (lossless), scanline image, row 0 = the array's row 0 (top). Written
+by refnpr's one EXR writer (:func:`refnpr.exr.write_exr_channels`: atomic, read back before the
+rename, a full disk a clear error).
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..image import atomic_file
+from ..exr import write_exr_channels
 
 __all__ = ["EXR_CHANNELS", "write_exr"]
 
@@ -39,8 +41,6 @@ def write_exr(path: str | os.PathLike, array: np.ndarray) -> Path:
     -------
     Path
     """
-    import OpenEXR
-
     arr = np.asarray(array)
     if arr.dtype.kind != "f":
         raise TypeError(f"array: expected a float array for {str(path)!r}, got dtype {arr.dtype}")
@@ -56,9 +56,4 @@ def write_exr(path: str | os.PathLike, array: np.ndarray) -> Path:
     arr = arr.astype(np.float32)
     names = EXR_CHANNELS[arr.shape[2]]
     channels = {n: np.ascontiguousarray(arr[..., i]) for i, n in enumerate(names)}
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    path = Path(path)
-    with atomic_file(path, suffix=".exr") as tmp:
-        with OpenEXR.File(header, channels) as f:
-            f.write(str(tmp))
-    return path
+    return write_exr_channels(path, channels)

@@ -570,7 +570,7 @@ def format_markdown(report: MutantReport) -> str:
 
 def run(args: Any) -> int:
     """The ``refnpr kit mutants`` command: render, check, print the matrix (text, or Markdown
-    with ``--markdown``), write ``--json``. Progress goes to stderr.
+    with ``--markdown``), write ``--json``. Progress goes to stderr (none with ``-q``).
 
     Returns 0 when every control passes and every bug is caught by a case of each style it
     changes, 1 otherwise.
@@ -585,7 +585,9 @@ def run(args: Any) -> int:
         args.kit_dir,
         only=getattr(args, "only", None),
         bugs=getattr(args, "bugs", None),
-        log=lambda line: print(line, file=sys.stderr, flush=True),
+        log=(lambda line: None)
+        if getattr(args, "quiet", False)
+        else lambda line: print(line, file=sys.stderr, flush=True),
     )
     if json_path is not None:
         from ._json import write_json

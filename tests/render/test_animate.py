@@ -62,7 +62,7 @@ def test_animate_style_params_video_and_progress(tmp_path, scene_file, capsys):
     )  # fmt: skip
     assert rc == 0
     captured = capsys.readouterr()
-    assert "frame 4/4" in captured.err and "fps" in captured.err and "ETA" in captured.err
+    assert "frame 4/4" in captured.err and "frame/s" in captured.err and "ETA" in captured.err
     assert "wrote " + str(video) in captured.out
     assert iio.imread(video, index=None).shape[:3] == (4, 16, 24)
     want = render(load_scene(scene_file).at(3), {"name": "toon", "n": 2}, 24, 16, 1).to_srgb8()
