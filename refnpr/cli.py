@@ -9,6 +9,7 @@ import os
 import sys
 import threading
 import time
+import warnings
 from pathlib import Path
 
 __all__ = ["main"]
@@ -47,75 +48,91 @@ def _param(text: str) -> tuple[str, object]:
     return key.strip(), value
 
 
-def _bar(fraction: float, width: int = 30) -> str:
-    filled = int(round(fraction * width))
-    return "#" * filled + "-" * (width - filled)
+#: Seconds a render runs before its progress bar appears (a quick render shows none).
+_BAR_DELAY = 1.0
 
 
-class _Line:
-    """A progress line on stderr, rewritten in place (``\\r``) and ended by :meth:`close`."""
+def _show_bar(args: argparse.Namespace) -> bool:
+    """Whether a command draws a progress bar: never with -q/--quiet; with --progress always;
+    else only when stderr is a terminal (captured output gets no ``\\r`` updates)."""
+    if getattr(args, "quiet", False):
+        return False
+    return bool(getattr(args, "progress", False)) or sys.stderr.isatty()
 
-    def __init__(self, stream=None) -> None:
-        self.stream = sys.stderr if stream is None else stream
+
+def _tqdm(**kwargs):
+    """A tqdm progress bar on stderr (tqdm is one of refnpr's dependencies)."""
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        raise ValueError(
+            "--progress: progress bars need the tqdm package (`pip install tqdm`); or pass -q"
+        ) from None
+    return tqdm(file=sys.stderr, dynamic_ncols=True, **kwargs)
+
+
+class _Progress:
+    """A render's progress bar (tqdm): the phase, its share of the work and the time so far,
+    refreshed from a thread; shown only once the render has taken ``_BAR_DELAY`` seconds."""
+
+    def __init__(self, delay: float | None = None) -> None:
+        self.delay = _BAR_DELAY if delay is None else delay
         self.start = time.perf_counter()
+        self.bar = _tqdm(
+            total=100, desc="start", bar_format="{desc:10s} {percentage:3.0f}%|{bar}| {elapsed}"
+        )
+        self.bar.delay = self.delay  # tqdm draws nothing itself before this
         self._shown = False
-
-    def _draw(self, fraction: float, text: str) -> None:
-        self.stream.write(f"\r[{_bar(fraction)}] {text}")
-        self.stream.flush()
-        self._shown = True
-
-    def close(self) -> None:
-        if self._shown:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-class _Progress(_Line):
-    """A render's progress bar, shown only once the render has taken more than a second."""
-
-    def __init__(self, stream=None, delay: float = 1.0) -> None:
-        super().__init__(stream)
-        self.delay, self.phase, self.fraction = delay, "start", 0.0
         self._done = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
 
     def __call__(self, phase: str, fraction: float) -> None:
-        self.phase, self.fraction = phase, fraction
-
-    def _show(self) -> None:
-        elapsed = time.perf_counter() - self.start
-        self._draw(self.fraction, f"{self.phase:10s} {elapsed:6.1f}s")
+        self.bar.set_description_str(phase, refresh=False)
+        self.bar.n = int(round(100 * fraction))
 
     def _run(self) -> None:
         if self._done.wait(self.delay):
             return
-        while not self._done.wait(0.2):
-            self._show()
+        self._shown = True
+        while True:
+            self.bar.refresh()
+            if self._done.wait(0.2):
+                return
 
     def close(self) -> None:
         self._done.set()
         self._thread.join()
-        if self._shown:
-            self.fraction, self.phase = 1.0, "done"
-            self._show()
-        super().close()
+        if self._shown or time.perf_counter() - self.start >= self.delay:
+            self("done", 1.0)
+            self.bar.refresh()
+        else:
+            self.bar.disable = True  # a quick render: no bar at all
+        self.bar.close()
 
 
-class _FrameProgress(_Line):
-    """`refnpr animate`'s progress bar: frame i/N, frames per second, ETA."""
+class _FrameProgress:
+    """`refnpr animate`'s progress bar (tqdm): frames done of the range, frames per second,
+    ETA, and the frame just finished (drawn from the first frame on)."""
 
-    rendered = 0
+    def __init__(self) -> None:
+        self.bar = None
 
     def __call__(self, done: int, total: int, frame: int, status: str) -> None:
-        self.rendered += status == "rendered"
-        elapsed = time.perf_counter() - self.start
-        fps = self.rendered / elapsed if elapsed > 0 and self.rendered else 0.0
-        eta = f"{(total - done) / fps:6.0f}s" if fps > 0 else "     ?"
-        what = "(state) " if status == "state" else ""
-        text = f"frame {done}/{total} {what}(#{frame}) {fps:5.2f} fps  ETA {eta}"
-        self._draw(done / total if total else 1.0, text)
+        if self.bar is None:
+            self.bar = _tqdm(
+                total=total,
+                unit="frame",
+                bar_format="frame {n_fmt}/{total_fmt} |{bar}| {rate_noinv_fmt} ETA {remaining}"
+                "{postfix}",
+            )
+        what = {"state": "state only", "skipped": "done"}.get(status, status)
+        self.bar.set_postfix_str(f"#{frame} {what}", refresh=False)
+        self.bar.update(done - self.bar.n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
 
 
 def _style_params(args: argparse.Namespace) -> dict[str, object]:
@@ -155,7 +172,7 @@ def _scene_and_style(args: argparse.Namespace) -> tuple[object, dict | None]:
     from .scenes import load_scene
 
     params = _style_params(args)
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, camera=args.camera)
     if args.style:
         return scene, {"name": args.style, **params}
     return scene, _with_params(scene.style, params, args.scene) if params else None
@@ -166,17 +183,25 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from .render import render
 
     check_png_path(args.output)  # before rendering, not after
+    if args.exr is not None:
+        from .exr import check_exr_path
+
+        check_exr_path(args.exr, what="--exr")
     scene, style = _scene_and_style(args)
     width, height = args.size
-    progress = _Progress() if not args.quiet else None
+    progress = _Progress() if _show_bar(args) else None
+    passes = args.exr is not None
     try:
-        image = render(scene, style, width, height, args.spp, progress=progress)
+        image = render(scene, style, width, height, args.spp, progress=progress, passes=passes)
     finally:
         if progress:
             progress.close()
     out = image.save(args.output)
+    written = f"{out} and {image.save(args.exr)}" if passes else f"{out}"
     if not args.quiet:
-        print(f"wrote {out} ({width}x{height}, spp={args.spp}) in {image.timings['total']:.2f} s")
+        print(
+            f"wrote {written} ({width}x{height}, spp={args.spp}) in {image.timings['total']:.2f} s"
+        )
     return 0
 
 
@@ -200,8 +225,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
             "--chunk / --warmup: they split a stateful style's frames over a cluster; add "
             "--workers N or --scheduler ADDR (a serial run shades every frame from frame 0)"
         )
-    show = not args.quiet and (args.progress or sys.stderr.isatty())
-    progress = _FrameProgress() if show else None
+    progress = _FrameProgress() if _show_bar(args) else None
     kwargs = dict(out_dir=out, frames=args.frames, exr=args.exr, progress=progress)
     try:
         if cluster is None:
@@ -336,12 +360,13 @@ def _cmd_golden(args: argparse.Namespace) -> int:
         from .golden import check_writable_suite
 
         check_writable_suite(suite)  # before a cluster starts
-        update_suite(suite, only=args.only)
+        update_suite(suite, only=args.only, log=(lambda line: None) if args.quiet else print)
         return 0
     results = check_suite(suite, only=args.only)
     failed = 0
     for r in results:
-        print(f"{'PASS' if r.passed else 'FAIL'} {r.name:32s} {r.message}")
+        if not (args.quiet and r.passed):  # -q: the failures and the count only
+            print(f"{'PASS' if r.passed else 'FAIL'} {r.name:32s} {r.message}")
         failed += not r.passed
     print(f"{len(results) - failed} passed, {failed} failed")
     return 1 if failed else 0
@@ -373,6 +398,8 @@ def _cmd_warmup(args: argparse.Namespace) -> int:
     jobs = args.jobs if args.jobs is not None else min(4, usable_cores())
     times = warm(jobs=jobs, progress=progress)
     total = time.perf_counter() - t0
+    if args.quiet:
+        return 0
     print(
         f"warmup: {len(times)} renders in {total:.1f} s ({jobs} process{'es' if jobs > 1 else ''});"
         " kernels are cached for the next run"
@@ -451,6 +478,15 @@ def _add_style_options(p: argparse.ArgumentParser, style_help: str) -> None:
     )
 
 
+def _add_camera_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--camera",
+        metavar="NAME",
+        help="glTF scenes: the camera (camera or node name) to render from (default: the file's "
+        "first camera)",
+    )
+
+
 def _add_suite_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--suite",
@@ -458,6 +494,18 @@ def _add_suite_options(p: argparse.ArgumentParser) -> None:
         help="suite file (default: the suite installed with refnpr, refnpr/suite/suite.toml)",
     )
     p.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
+
+
+def _add_quiet_progress(p: argparse.ArgumentParser) -> None:
+    """-q/--quiet and --progress of a command that draws a progress bar."""
+    p.add_argument(
+        "-q", "--quiet", action="store_true", help="print nothing but errors (no progress bar)"
+    )
+    p.add_argument(
+        "--progress",
+        action="store_true",
+        help="draw the progress bar even when stderr is not a terminal (default: only on one)",
+    )
 
 
 def _add_cluster_options(parser: argparse.ArgumentParser) -> None:
@@ -490,8 +538,11 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     r.add_argument(
-        "--scene", default="default", help="built-in scene name or .toml file (default: default)"
+        "--scene",
+        default="default",
+        help="built-in scene name, .toml, .gltf or .glb file (default: default)",
     )
+    _add_camera_option(r)
     _add_style_options(r, "style name (default: the scene's own style, toon if it names none)")
     r.add_argument("--size", type=_size, default=DEFAULT_SIZE, help="WxH (default 768x432, 16:9)")
     r.add_argument(
@@ -501,7 +552,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="samples per pixel, a square (1, 4, 9, 16; default 4, anti-aliased)",
     )
     r.add_argument("-o", "--output", default="out.png", help="output PNG (default out.png)")
-    r.add_argument("-q", "--quiet", action="store_true")
+    r.add_argument(
+        "--exr",
+        metavar="FILE.exr",
+        help="also write one OpenEXR file: linear RGBA (premultiplied) and the G-buffer passes "
+        "(depth.Z, normal.X/Y/Z, uv.U/V, position.X/Y/Z, tri_id, mesh_id, ...; see docs)",
+    )
+    _add_quiet_progress(r)
     r.set_defaults(func=_cmd_render)
 
     a = sub.add_parser(
@@ -513,7 +570,10 @@ def build_parser() -> argparse.ArgumentParser:
             "are skipped, so a killed run can be restarted (see docs/animation.md)."
         ),
     )
-    a.add_argument("scene", help="built-in scene name or .toml file (see `refnpr scenes`)")
+    a.add_argument(
+        "scene", help="built-in scene name, .toml, .gltf or .glb file (see `refnpr scenes`)"
+    )
+    _add_camera_option(a)
     _add_style_options(a, own_style)
     a.add_argument("--size", type=_size, default=DEFAULT_SIZE, help="WxH (default 768x432)")
     a.add_argument(
@@ -525,11 +585,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="frames A to B-1, like a Python slice (10:, :24); default all",
     )
     a.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for the frames")
-    a.add_argument("--exr", action="store_true", help="also write linear float EXR frames")
-    a.add_argument("--video", metavar="FILE", help="also encode FILE.mp4 or FILE.gif")
     a.add_argument(
-        "--progress", action="store_true", help="show the progress bar even if stderr is no tty"
+        "--exr",
+        action="store_true",
+        help="also write OpenEXR frames: linear RGBA and the frame's G-buffer passes",
     )
+    a.add_argument("--video", metavar="FILE", help="also encode FILE.mp4 or FILE.gif")
     _add_cluster_options(a)
     a.add_argument(
         "--chunk",
@@ -545,7 +606,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --workers/--scheduler, stateful styles: frames shaded before each chunk for "
         "the state only (default 8)",
     )
-    a.add_argument("-q", "--quiet", action="store_true")
+    _add_quiet_progress(a)
     a.set_defaults(func=_cmd_animate)
 
     sub.add_parser("scenes", help="list built-in scenes").set_defaults(func=_cmd_scenes)
@@ -565,6 +626,9 @@ def build_parser() -> argparse.ArgumentParser:
     mode.add_argument("--update", action="store_true", help="re-render and overwrite")
     _add_suite_options(g)
     _add_cluster_options(g)
+    g.add_argument(
+        "-q", "--quiet", action="store_true", help="only failing cases and the count; no 'wrote'"
+    )
     g.set_defaults(func=_cmd_golden)
 
     c = sub.add_parser("compare", help="compare another backend's renders with reference images")
@@ -588,6 +652,7 @@ def build_parser() -> argparse.ArgumentParser:
     gal.add_argument("--spp", type=int, help="samples per pixel (the cases')")
     gal.add_argument("--only", nargs="+", metavar="FILE", help="only these entries (by file name)")
     gal.add_argument("--markdown", action="store_true", help="print the README table")
+    gal.add_argument("-q", "--quiet", action="store_true", help="no line per image")
     gal.set_defaults(func=_run_of("gallery"))
 
     kit = sub.add_parser(
@@ -613,6 +678,9 @@ def build_parser() -> argparse.ArgumentParser:
     kc.add_argument("--json", metavar="FILE", help="write the metrics as JSON")
     kc.add_argument("--only", nargs="+", metavar="NAME", help="only these cases")
     kc.add_argument("--styles", nargs="+", metavar="NAME", help="only the cases of these styles")
+    kc.add_argument(
+        "-q", "--quiet", action="store_true", help="only failing cases and the summary line"
+    )
     kc.add_argument(
         "--missing",
         choices=("fail", "skip"),
@@ -643,6 +711,7 @@ def build_parser() -> argparse.ArgumentParser:
     km.add_argument("--bugs", nargs="+", metavar="BUG", help="only these bugs (default all)")
     km.add_argument("--json", metavar="FILE", help="write the case x bug matrix as JSON")
     km.add_argument("--markdown", action="store_true", help="print the matrix as a Markdown table")
+    km.add_argument("-q", "--quiet", action="store_true", help="no progress line per case")
     km.set_defaults(func=_run_of("kit.mutants"))
 
     co = sub.add_parser(
@@ -654,7 +723,11 @@ def build_parser() -> argparse.ArgumentParser:
             "E / D and the flip fraction (docs/coherence.md)."
         ),
     )
-    co.add_argument("scene", help="built-in scene name or .toml file with an [animation] table")
+    co.add_argument(
+        "scene",
+        help="built-in scene name, .toml file with an [animation] table, or an animated .gltf/.glb",
+    )
+    _add_camera_option(co)
     _add_style_options(co, own_style)
     co.add_argument("--size", type=_size, default=(256, 192), help="WxH (default 256x192)")
     co.add_argument("--spp", type=int, default=1, help="samples per pixel of the frames (1)")
@@ -683,7 +756,7 @@ def build_parser() -> argparse.ArgumentParser:
             "on the first real render (refnpr.warmup)."
         ),
     )
-    w.add_argument("-q", "--quiet", action="store_true", help="no line per render")
+    w.add_argument("-q", "--quiet", action="store_true", help="print nothing (errors only)")
     w.add_argument(
         "--jobs",
         type=int,
@@ -696,11 +769,24 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    show = warnings.showwarning
+
+    def note(message, category, *rest, **kw):  # what a glTF file gives differently: one line
+        from .scenes.gltf import GltfWarning
+
+        if issubclass(category, GltfWarning):
+            print(f"refnpr {_command(args)}: note: {message}", file=sys.stderr)
+        else:
+            show(message, category, *rest, **kw)
+
+    warnings.showwarning = note
     try:
         return int(args.func(args) or 0)
     except (ValueError, TypeError, OSError) as exc:
         print(f"refnpr {_command(args)}: error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        warnings.showwarning = show
 
 
 if __name__ == "__main__":

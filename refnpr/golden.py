@@ -28,7 +28,7 @@ Suite format::
 
     [[case]]
     name = "teapot-toon"    # file stem: [a-z0-9_-]+
-    scene = "teapot"        # built-in scene name or a .toml path relative to the suite file
+    scene = "teapot"        # built-in scene name, or a .toml, .gltf or .glb path relative to the suite file
     style = { name = "toon", n = 2 }
     spp = 4                 # overrides a default
 
@@ -222,7 +222,7 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
         seen.add(name)
         if not isinstance(scene, str):
             raise ValueError(
-                f"{path}: case {name!r}: 'scene' (a built-in name or .toml path) is required"
+                f"{path}: case {name!r}: 'scene' (a built-in name, or a .toml, .gltf or .glb path) is required"
             )
         _check_keys(raw, f"{path}: case {name!r}:")
         params = {**defaults, **raw}
@@ -231,7 +231,7 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
             raise ValueError(
                 f"{path}: case {name!r}: kind must be 'image' or 'gbuffer', got {params['kind']!r}"
             )
-        if scene.endswith(".toml"):
+        if scene.endswith((".toml", ".gltf", ".glb")):
             scene = str((path.parent / scene).resolve())
         cases.append(GoldenCase(name, scene, params))
     if not cases:

@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
         if key == "name" or key in params:
             raise ValueError(f"--param: {key!r} is the style's name or given twice; give it once")
         params[key] = value
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, camera=getattr(args, "camera", None))
     count = getattr(scene, "frames", 1)
     if getattr(scene, "animation", None) is None or count < 2:
         raise ValueError(

@@ -1,9 +1,10 @@
 """Built-in procedural meshes, Newell's teapot, mesh loading, TOML scene files (the format is in
-:mod:`refnpr.scenes.toml_format`) and animated scenes (``scene.at(frame)`` is a frame's still).
+:mod:`refnpr.scenes.toml_format`), glTF 2.0 scenes (:mod:`refnpr.scenes.gltf`) and animated scenes (``scene.at(frame)`` is a frame's still).
 World space is right-handed with +y up; meshes are counter-clockwise seen from outside.
 """
 
 from .animation import Animation, Track
+from .gltf import GltfError, GltfWarning, load_gltf
 from .knot import rotation_minimising_frames, torus_knot, torus_knot_curve
 from .loading import from_trimesh, load_mesh
 from .primitives import icosphere, spherical_uv, torus, uv_sphere
@@ -19,6 +20,8 @@ from .uv_projection import UV_PROJECTIONS, project_uv, require_uv
 
 __all__ = [
     "Animation",
+    "GltfError",
+    "GltfWarning",
     "Keyframe",
     "Track",
     "Light",
@@ -32,6 +35,7 @@ __all__ = [
     "from_trimesh",
     "icosphere",
     "list_scenes",
+    "load_gltf",
     "load_mesh",
     "load_scene",
     "mesh_from_spec",

@@ -45,6 +45,20 @@ A scene file has a few top-level keys and tables (unknown keys are errors)::
 
     [animation]                            # optional: an animated scene (docs/animation.md)
 
+A scene may take its content from a glTF 2.0 file (docs/scenes.md)::
+
+    gltf = "model.glb"                     # or { path = "model.glb", camera = "Cam",
+                                           #      animation = "Walk" }
+    [camera]                               # optional: keys given replace the glTF camera's
+    fov_y = 30.0
+    [materials."*"]                        # optional: Material fields for every glTF object ...
+    specular = 0.0
+    [materials."wheel"]                    # ... or for one, by object name
+    diffuse = [0.9, 0.2, 0.1]
+
+Then ``[[light]]`` tables replace the file's lights, ``[[object]]`` tables add objects, and an
+``[animation]`` table replaces the file's animation (whose frame rate is its ``fps``).
+
 ``transform`` applies ``scale``, then the rotations about x, y, z (degrees), then ``translate``
 (:func:`~refnpr.scenes.transform_matrix`). A mesh file with several geometries (glTF) becomes
 several objects named ``name[i]`` sharing the transform and material.
@@ -79,7 +93,10 @@ __all__ = [
     "scene_frames",
 ]
 
-_TOP_KEYS = tuple("name description ambient background camera style light object animation".split())
+_TOP_KEYS = tuple(
+    "name description ambient background gltf materials camera style light object animation".split()
+)
+_GLTF_KEYS = ("path", "camera", "animation")
 _CAMERA_KEYS = ("eye", "target", "up", "fov_y", "near", "far")
 _LIGHT_KEYS = ("kind", "direction", "position", "color")
 _MATERIAL_KEYS = tuple(f.name for f in fields(Material))
@@ -178,24 +195,30 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
     src = "<scene dict>" if source is None else str(source)
     base = Path(base_dir)
     top = _table(src, "top level", data, _TOP_KEYS)
-    if "camera" not in top:
+    content = _gltf_content(src, top, base) if "gltf" in top else None
+    if "camera" not in top and content is None:
         raise SceneFileError(
             f"{src}: missing the [camera] table; add one with eye = [x, y, z] and "
             "target = [x, y, z] (optional: up, fov_y, near, far)"
         )
-    cam = _table(src, "[camera]", top["camera"], _CAMERA_KEYS)
+    cam = _table(src, "[camera]", top.get("camera", {}), _CAMERA_KEYS)
+    if content is not None:  # [camera] keys override the glTF camera's
+        cam = {k: getattr(content.camera, k) for k in _CAMERA_KEYS} | cam
     for key in ("eye", "target"):
         if key not in cam:
             raise SceneFileError(f"{src}: [camera]: missing key {key!r} (3 numbers)")
     with _where(src, "[camera]"):
         camera = Camera.look_at(**cam)
     lights = []
-    for i, spec in enumerate(_array_of_tables(src, "light", top.get("light", [{}]))):
+    default_lights = [{}] if content is None else []
+    for i, spec in enumerate(_array_of_tables(src, "light", top.get("light", default_lights))):
         where = f"[[light]] #{i + 1}"
         spec = _table(src, where, spec, _LIGHT_KEYS)
         with _where(src, where):
             lights.append(Light(**spec))
-    objects = []
+    if content is not None and "light" not in top:
+        lights = list(content.lights)
+    objects = [] if content is None else _override_materials(src, top, content, base)
     for i, spec in enumerate(_array_of_tables(src, "object", top.get("object", []))):
         where = f"[[object]] #{i + 1}"
         spec = _table(src, where, spec, None)
@@ -236,6 +259,15 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
             name=name,
             style=style,
         )
+    if content is not None and "animation" not in top and content.animation is not None:
+        kept = tuple(
+            t
+            for t in content.animation.tracks
+            if not (t.target.startswith("camera.") and "camera" in top)
+            and not (t.target.startswith("light[") and "light" in top)
+        )
+        animation = dataclasses.replace(content.animation, tracks=kept)
+        return dataclasses.replace(scene, animation=animation)
     if "animation" not in top:
         return scene
     animation = _animation(src, top["animation"])
@@ -245,6 +277,56 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
     except ValueError as exc:
         raise SceneFileError(str(exc)) from exc
     return dataclasses.replace(scene, animation=animation)
+
+
+def _gltf_content(src: str, top: dict, base: Path) -> Scene:
+    """The scene of the ``gltf`` key: a path, or a table with ``path`` and optional ``camera``
+    and ``animation`` (names or indices) of :func:`~refnpr.scenes.gltf.load_gltf`."""
+    from .gltf import load_gltf
+
+    spec = top["gltf"]
+    spec = {"path": spec} if isinstance(spec, str) else _table(src, "gltf", spec, _GLTF_KEYS)
+    path = spec.pop("path", None)
+    if not isinstance(path, str) or Path(path).suffix.lower() not in (".gltf", ".glb"):
+        raise SceneFileError(
+            f"{src}: gltf: expected the path of a .gltf or .glb file (relative to this file), "
+            f"got {path!r}"
+        )
+    anim = top.get("animation")
+    fps = anim.get("fps", 24.0) if isinstance(anim, Mapping) else 24.0
+    full = base / path
+    if not full.is_file():
+        raise SceneFileError(f"{src}: gltf: file {str(full)!r} not found")
+    with _where(src, "gltf"):
+        return load_gltf(full, fps=fps, **spec)
+
+
+def _override_materials(src: str, top: dict, content: Scene, base: Path) -> list:
+    """The glTF objects, each with the ``[materials]`` fields given for its name (or ``"*"``,
+    all objects) replacing its material's."""
+    table = _table(src, "[materials]", top.get("materials", {}), None)
+    names = [o.name for o in content.objects]
+    for key in table:
+        if key != "*" and key not in names:
+            raise SceneFileError(
+                f"{src}: [materials]: no glTF object named {key!r}; objects: "
+                + ", ".join(map(repr, names))
+                + " (or '*' for all)"
+            )
+    objects = []
+    for obj in content.objects:
+        fields_ = {**table.get("*", {}), **table.get(obj.name, {})}
+        if not fields_:
+            objects.append(obj)
+            continue
+        where = f"[materials] {obj.name!r}"
+        given = _table(src, where, fields_, _MATERIAL_KEYS)
+        current = {f.name: getattr(obj.material, f.name) for f in fields(Material)}
+        material = _material(src, where, given, base)
+        merged = current | {k: getattr(material, k) for k in given}
+        with _where(src, where):
+            objects.append(dataclasses.replace(obj, material=Material(**merged)))
+    return objects
 
 
 def _is_int(v) -> bool:
@@ -419,19 +501,40 @@ def builtin_scene_path(name: str) -> Path:
     return path
 
 
-def load_scene(name_or_path: str | Path) -> Scene:
+def load_scene(name_or_path: str | Path, *, camera: str | int | None = None) -> Scene:
     """Load a built-in scene by name (see :func:`list_scenes`) or a scene file by path: a
-    ``Path``, or a string that ends in ``.toml`` or contains a slash.
+    ``Path``, or a string that ends in ``.toml`` or contains a slash. A path ending in ``.gltf``
+    or ``.glb`` is read by :func:`refnpr.scenes.gltf.load_gltf` (docs/scenes.md).
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+    camera : str or int, optional
+        glTF scenes only: the camera (camera or node name, or node index) to render from;
+        default the file's first camera.
 
     Raises
     ------
     ValueError
         An unknown built-in name (listing the valid names) or an invalid file
         (:class:`SceneFileError`, naming the file and the key): not UTF-8 or invalid TOML (with
-        the line), a directory, or an existing file without ``.toml``.
+        the line), a directory, or an existing file without ``.toml``; a malformed glTF file
+        (:class:`~refnpr.scenes.gltf.GltfError`, naming the file and the glTF path of the field).
     FileNotFoundError
         If a scene file path does not exist.
     """
+    from .gltf import GLTF_EXTENSIONS, load_gltf
+
+    is_gltf = isinstance(name_or_path, (str, Path)) and (
+        Path(name_or_path).suffix.lower() in GLTF_EXTENSIONS
+    )
+    if camera is not None and not is_gltf:
+        raise ValueError(
+            f"camera: {camera!r} names a glTF camera, but scene {str(name_or_path)!r} is not a "
+            ".gltf/.glb file (a TOML scene has one [camera] table)"
+        )
+    if is_gltf:
+        return load_gltf(name_or_path, camera=camera)
     if isinstance(name_or_path, Path) or (
         isinstance(name_or_path, str)
         and (name_or_path.endswith(".toml") or "/" in name_or_path or "\\" in name_or_path)

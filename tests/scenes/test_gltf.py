@@ -1,0 +1,604 @@
+"""glTF 2.0 scenes: the reader's geometry, transforms, cameras, lights, materials and animations
+against values computed here from the file's numbers, and malformed files with their messages.
+
+The files are written here: geometry from trimesh, JSON (nodes, cameras, lights, animations) by
+hand, packed as .gltf with a data: URI, an external .bin, or .glb.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import struct
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+
+from refnpr.scenes import load_scene
+from refnpr.scenes.gltf import GltfError, GltfWarning, load_gltf
+
+
+class Doc:
+    """A glTF document under construction: arrays packed into one buffer."""
+
+    def __init__(self):
+        self.blob = bytearray()
+        self.doc = {
+            "asset": {"version": "2.0"},
+            "scene": 0,
+            "scenes": [{"nodes": []}],
+            "nodes": [],
+            "meshes": [],
+            "accessors": [],
+            "bufferViews": [],
+            "buffers": [],
+        }
+
+    def accessor(self, array, ctype=5126, kind=None, **extra) -> int:
+        dtype = {5126: "<f4", 5125: "<u4", 5123: "<u2", 5121: "<u1"}[ctype]
+        a = np.ascontiguousarray(array, dtype=dtype)
+        width = 1 if a.ndim == 1 else a.shape[1]
+        data = a.tobytes()
+        self.doc["bufferViews"].append(
+            {"buffer": 0, "byteOffset": len(self.blob), "byteLength": len(data)}
+        )
+        self.blob += data + b"\0" * (-len(data) % 4)
+        kind = kind or {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4"}[width]
+        self.doc["accessors"].append(
+            {
+                "bufferView": len(self.doc["bufferViews"]) - 1,
+                "componentType": ctype,
+                "count": int(a.shape[0]),
+                "type": kind,
+                **extra,
+            }
+        )
+        return len(self.doc["accessors"]) - 1
+
+    def mesh(self, tm: trimesh.Trimesh, *, normals=True, indexed=True, name=None, **prim) -> int:
+        pos = np.asarray(tm.vertices)
+        faces = np.asarray(tm.faces)
+        if not indexed:
+            pos = pos[faces].reshape(-1, 3)
+        attrs = {"POSITION": self.accessor(pos)}
+        if normals:
+            n = np.asarray(tm.vertex_normals)
+            attrs["NORMAL"] = self.accessor(n if indexed else n[faces].reshape(-1, 3))
+        p = {"attributes": attrs, **prim}
+        if indexed:
+            p["indices"] = self.accessor(faces.reshape(-1), 5125)
+        self.doc["meshes"].append({"primitives": [p], **({"name": name} if name else {})})
+        return len(self.doc["meshes"]) - 1
+
+    def node(self, root=True, **fields) -> int:
+        self.doc["nodes"].append(fields)
+        i = len(self.doc["nodes"]) - 1
+        if root:
+            self.doc["scenes"][0]["nodes"].append(i)
+        return i
+
+    def write(self, path, form="glb"):
+        doc = json.loads(json.dumps(self.doc))
+        blob = bytes(self.blob)
+        if form == "glb":
+            doc["buffers"] = [{"byteLength": len(blob)}]
+            js = json.dumps(doc).encode()
+            js += b" " * (-len(js) % 4)
+            out = struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(js) + 8 + len(blob))
+            out += struct.pack("<I4s", len(js), b"JSON") + js
+            out += struct.pack("<I4s", len(blob), b"BIN\0") + blob
+            path.write_bytes(out)
+        elif form == "data":
+            uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode()
+            doc["buffers"] = [{"byteLength": len(blob), "uri": uri}]
+            path.write_text(json.dumps(doc))
+        else:
+            (path.parent / "model.bin").write_bytes(blob)
+            doc["buffers"] = [{"byteLength": len(blob), "uri": "model.bin"}]
+            path.write_text(json.dumps(doc))
+        return path
+
+
+def quat(axis, deg):
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    h = math.radians(deg) / 2
+    return [*(a * math.sin(h)), math.cos(h)]
+
+
+def rot(q):
+    x, y, z, w = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def trs(t=(0, 0, 0), q=(0, 0, 0, 1), s=(1, 1, 1)):
+    m = np.eye(4)
+    m[:3, :3] = rot(q) @ np.diag(s)
+    m[:3, 3] = t
+    return m
+
+
+def quiet(fn, *a, **k):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", GltfWarning)
+        return fn(*a, **k)
+
+
+def two_boxes_with_camera():
+    """A parent node (TRS) with a child box (matrix), a second box, a camera under a rotated
+    node and a directional light."""
+    d = Doc()
+    box = d.mesh(trimesh.creation.box((1.0, 1.0, 1.0)), name="boxmesh")
+    child = d.node(
+        root=False,
+        name="child",
+        mesh=box,
+        matrix=trs((1.0, 0.0, 0.0), quat((0, 0, 1), 30), (0.5, 0.5, 0.5)).T.reshape(-1).tolist(),
+    )
+    d.node(
+        name="parent", translation=[0.0, 1.0, -2.0], rotation=quat((0, 1, 0), 90), children=[child]
+    )
+    d.node(name="second", mesh=box, translation=[-2.0, 0.0, 0.0], scale=[1.0, 2.0, 1.0])
+    d.doc["cameras"] = [
+        {
+            "name": "cam",
+            "type": "perspective",
+            "perspective": {"yfov": 0.8, "znear": 0.1, "zfar": 50.0},
+        }
+    ]
+    d.node(name="camnode", camera=0, translation=[0.5, 2.0, 8.0], rotation=quat((1, 0, 0), -10))
+    d.doc["extensions"] = {
+        "KHR_lights_punctual": {
+            "lights": [{"type": "directional", "color": [1.0, 0.5, 0.25], "intensity": 2.0}]
+        }
+    }
+    d.doc["extensionsUsed"] = ["KHR_lights_punctual"]
+    d.node(
+        name="sun",
+        rotation=quat((1, 0, 0), -90),
+        extensions={"KHR_lights_punctual": {"light": 0}},
+    )
+    return d
+
+
+@pytest.mark.parametrize("form", ["glb", "data", "bin"])
+def test_hierarchy_camera_light(tmp_path, form):
+    d = two_boxes_with_camera()
+    path = d.write(tmp_path / ("model.glb" if form == "glb" else "model.gltf"), form)
+    scene = quiet(load_scene, str(path))
+    names = [o.name for o in scene.objects]
+    assert names == ["child", "second"]
+    parent = trs((0.0, 1.0, -2.0), quat((0, 1, 0), 90))
+    child = trs((1.0, 0.0, 0.0), quat((0, 0, 1), 30), (0.5, 0.5, 0.5))
+    np.testing.assert_allclose(scene.objects[0].transform, parent @ child, atol=1e-12)
+    np.testing.assert_allclose(
+        scene.objects[1].transform, trs((-2.0, 0.0, 0.0), s=(1, 2, 1)), atol=1e-12
+    )
+    cam = scene.camera
+    np.testing.assert_allclose(cam.eye, [0.5, 2.0, 8.0])
+    r = rot(quat((1, 0, 0), -10))
+    np.testing.assert_allclose(cam.forward, -r[:, 2], atol=1e-12)
+    assert cam.fov_y == pytest.approx(math.degrees(0.8))
+    assert (cam.near, cam.far) == (0.1, 50.0)
+    (light,) = scene.lights
+    assert light.kind == "directional"
+    np.testing.assert_allclose(light.color, [2.0, 1.0, 0.5])
+    # the light shines along its node's -Z: rotated -90 deg about x, -Z becomes -Y (straight down)
+    np.testing.assert_allclose(light.direction, [0.0, 1.0, 0.0], atol=1e-12)
+    assert scene.objects[0].mesh.positions.shape == (8, 3) or scene.objects[0].mesh.n_faces == 12
+
+
+def test_render_lands_where_projected(tmp_path):
+    """A rendered glTF's pixels match a float64 pinhole projection of its known vertices."""
+    from refnpr.raster import rasterize
+    from refnpr.render import render
+
+    d = Doc()
+    tri = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], process=False)
+    mesh = d.mesh(tri, normals=False)
+    d.node(
+        name="tri",
+        mesh=mesh,
+        translation=[0.2, -0.3, -1.0],
+        rotation=quat((0, 0, 1), 20),
+        scale=[1.5, 1.2, 1.0],
+    )
+    yfov, w, h = 0.9, 48, 32
+    d.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": yfov, "znear": 0.05}}]
+    cam_q = quat((0, 1, 0), 15)
+    d.node(name="cam", camera=0, translation=[0.4, 0.1, 3.0], rotation=cam_q)
+    d.doc["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.4, 0.6, 0.8, 1.0]}}]
+    d.doc["meshes"][0]["primitives"][0]["material"] = 0
+    d.doc["extensions"] = {
+        "KHR_lights_punctual": {"lights": [{"type": "directional", "color": [1.0, 0.5, 0.25]}]}
+    }
+    light_q = quat((1, 0, 0), -30)
+    d.node(name="sun", rotation=light_q, extensions={"KHR_lights_punctual": {"light": 0}})
+    scene = quiet(load_gltf, d.write(tmp_path / "t.glb"))
+    gb = rasterize(scene, scene.camera, w, h, channels=("tri_id",))
+    covered = gb["tri_id"] >= 0
+    # independent projection: world vertices, camera frame from the node's TRS, pinhole
+    model = trs((0.2, -0.3, -1.0), quat((0, 0, 1), 20), (1.5, 1.2, 1.0))
+    verts = (model @ np.c_[tri.vertices, np.ones(3)].T).T[:, :3]
+    cam_r = rot(cam_q)
+    eye = np.array([0.4, 0.1, 3.0])
+    local = (verts - eye) @ cam_r  # camera-space coordinates (columns: right, up, back)
+    f = 1 / math.tan(yfov / 2)
+    ndc = np.c_[f * (h / w) * local[:, 0] / -local[:, 2], f * local[:, 1] / -local[:, 2]]
+    px = np.c_[(ndc[:, 0] + 1) / 2 * w, (1 - ndc[:, 1]) / 2 * h]
+    # a pixel centre is covered iff it lies inside the projected triangle (edge functions)
+    ys, xs = np.mgrid[0:h, 0:w] + 0.5
+    pts = np.stack([xs, ys], -1)
+
+    def edge(a, b):
+        return (b[0] - a[0]) * (pts[..., 1] - a[1]) - (b[1] - a[1]) * (pts[..., 0] - a[0])
+
+    e = [edge(px[0], px[1]), edge(px[1], px[2]), edge(px[2], px[0])]
+    inside = (e[0] > 0.05) & (e[1] > 0.05) & (e[2] > 0.05) | (e[0] < -0.05) & (e[1] < -0.05) & (
+        e[2] < -0.05
+    )
+    outside = ~((e[0] >= -0.05) & (e[1] >= -0.05) & (e[2] >= -0.05)) & ~(
+        (e[0] <= 0.05) & (e[1] <= 0.05) & (e[2] <= 0.05)
+    )
+    assert inside.sum() > 50
+    assert covered[inside].all()
+    assert not covered[outside].any()
+    # the light: Veryovka eq. 1 without specular, I = m_a l_a + m_d max(N.L, 0) l_i, with the
+    # light shining along its node's -Z and the triangle's normal +Z (a z rotation keeps it)
+    image = render(scene, {"name": "smooth", "specular": False}, w, h)
+    to_light = rot(light_q)[:, 2]
+    base = np.array([0.4, 0.6, 0.8])
+    expect = 0.15 / 0.8 * base + base * max(to_light[2], 0.0) * np.array([1.0, 0.5, 0.25])
+    np.testing.assert_allclose(
+        image.rgba[inside][:, :3], np.tile(expect, (inside.sum(), 1)), atol=1e-5
+    )
+
+
+def test_no_lights_gets_headlight_and_no_camera_frames(tmp_path):
+    d = Doc()
+    d.node(name="ball", mesh=d.mesh(trimesh.creation.icosphere(1)))
+    path = d.write(tmp_path / "ball.glb")
+    with pytest.warns(GltfWarning, match="headlight"):
+        scene = load_gltf(path)
+    (light,) = scene.lights
+    expect = (scene.camera.eye - scene.camera.target) / np.linalg.norm(
+        scene.camera.eye - scene.camera.target
+    )
+    np.testing.assert_allclose(light.direction, expect, atol=1e-12)
+    lo, hi = scene.bounds()
+    for corner in np.array(np.meshgrid(*zip(lo, hi, strict=True))).reshape(3, -1).T:
+        p = scene.camera.view_projection(64, 64) @ [*corner, 1.0]
+        assert np.all(np.abs(p[:3] / p[3]) < 1.0)  # the framing camera sees every corner
+
+
+def test_strips_fans_nonindexed_and_flat_normals(tmp_path):
+    d = Doc()
+    quad = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    strip = {"attributes": {"POSITION": d.accessor(quad)}, "mode": 5}
+    fan = {"attributes": {"POSITION": d.accessor(quad[[0, 1, 3, 2]])}, "mode": 6}
+    d.doc["meshes"].append({"name": "m", "primitives": [strip, fan]})
+    d.node(name="q", mesh=0)
+    scene = quiet(load_gltf, d.write(tmp_path / "q.glb"))
+    a, b = scene.objects
+    assert (a.name, b.name) == ("q[0]", "q[1]")
+    for obj in (a, b):
+        p = obj.mesh.positions[obj.mesh.faces]
+        n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        assert obj.mesh.n_faces == 2
+        assert np.all(n[:, 2] > 0)  # both converted triangles counter-clockwise, facing +z
+        np.testing.assert_allclose(obj.mesh.normals, np.tile([0, 0, 1.0], (6, 1)))
+
+
+def test_material_base_color_and_ignored_inputs(tmp_path):
+    d = Doc()
+    d.node(name="b", mesh=d.mesh(trimesh.creation.box(), material=0))
+    d.doc["materials"] = [
+        {
+            "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1.0], "metallicFactor": 0},
+            "normalTexture": {"index": 0},
+        }
+    ]
+    with pytest.warns(GltfWarning) as record:
+        scene = load_gltf(d.write(tmp_path / "m.glb"))
+    m = scene.objects[0].material
+    np.testing.assert_allclose(m.diffuse, [0.2, 0.4, 0.6])
+    np.testing.assert_allclose(m.ambient, np.array([0.2, 0.4, 0.6]) * 0.15 / 0.8)
+    ignored = [str(w.message) for w in record if "ignored" in str(w.message)]
+    assert len(ignored) == 1
+    assert "normalTexture" in ignored[0] and "metallicFactor" in ignored[0]
+
+
+def test_camera_choice_and_orthographic(tmp_path):
+    d = two_boxes_with_camera()
+    d.doc["cameras"].append(
+        {
+            "name": "ortho",
+            "type": "orthographic",
+            "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 9},
+        }
+    )
+    d.doc["cameras"].append(
+        {"name": "wide", "type": "perspective", "perspective": {"yfov": 1.2, "znear": 0.2}}
+    )
+    d.node(name="ortho_node", camera=1, translation=[0, 0, 5])
+    d.node(name="wide_node", camera=2, translation=[0, 1, 6])
+    path = d.write(tmp_path / "c.glb")
+    assert quiet(load_scene, str(path)).camera.fov_y == pytest.approx(math.degrees(0.8))
+    wide = quiet(load_scene, str(path), camera="wide")
+    np.testing.assert_allclose(wide.camera.eye, [0, 1, 6])
+    assert quiet(load_gltf, path, camera="wide_node").camera.fov_y == pytest.approx(
+        math.degrees(1.2)
+    )
+    with pytest.raises(ValueError, match=r"c\.glb: cameras\[1\]\.type: .*'ortho'.*orthographic"):
+        quiet(load_gltf, path, camera="ortho")
+    with pytest.raises(ValueError, match="no camera node named 'nope'.*'camnode'"):
+        quiet(load_gltf, path, camera="nope")
+
+
+def test_toml_with_gltf_overrides(tmp_path):
+    two_boxes_with_camera().write(tmp_path / "model.glb")
+    (tmp_path / "s.toml").write_text(
+        'gltf = "model.glb"\n'
+        "[camera]\nfov_y = 30.0\n"
+        '[style]\nname = "toon"\n'
+        '[materials."*"]\nspecular = 0.0\n'
+        "[materials.second]\ndiffuse = [1.0, 0.0, 0.0]\n"
+        '[[light]]\nkind = "point"\nposition = [1.0, 2.0, 3.0]\n'
+        '[[object]]\nname = "extra"\nmesh = "teapot"\nlevel = 2\n'
+    )
+    scene = quiet(load_scene, tmp_path / "s.toml")
+    assert scene.camera.fov_y == 30.0
+    np.testing.assert_allclose(scene.camera.eye, [0.5, 2.0, 8.0])
+    assert scene.style == {"name": "toon"}
+    assert [o.name for o in scene.objects] == ["child", "second", "extra"]
+    assert scene.objects[1].material.diffuse == (1.0, 0.0, 0.0)
+    assert scene.objects[0].material.specular == (0.0, 0.0, 0.0)
+    assert scene.objects[0].material.diffuse == (0.8, 0.8, 0.8)  # no glTF material: refnpr's
+    assert [lt.kind for lt in scene.lights] == ["point"]
+    (tmp_path / "bad.toml").write_text('gltf = "model.glb"\n[materials.nobody]\ndiffuse = 1.0\n')
+    with pytest.raises(
+        ValueError, match=r"bad\.toml: \[materials\]: no glTF object named 'nobody'"
+    ):
+        quiet(load_scene, tmp_path / "bad.toml")
+
+
+# -- animation ---------------------------------------------------------------------------------------
+
+
+def animated(interp, times, values, path="translation"):
+    d = Doc()
+    box = d.mesh(trimesh.creation.box())
+    d.node(name="box", mesh=box, translation=[0.0, 0.0, 0.0])
+    tin = d.accessor(np.asarray(times, float))
+    tout = d.accessor(np.asarray(values, float))
+    d.doc["animations"] = [
+        {
+            "name": "move",
+            "samplers": [{"input": tin, "output": tout, "interpolation": interp}],
+            "channels": [{"sampler": 0, "target": {"node": 0, "path": path}}],
+        }
+    ]
+    return d
+
+
+def at_frames(scene, target):
+    track = {t.target: t for t in scene.animation.tracks}[target]
+    return np.array([k.value for k in track.keys])
+
+
+def test_animation_linear_step_cubic(tmp_path):
+    times = [0.0, 0.5, 1.0]
+    vals = [[0, 0, 0], [2, 0, 0], [2, 4, 0]]
+    lin = quiet(load_gltf, animated("LINEAR", times, vals).write(tmp_path / "a.glb"), fps=4)
+    assert lin.frames == 5
+    got = at_frames(lin, 'object "box".translation')
+    np.testing.assert_allclose(got, [[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 2, 0], [2, 4, 0]])
+    step = quiet(load_gltf, animated("STEP", times, vals).write(tmp_path / "s.glb"), fps=4)
+    got = at_frames(step, 'object "box".translation')
+    np.testing.assert_allclose(got, [[0, 0, 0], [0, 0, 0], [2, 0, 0], [2, 0, 0], [2, 4, 0]])
+    # CUBICSPLINE: (in-tangent, value, out-tangent) per key; hand-evaluated Hermite at t = 0.25
+    cub_vals = [[0, 0, 0], [0, 0, 0], [4, 0, 0], [0, 0, 0], [1, 0, 0], [0, 0, 0]]
+    cub = quiet(
+        load_gltf, animated("CUBICSPLINE", [0.0, 0.5], cub_vals).write(tmp_path / "c.glb"), fps=8
+    )
+    got = at_frames(cub, 'object "box".translation')
+    u, td = 0.5, 0.5  # frame 2 = 0.25 s, halfway
+    expect = (u**3 - 2 * u**2 + u) * 4 * td + (-2 * u**3 + 3 * u**2) * 1
+    assert got[2, 0] == pytest.approx(expect, abs=1e-12)
+    assert got[4, 0] == 1.0 and got[0, 0] == 0.0
+    # the scene's still at a frame carries the sampled transform
+    np.testing.assert_allclose(cub.at(2).objects[0].transform[:3, 3], [expect, 0, 0], atol=1e-12)
+
+
+def test_animation_rotation_slerp_of_parent(tmp_path):
+    d = Doc()
+    box = d.mesh(trimesh.creation.box())
+    child = d.node(root=False, name="kid", mesh=box, translation=[1.0, 0.0, 0.0])
+    d.node(name="spin", children=[child])
+    tin = d.accessor(np.array([0.0, 1.0]))
+    tout = d.accessor(np.array([quat((0, 1, 0), 0), quat((0, 1, 0), 90)]))
+    d.doc["animations"] = [
+        {
+            "samplers": [{"input": tin, "output": tout}],
+            "channels": [{"sampler": 0, "target": {"node": 1, "path": "rotation"}}],
+        }
+    ]
+    scene = quiet(load_gltf, d.write(tmp_path / "r.glb"), fps=3)
+    tr = at_frames(scene, 'object "kid".translation')
+    for f in range(4):  # the child orbits: world position = R_y(30 f) (1, 0, 0)
+        a = math.radians(30 * f)
+        np.testing.assert_allclose(tr[f], [math.cos(a), 0, -math.sin(a)], atol=1e-7)
+
+
+# -- malformed files ---------------------------------------------------------------------------------
+
+
+def _base():
+    d = Doc()
+    d.node(
+        name="tri",
+        mesh=d.mesh(trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], process=False)),
+    )
+    return d
+
+
+def _set(path, value):
+    def edit(doc):
+        obj = doc
+        for key in path[:-1]:
+            obj = obj[key]
+        obj[path[-1]] = value
+
+    return edit
+
+
+MALFORMED = [
+    (
+        "accessor count beyond view",
+        _set(["accessors", 0, "count"], 1000),
+        r"accessors\[0\]\.count: 1000 elements",
+    ),
+    ("huge count", _set(["accessors", 0, "count"], 2**62), r"accessors\[0\]\.count"),
+    (
+        "view beyond buffer",
+        _set(["bufferViews", 0, "byteLength"], 10**6),
+        r"bufferViews\[0\]: byteOffset",
+    ),
+    (
+        "missing accessor",
+        _set(["meshes", 0, "primitives", 0, "attributes", "POSITION"], 9),
+        r"meshes\[0\]\.primitives\[0\]\.attributes\.POSITION: 9 is not an index of accessors",
+    ),
+    (
+        "bad component",
+        _set(["accessors", 0, "componentType"], 5125),
+        r"accessors\[0\]\.componentType: UNSIGNED_INT cannot",
+    ),
+    (
+        "bad stride",
+        _set(["bufferViews", 0, "byteStride"], 4),
+        r"bufferViews\[0\]\.byteStride: 4 is smaller",
+    ),
+    (
+        "index out of range",
+        lambda doc: doc["accessors"][2].update(bufferView=0, byteOffset=12),
+        r"accessors\[2\]: index \d+ at position \d+ .* out of range",
+    ),
+    (
+        "cycle",
+        _set(["nodes", 0, "children"], [0]),
+        r"nodes\[0\]\.children\[0\]: node 0 lists itself",
+    ),
+    (
+        "lines",
+        _set(["meshes", 0, "primitives", 0, "mode"], 1),
+        r"meshes\[0\]\.primitives\[0\]\.mode: 1 \(LINES\) in nodes\[0\] 'tri'",
+    ),
+    (
+        "bad matrix",
+        _set(["nodes", 0, "matrix"], [1, 0, 0, 1] + [0] * 12),
+        r"nodes\[0\]\.matrix: the last row",
+    ),
+    (
+        "non-unit rotation",
+        _set(["nodes", 0, "rotation"], [0, 0, 0, 2]),
+        r"nodes\[0\]\.rotation: .*unit quaternion",
+    ),
+    (
+        "missing buffer",
+        _set(["buffers"], []),
+        r"bufferViews\[0\]\.buffer: refers to buffers\[0\], but the file has no buffers",
+    ),
+    ("no version", _set(["asset"], {}), r"asset\.version: missing"),
+    (
+        "required ext",
+        _set(["extensionsRequired"], ["KHR_draco_mesh_compression"]),
+        r"extensionsRequired: 'KHR_draco",
+    ),
+    ("sparse", _set(["accessors", 0, "sparse"], {}), r"accessors\[0\]\.sparse: sparse accessors"),
+    (
+        "ortho",
+        lambda doc: (
+            doc.__setitem__("cameras", [{"type": "orthographic"}]),
+            doc["nodes"].append({"camera": 0}),
+            doc["scenes"][0]["nodes"].append(1),
+        ),
+    ),
+    (
+        "bad light",
+        _set(["nodes", 0, "extensions"], {"KHR_lights_punctual": {"light": 3}}),
+        r"nodes\[0\]\.extensions\.KHR_lights_punctual\.light: 3 is not a light index",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    "label, edit, message",
+    [m if len(m) == 3 else (*m, r"cameras\[0\]\.type: .*orthographic") for m in MALFORMED],
+    ids=[m[0] for m in MALFORMED],
+)
+def test_malformed(tmp_path, label, edit, message):
+    d = _base()
+    path = d.write(tmp_path / "bad.gltf", "data")
+    doc = json.loads(path.read_text())
+    edit(doc)
+    path.write_text(json.dumps(doc))
+    with pytest.raises(GltfError, match=r"bad\.gltf: " + message):
+        quiet(load_gltf, path)
+
+
+def test_malformed_nan_and_two_parent_cycle(tmp_path):
+    d = _base()
+    d.doc["accessors"][0]["count"] = 3
+    d.blob[0:4] = struct.pack("<f", float("nan"))
+    with pytest.raises(ValueError, match=r"nan\.glb: accessors\[0\]: element 0 .* not finite"):
+        quiet(load_gltf, d.write(tmp_path / "nan.glb"))
+    d = _base()
+    d.doc["nodes"] += [{"children": [2]}, {"children": [1]}]
+    with pytest.raises(
+        ValueError, match=r"cyc\.glb: nodes\[\d\]\.children: the node graph has a cycle"
+    ):
+        quiet(load_gltf, d.write(tmp_path / "cyc.glb"))
+
+
+def test_uris_outside_directory_refused(tmp_path):
+    sub = tmp_path / "sub"
+    sub.mkdir()
+    d = _base()
+    d.write(sub / "model.gltf", "bin")
+    for uri, what in [
+        ("../secret.bin", "outside the directory"),
+        ("/etc/passwd", "absolute"),
+        ("http://example.com/x.bin", "not a relative file"),
+        ("nothere.bin", "not found"),
+    ]:
+        doc = json.loads((sub / "model.gltf").read_text())
+        doc["buffers"][0]["uri"] = uri
+        (sub / "model.gltf").write_text(json.dumps(doc))
+        with pytest.raises(ValueError, match=r"model\.gltf: buffers\[0\]\.uri: .*" + what):
+            load_gltf(sub / "model.gltf")
+
+
+def test_truncated_glb_and_huge_byte_length(tmp_path):
+    path = _base().write(tmp_path / "t.glb")
+    raw = path.read_bytes()
+    path.write_bytes(raw[:-8])
+    with pytest.raises(ValueError, match=r"t\.glb: GLB header: declares"):
+        load_gltf(path)
+    d = _base()
+    path = d.write(tmp_path / "h.gltf", "bin")
+    doc = json.loads(path.read_text())
+    doc["buffers"][0]["byteLength"] = 2**40
+    path.write_text(json.dumps(doc))
+    with pytest.raises(
+        ValueError, match=r"h\.gltf: buffers\[0\]\.uri: buffer file 'model\.bin' has \d+ bytes"
+    ):
+        load_gltf(path)
