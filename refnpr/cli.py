@@ -172,7 +172,7 @@ def _scene_and_style(args: argparse.Namespace) -> tuple[object, dict | None]:
     from .scenes import load_scene
 
     params = _style_params(args)
-    scene = load_scene(args.scene, camera=args.camera)
+    scene = load_scene(args.scene, camera=getattr(args, "camera", None))
     if args.style:
         return scene, {"name": args.style, **params}
     return scene, _with_params(scene.style, params, args.scene) if params else None
@@ -456,15 +456,45 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 def _cmd_kit_export(args: argparse.Namespace) -> int:
     from .golden import load_suite
     from .kit.export import export_kit
-    from .kit.provenance import describe_source
+    from .kit.provenance import describe, describe_source, provenance
 
-    suite = _suite(args)
-    load_suite(suite)  # a bad suite is reported before the line that names it
-    print(describe_source(suite))
     log = (lambda line: None) if args.quiet else print
-    written = export_kit(args.dir, suite=suite, only=args.only, log=log)
+    if args.scene is None:
+        for flag in ("style", "param", "name", "size", "spp"):
+            if getattr(args, flag) is not None:
+                raise ValueError(f"--{flag}: only with --scene FILE (a case of your own scene)")
+        suite = _suite(args)
+        load_suite(suite)  # a bad suite is reported before the line that names it
+        print(describe_source(suite))
+        written = export_kit(args.dir, suite=suite, only=args.only, log=log)
+    else:
+        if args.suite is not None or args.only is not None:
+            raise ValueError("--scene: export either a case of your own scene or suite cases")
+        case = _scene_case(args)
+        print(f"{describe(provenance())}; case {case.name!r} of {args.scene!r}")
+        written = export_kit(args.dir, cases=[case], log=log)
     print(f"exported {len(written)} case(s) to {args.dir}")
     return 0
+
+
+def _scene_case(args: argparse.Namespace):
+    """The kit case of ``kit export --scene``: its name (--name, else the scene's file name and
+    the style) and style (--style/--param, else the scene's own with --param applied)."""
+    import re
+
+    from .golden import scene_case
+    from .render import DEFAULT_STYLE
+
+    with warnings.catch_warnings():  # the export reads the scene again and notes what it must
+        warnings.simplefilter("ignore")
+        scene, style = _scene_and_style(args)
+    spec = style or scene.style or DEFAULT_STYLE
+    label = spec if isinstance(spec, str) else spec.get("name", "style")
+    stem = Path(args.scene).stem if Path(args.scene).suffix else args.scene
+    name = args.name or re.sub(r"[^a-z0-9_-]+", "-", f"{stem}-{label}".lower()).strip("-_")
+    width, height = args.size or (256, 192)
+    spp = 1 if args.spp is None else args.spp
+    return scene_case(name, args.scene, style=style, width=width, height=height, spp=spp)
 
 
 def _add_style_options(p: argparse.ArgumentParser, style_help: str) -> None:
@@ -669,6 +699,16 @@ def build_parser() -> argparse.ArgumentParser:
     ke = ksub.add_parser("export", help="write the conformance kit of the golden suite to DIR")
     ke.add_argument("dir", help="kit directory (created; existing cases are replaced)")
     _add_suite_options(ke)
+    ke.add_argument(
+        "--scene",
+        metavar="FILE",
+        help="export one case of your own scene (.gltf, .glb, .toml or a built-in name) instead of "
+        "the suite's: same schema, tolerances and derived texts; added to the kit's cases",
+    )
+    ke.add_argument("--name", help="with --scene: the case name (default: SCENE-STYLE)")
+    _add_style_options(ke, "with --scene: the style (default: the scene's own)")
+    ke.add_argument("--size", type=_size, help="with --scene: WxH (default 256x192)")
+    ke.add_argument("--spp", type=int, help="with --scene: samples per pixel (default 1)")
     ke.add_argument("-q", "--quiet", action="store_true", help="no line per case")
     ke.set_defaults(func=_cmd_kit_export)
     kc = ksub.add_parser("check", help="compare a backend's renders with a kit")

@@ -239,6 +239,44 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
     return cases
 
 
+def scene_case(
+    name: str,
+    scene: str | Path,
+    *,
+    style: Any = None,
+    width: int = 256,
+    height: int = 192,
+    spp: int = 1,
+) -> GoldenCase:
+    """An image case of the user's own scene, with the suite's defaults (tolerance, threshold,
+    SSIM, position deviation): what ``refnpr kit export DIR --scene FILE`` exports.
+
+    Parameters
+    ----------
+    name : str
+        The case name, ``[a-z0-9][a-z0-9_-]*``.
+    scene : str or path
+        A built-in scene name or a scene file (.toml, .gltf, .glb).
+    style : str, dict or None
+        As in a suite file (None: the scene's own style).
+    width, height, spp : int
+        Image size and samples per pixel.
+
+    Raises
+    ------
+    ValueError
+        A bad name, size or spp, naming it; the scene and style are checked when exported.
+    """
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(f"name: expected a case name matching [a-z0-9][a-z0-9_-]*, got {name!r}")
+    params = {**_DEFAULTS, "style": style, "width": width, "height": height, "spp": spp}
+    _check_case(Path(str(scene)), name, params)
+    scene = str(scene)
+    if scene.endswith((".toml", ".gltf", ".glb")):
+        scene = str(Path(scene).resolve())
+    return GoldenCase(name, scene, params)
+
+
 def _check_keys(table: dict[str, Any], where: str) -> None:
     for key in table:
         if key not in _DEFAULTS:

@@ -137,7 +137,9 @@ def _base(case: GoldenCase, scene: Any) -> dict[str, Any]:
     }
 
 
-def _export_image(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) -> dict[str, Any]:
+def _export_image(
+    case: GoldenCase, scene: Any, tmp: Path, golden_root: Path | None
+) -> dict[str, Any]:
     from ..render import render
 
     style = _style_of(case, scene)
@@ -154,8 +156,8 @@ def _export_image(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) ->
     data["textures"] = sx.textures
     image = render(scene, style, case.width, case.height, case.spp)
     srgb8 = image.to_srgb8()
-    golden = golden_root / f"{case.name}.png"
-    if golden.is_file():
+    golden = golden_root / f"{case.name}.png" if golden_root is not None else None
+    if golden is not None and golden.is_file():
         shutil.copyfile(golden, tmp / "expected.png")
         matches = bool(np.array_equal(read_image_file(golden, what="golden file"), srgb8))
     else:
@@ -167,7 +169,7 @@ def _export_image(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) ->
     data["expected"] = {
         "png": "expected.png",
         "linear": "expected.exr",
-        "png_from_golden": golden.is_file(),
+        "png_from_golden": golden is not None and golden.is_file(),
         "linear_matches_png": matches,
     }
     data["tolerance"] = tolerance_entry(case)
@@ -175,7 +177,9 @@ def _export_image(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) ->
     return data
 
 
-def _export_gbuffer(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) -> dict[str, Any]:
+def _export_gbuffer(
+    case: GoldenCase, scene: Any, tmp: Path, golden_root: Path | None
+) -> dict[str, Any]:
     data = _base(case, scene)
     data["resolve"] = None
     data["objects"] = objects_entry(scene, tmp)
@@ -190,9 +194,9 @@ def _export_gbuffer(case: GoldenCase, scene: Any, tmp: Path, golden_root: Path) 
         kit_meshes(scene), scene.camera, case.width, case.height, case.channels, case.spp, **opts
     )
     arrays = {k: np.asarray(gb[k]) for k in gb}
-    golden = golden_root / f"{case.name}.npz"
+    golden = golden_root / f"{case.name}.npz" if golden_root is not None else None
     matches, golden_frac = None, None
-    if golden.is_file():
+    if golden is not None and golden.is_file():
         with np.load(golden, allow_pickle=False) as z:
             ref = {k: z[k] for k in z.files}
         matches = set(ref) == set(arrays) and all(
@@ -233,8 +237,10 @@ def _frac_off(got: np.ndarray, ref: np.ndarray, case: GoldenCase) -> float:
     return float(np.mean(bad))
 
 
-def export_case(case: GoldenCase, directory: Path, golden_root: Path) -> Path:
-    """Export one case into ``directory / case.name`` (replacing it whole).
+def export_case(case: GoldenCase, directory: Path, golden_root: Path | None) -> Path:
+    """Export one case into ``directory / case.name`` (replacing it whole); its expected image is
+    the golden file of that name in ``golden_root`` where there is one, else refnpr's render
+    (``golden_root`` None: always the render, as for a case of the user's own scene).
 
     Returns
     -------
@@ -271,9 +277,11 @@ def export_kit(
     suite: str | os.PathLike | None = None,
     only: list[str] | None = None,
     *,
+    cases: list[GoldenCase] | None = None,
     log: Callable[[str], None] | None = None,
 ) -> list[Path]:
-    """Export the golden suite (or the cases in ``only``) as a conformance kit in ``dir``.
+    """Export the golden suite (or the cases in ``only``, or the given ``cases``) as a
+    conformance kit in ``dir``.
 
     Parameters
     ----------
@@ -284,6 +292,10 @@ def export_kit(
         :data:`refnpr.golden.DEFAULT_SUITE`); golden files are read beside it.
     only : list of str, optional
         Case names to export (all when None).
+    cases : list of GoldenCase, optional
+        Cases of the user's own scenes (:func:`refnpr.golden.scene_case`) to export instead of
+        the suite's: same schema, tolerances and derived texts, the expected image rendered by
+        refnpr (there is no golden file); added to the kit's other cases.
     log : callable(str), optional
         Called with one line per case written.
 
@@ -297,8 +309,11 @@ def export_kit(
     ValueError
         ``dir`` is a file or cannot be created; the suite cannot be read; an unknown case name.
     """
+    if cases is not None and (suite is not None or only is not None):
+        raise ValueError("cases: give either cases of your own or a suite (and only), not both")
+    user = cases is not None
     suite_path = Path(suite) if suite is not None else DEFAULT_SUITE
-    cases = _select(load_suite(suite_path), only)
+    cases = list(cases) if user else _select(load_suite(suite_path), only)
     directory = _check_dir(dir)
     for name in SCHEMA_FILES:
         with atomic_file(directory / name, suffix=".json") as tmp:
@@ -306,12 +321,12 @@ def export_kit(
     written = []
     for case in cases:
         try:
-            written.append(export_case(case, directory, suite_path.parent))
+            written.append(export_case(case, directory, None if user else suite_path.parent))
         except (ValueError, TypeError) as exc:  # name the case in the message
             raise type(exc)(f"case {case.name!r}: {exc}") from exc
         if log is not None:
             log(f"wrote {written[-1]}")
-    _write_index(directory, provenance(suite_path), {c.name for c in cases})
+    _write_index(directory, provenance(None if user else suite_path), {c.name for c in cases})
     return written
 
 

@@ -511,3 +511,83 @@ def test_the_installed_suite_is_read_only_and_fails_into_the_temporary_directory
     other = Path(tempfile.gettempdir()) / "elsewhere" / "suite.toml"
     assert golden.default_failure_dir(other) == other.parent / "_failures"
     golden.check_writable_suite(other)  # any other suite may be updated
+
+
+# -- cases of the user's own scenes -----------------------------------------------------------
+def _user_glb(path):
+    import trimesh
+
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.icosphere(2), node_name="ball")
+    scene.add_geometry(
+        trimesh.creation.box(),
+        node_name="box",
+        transform=trimesh.transformations.translation_matrix([1.6, 0.0, -0.5]),
+    )
+    scene.export(path)
+    return path
+
+
+def test_a_case_of_your_own_gltf_scene_is_exported_like_a_suite_case(tmp_path):
+    import warnings
+
+    from refnpr.kit.check import check_kit
+    from refnpr.render import render
+    from refnpr.scenes import load_scene
+
+    glb = _user_glb(tmp_path / "model.glb")
+    kit = tmp_path / "kit"
+    args = ["kit", "export", str(kit), "--scene", str(glb), "--style", "smooth", "-q"]
+    assert main([*args, "--size", "48x36"]) == 0
+    case = json.loads((kit / "model-smooth" / "case.json").read_text())
+    assert (case["width"], case["height"], case["spp"]) == (48, 36, 1)
+    assert case["style"]["name"] == "smooth"
+    assert case["expected"]["png_from_golden"] is False
+    assert case["tolerance"]["threshold"] == pytest.approx(2 / 255)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        want = render(load_scene(glb), "smooth", 48, 36, 1).to_srgb8()
+    np.testing.assert_array_equal(iio.imread(kit / "model-smooth" / "expected.png"), want)
+    index = json.loads((kit / "index.json").read_text())
+    assert [c["name"] for c in index["cases"]] == ["model-smooth"]
+    assert "suite" not in index["provenance"]
+    # a second case of the same scene joins the kit; a backend rendering both passes
+    own = ["kit", "export", str(kit), "--scene", str(glb), "--name", "ball-toon", "--style", "toon"]
+    assert main([*own, "--param", "n=3", "-q"]) == 0
+    renders = tmp_path / "renders"
+    renders.mkdir()
+    for name in ("model-smooth", "ball-toon"):
+        (renders / f"{name}.png").write_bytes((kit / name / "expected.png").read_bytes())
+    results = check_kit(kit, renders)
+    assert [r.passed for r in results] == [True, True]
+
+
+@pytest.mark.parametrize(
+    "extra, match",
+    [
+        (["--only", "default-toon"], "--scene: export either a case of your own scene or suite"),
+        (["--name", "Bad Name"], "name: expected a case name matching"),
+        (["--spp", "0"], "spp: expected a positive integer"),
+    ],
+)
+def test_own_scene_export_errors(tmp_path, capsys, extra, match):
+    glb = _user_glb(tmp_path / "model.glb")
+    assert main(["kit", "export", str(tmp_path / "k"), "--scene", str(glb), *extra]) == 2
+    assert match in capsys.readouterr().err
+
+
+def test_style_options_need_a_scene(tmp_path, capsys):
+    assert main(["kit", "export", str(tmp_path / "k"), "--style", "toon"]) == 2
+    assert "--style: only with --scene FILE" in capsys.readouterr().err
+
+
+def test_a_suite_file_may_name_a_gltf_scene(tmp_path):
+    _user_glb(tmp_path / "model.glb")
+    (tmp_path / "suite.toml").write_text(
+        '[[case]]\nname = "mine"\nscene = "model.glb"\nstyle = { name = "smooth" }\n'
+        "width = 40\nheight = 30\n"
+    )
+    [case] = load_suite(tmp_path / "suite.toml")
+    assert case.scene == str((tmp_path / "model.glb").resolve())
+    written = export_kit(tmp_path / "kit", suite=tmp_path / "suite.toml", log=None)
+    assert [p.parent.name for p in written] == ["mine"]
