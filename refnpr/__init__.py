@@ -1,8 +1,25 @@
-"""refnpr: a CPU reference renderer for non-photorealistic shading."""
+"""refnpr: a CPU reference renderer for non-photorealistic shading.
+
+The everyday names are importable from the package itself::
+
+    import refnpr
+
+    scene = refnpr.load_scene("teapot")
+    image = refnpr.render(scene, {"name": "toon", "n": 3}, 512, 512, spp=4)
+    image.save("teapot.png")
+
+Each is imported on first use, so ``import refnpr`` (and the ``refnpr`` command's start) stays
+instant: numba, the kernels and optional dependencies load only when a name that needs them is
+used. ``refnpr.render`` is the function :func:`refnpr.render.render` (also when the module
+``refnpr.render`` has been imported); the module's other names are imported from it
+(``from refnpr.render import RenderContext``).
+"""
 
 from __future__ import annotations
 
 import os
+import sys
+import types
 from typing import Any
 
 # numba's OpenMP threads (refnpr's kernels are all banded, but a caller's own prange kernels
@@ -14,15 +31,68 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 __version__ = "0.1.0"
 
-__all__ = ["__version__", "explore"]
+#: The module of each everyday name, imported on first use.
+_EXPORTS = {
+    # rendering
+    "render": "render",
+    "RenderContext": "render",
+    "Image": "image",
+    "render_sequence": "sequence",
+    # rasterizer
+    "rasterize": "raster",
+    "Camera": "raster",
+    "GBuffer": "raster",
+    "Mesh": "raster",
+    # scenes
+    "load_scene": "scenes",
+    "list_scenes": "scenes",
+    "load_mesh": "scenes",
+    "Scene": "scenes",
+    "SceneObject": "scenes",
+    "Light": "scenes",
+    "Material": "scenes",
+    # styles
+    "get_style": "styles",
+    "list_styles": "styles",
+    "Style": "styles",
+    # conformance kit
+    "export_kit": "kit",
+    "check_kit": "kit",
+    # Jupyter (ipywidgets: the optional extra ``notebook``)
+    "explore": "explore",
+}
+
+__all__ = ["__version__", *_EXPORTS]
 
 
 def __getattr__(name: str) -> Any:
-    """``refnpr.explore`` on first use, so that ``import refnpr`` never imports ipywidgets
-    (the optional extra ``notebook``) nor the renderer."""
-    if name == "explore":
-        from .explore import explore
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
 
-        globals()["explore"] = explore  # the function, not the submodule import just bound
-        return explore
-    raise AttributeError(f"module 'refnpr' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+class _Package(types.ModuleType):
+    """The package's module type: a name exported from the submodule of the same name
+    (``render``, ``explore``) stays the function when that submodule is imported, which the
+    import system would otherwise bind on the package in its place."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if (
+            _EXPORTS.get(name) == name
+            and isinstance(value, types.ModuleType)
+            and value.__name__ == f"{__name__}.{name}"
+        ):
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

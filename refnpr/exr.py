@@ -12,24 +12,24 @@ the free space. The conformance kit's textures and expected images
 Rendered images as EXR (:func:`image_channels`): one part with the linear RGBA result and the
 image's G-buffer passes (``Image.passes``), named as compositing tools expect:
 
-========================= ====================================================== ==========
-channel                   value                                                  pixel type
-========================= ====================================================== ==========
-``R``, ``G``, ``B``, ``A`` linear colour premultiplied by alpha (OpenEXR's         FLOAT
-                          convention; equal to ``Image.rgba`` where alpha is 1,
-                          as over an opaque background), and alpha
-``depth.Z``               eye-space distance along the view axis; +inf where empty FLOAT
-``normal.X/Y/Z``          world-space interpolated normal; 0 where empty         FLOAT
-``uv.U/V``                texture coordinates                                    FLOAT
-``position.X/Y/Z``        world-space position                                   FLOAT
-``tri_id``, ``mesh_id``   the int32 id's bit pattern: the id, 4294967295 (int32   UINT
-                          -1) where empty; read back with ``.view(numpy.int32)``
-others                    every other channel the frame computed: a scalar by    FLOAT
-                          its name (``ndc_z``, ``lod``, ``coverage``, ...); C
-                          components as ``name.X/Y/Z/W`` (``duv_dx.U/V``; more
-                          than 4: ``name.0``, ``name.1``, ...); integer
-                          channels as UINT like the ids
-========================= ====================================================== ==========
+========================== ======================================================== ==========
+channel                    value                                                    pixel type
+========================== ======================================================== ==========
+``R``, ``G``, ``B``, ``A`` linear colour premultiplied by alpha (OpenEXR's          FLOAT
+                           convention; equal to ``Image.rgba`` where alpha is 1,
+                           as over an opaque background), and alpha
+``depth.Z``                eye-space distance along the view axis; +inf where empty FLOAT
+``normal.X/Y/Z``           world-space interpolated normal; 0 where empty           FLOAT
+``uv.U/V``                 texture coordinates                                      FLOAT
+``position.X/Y/Z``         world-space position                                     FLOAT
+``tri_id``, ``mesh_id``    the int32 id's bit pattern: the id, 4294967295 (int32    UINT
+                           -1) where empty; read back with ``.view(numpy.int32)``
+others                     every other channel the frame computed: a scalar by      FLOAT
+                           its name (``ndc_z``, ``lod``, ``coverage``, ...); C
+                           components as ``name.X/Y/Z/W`` (``duv_dx.U/V``; more
+                           than 4: ``name.0``, ``name.1``, ...); integer
+                           channels as UINT like the ids
+========================== ======================================================== ==========
 
 Passes are per pixel, not per sample: see :func:`pixel_passes`.
 """
@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from .image import atomic_file
+from ._atomic import atomic_file
 
 __all__ = [
     "EXR_PASSES",

@@ -47,7 +47,7 @@ class GalleryEntry:
     caption: str
 
 
-#: The case that shows each paper best (read from refnpr/suite/*.toml), in README order.
+#: The case that shows each paper best (read from ``refnpr/suite/*.toml``), in README order.
 GALLERY: tuple[GalleryEntry, ...] = (
     GalleryEntry(
         "veryovka-fig6-vase-cross-filtered",

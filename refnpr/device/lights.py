@@ -19,6 +19,8 @@ LIGHT_POINT = 1
 class Lights(NamedTuple):
     """The lights of a frame (numba record).
 
+    Attributes
+    ----------
     kind : (L,) int64, ``LIGHT_DIRECTIONAL`` or ``LIGHT_POINT``
     vec : (L, 3) float64, unit direction towards a directional light (``d / |d|`` of the
         scene's direction), position of a point light

@@ -1,8 +1,8 @@
 """OpenGL texture sampling of one sample: GL_REPEAT taps, bilinear, a mip level, trilinear,
 anisotropic probes (OpenGL 4.6 sec. 8.14-8.15).
 
-Textures are packed pyramids ``pyr = (texels, offsets, shapes)`` (:meth:`refnpr.texture
-.MipPyramid.packed`): ``texels (N, C)`` float64, level k's ``shapes[k] = (rows, cols)`` texels
+Textures are packed pyramids ``pyr = (texels, offsets, shapes)``
+(:meth:`refnpr.texture.MipPyramid.packed`): ``texels (N, C)`` float64, level k's ``shapes[k] = (rows, cols)`` texels
 starting at row ``offsets[k]``, row-major. Texel (i, j) of a level sits at
 ``((j + 0.5) / cols, (i + 0.5) / rows)`` in uv (u along columns, v along rows). Weights are
 summed in one order everywhere (w00, w10, w01, w11), and a level's value enters a trilinear

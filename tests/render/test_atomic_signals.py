@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from refnpr import image
+from refnpr import _atomic as image  # the atomic-write machinery (re-exported by refnpr.image)
 from refnpr.image import atomic_file
 
 pytestmark = pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="POSIX signals")
@@ -90,7 +90,7 @@ def test_the_handler_resets_itself_before_removing_and_re_sending(tmp_path):
     r = _child(
         """
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})  # first: threads inherit it
-        from refnpr import image
+        from refnpr import _atomic as image
         seen = []
         real_unlink = os.unlink
         def unlink(name, *a, **k):

@@ -306,8 +306,8 @@ def fit_stroke(
     t : (n,) float, stroke parameter of each fragment (n >= 1)
     x, y : (n,) float, pixel positions
     iterations : int, CG iterations (4 in the paper)
-    basis : {"legendre", "monomial", "raw"}, see :func:`fit_strokes`; ``basis="raw",
-        centre_xy=False`` is the paper verbatim (raw monomials of t).
+    basis : {"legendre", "monomial", "raw"}, see :func:`fit_strokes`;
+        ``basis="raw", centre_xy=False`` is the paper verbatim (raw monomials of t).
     centre_xy : bool, see :func:`fit_fragments`
     prior_weight : float, see :func:`fit_strokes`
 

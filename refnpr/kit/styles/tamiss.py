@@ -6,8 +6,8 @@ Every parameter is resolved by the style's own code: its declaration's resolved 
 as a texture file. What TAMISS derives from the
 mesh topology (uv charts, their orientation, offset and id group, the smooth per-vertex tangent
 frames) is exported per vertex, computed by refnpr's own functions
-(:func:`refnpr.styles.tamiss.charts.chart_layout`, :func:`~refnpr.styles.tamiss.charts
-.vertex_frames`), so that a backend needs no mesh analysis.
+(:func:`refnpr.styles.tamiss.charts.chart_layout`,
+:func:`~refnpr.styles.tamiss.charts.vertex_frames`), so that a backend needs no mesh analysis.
 
 Params layout (``case.json`` ``style.params``): the declared parameters in their order
 (directions, layer_tones, period, length, length_jitter, width_jitter, density, max_level,

@@ -285,7 +285,7 @@ def tone_luts(pyramid: MipPyramid) -> np.ndarray:
     neighbouring texels and compresses the distribution of the values a sampler returns, so the
     binary threshold then misses the tone by up to ~0.1 at I = 0.1 or 0.9 on coarse noisy levels.
     Mapping a sample through its level's CDF makes the sampled values uniform again. The CDF is
-    estimated on a regular grid of ``LUT_SUBSAMPLES``^2 points per texel; levels with a single
+    estimated on a regular grid of ``LUT_SUBSAMPLES ** 2`` points per texel; levels with a single
     texel keep the identity.
     """
     x = np.linspace(0.0, 1.0, LUT_BINS)

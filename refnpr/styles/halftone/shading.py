@@ -2,7 +2,7 @@
 (``_kernels.shade_object_for``), after one pass over the empty samples (``_kernels.prepare``).
 
 The kernels read the frame record (:func:`refnpr.styles._frame.frame_record`), the style record
-(:func:`style_record`, from the declaration :data:`.params.PARAMS`) and each object's
+(:func:`style_record`, from the declaration :data:`refnpr.styles.halftone.params.PARAMS`) and each object's
 :class:`~._kernels.Tables` (:func:`object_tables`: its screen, normal map, tone LUTs, indication
 map and numbers).
 """

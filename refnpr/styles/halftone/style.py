@@ -85,5 +85,5 @@ class HalftoneStyle(Style):
 
     # -- shading ----------------------------------------------------------------------------
     def shade(self, ctx: ShadeContext) -> np.ndarray:
-        """Per-sample RGBA (nH, nW, 4) float32: one numba pass per object (:mod:`.shading`)."""
+        """Per-sample RGBA (nH, nW, 4) float32: one numba pass per object (:mod:`refnpr.styles.halftone.shading`)."""
         return shade_rgba(self, ctx)
