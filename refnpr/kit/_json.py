@@ -102,6 +102,17 @@ def json_depth(value: Any) -> int:
     return deepest
 
 
+def _no_constant(name: str) -> float:
+    raise ValueError(f"{name} is not a JSON number; write a finite number")
+
+
+def _finite(text: str) -> float:
+    v = float(text)
+    if not math.isfinite(v):
+        raise ValueError(f"{text[:40]} overflows a float64; write a finite number")
+    return v
+
+
 def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for k, v in pairs:
@@ -111,7 +122,7 @@ def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def load_json(data: bytes, *, what: str, max_depth: int) -> Any:
+def load_json(data: bytes, *, what: str, max_depth: int, finite: bool = False) -> Any:
     """Parse untrusted JSON bytes (UTF-8).
 
     Parameters
@@ -122,6 +133,9 @@ def load_json(data: bytes, *, what: str, max_depth: int) -> Any:
         What the data is (a file name), the start of every message.
     max_depth : int
         Deepest nesting of arrays and objects allowed (see :func:`json_depth`).
+    finite : bool
+        Refuse ``NaN``, ``Infinity`` and numbers that overflow a float64 (else they are read
+        as floats, below).
 
     Returns
     -------
@@ -146,7 +160,8 @@ def load_json(data: bytes, *, what: str, max_depth: int) -> Any:
             f"{what}: not UTF-8 text (byte {exc.start}: {exc.reason}); expected a JSON file"
         ) from None
     try:
-        value = json.loads(text, object_pairs_hook=_unique_keys)
+        hooks = {"parse_constant": _no_constant, "parse_float": _finite} if finite else {}
+        value = json.loads(text, object_pairs_hook=_unique_keys, **hooks)
     except RecursionError:
         raise ValueError(too_deep) from None
     except ValueError as exc:  # JSONDecodeError, a repeated key, an over-long integer

@@ -22,13 +22,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 import re
 import stat
 from pathlib import Path
 from typing import Any
 
+from ._json import load_json
 from ._untrusted import printable
 from .limits import MAX_FILE_BYTES, MAX_JSON_BYTES, MAX_JSON_DEPTH
 
@@ -61,8 +61,6 @@ GROUPS = ("inputs", "tolerance", "expected", "texts")
 _NOT_INPUTS = ("tolerance", "expected", "derived", "description")
 
 _DIGEST = re.compile(r"sha256:[0-9a-f]{64}")
-_STRING = re.compile(r'"[^"\\]*(?:\\.[^"\\]*)*"', re.DOTALL)
-_BRACKET = re.compile(r"[\[\]{}]")
 _CHUNK = 1 << 20
 
 
@@ -146,39 +144,6 @@ def _hash_file(path: Path, what: str) -> str:
     return f"sha256:{h.hexdigest()}"
 
 
-def _depth(text: str, limit: int) -> int:
-    """Nesting depth of the arrays and objects of a JSON text (strings skipped), stopping past
-    ``limit``."""
-    depth = best = 0
-    for m in _BRACKET.finditer(_STRING.sub("", text)):
-        depth += 1 if m.group() in "[{" else -1
-        if depth > best:
-            best = depth
-            if best > limit:
-                break
-    return best
-
-
-def _no_constant(name: str) -> float:
-    raise ValueError(f"{name} is not a JSON number; write a finite number")
-
-
-def _finite(text: str) -> float:
-    v = float(text)
-    if not math.isfinite(v):
-        raise ValueError(f"{text[:40]} overflows a float64; write a finite number")
-    return v
-
-
-def _pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for k, v in pairs:
-        if k in out:
-            raise ValueError(f"key {quote(k)} appears twice in one object")
-        out[k] = v
-    return out
-
-
 def read_json(
     path: str | Path,
     *,
@@ -186,7 +151,8 @@ def read_json(
     max_bytes: int = MAX_JSON_BYTES,
     max_depth: int = MAX_JSON_DEPTH,
 ) -> Any:
-    """A JSON file read as untrusted input (see the module docstring for what is refused).
+    """A JSON file read as untrusted input (see the module docstring for what is refused):
+    :func:`refnpr.kit._json.load_json` with NaN, Infinity and overflowing numbers refused.
 
     Raises
     ------
@@ -194,21 +160,7 @@ def read_json(
         Naming ``what``, the file and the problem.
     """
     data = read_bytes(path, what=what, limit=max_bytes)
-    where = f"{what}: {quote(str(path))}"
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{where} is not UTF-8 text (byte {exc.start})") from None
-    if _depth(text, max_depth) > max_depth:
-        raise ValueError(f"{where}: arrays and objects nested deeper than {max_depth}")
-    try:
-        return json.loads(
-            text, parse_constant=_no_constant, parse_float=_finite, object_pairs_hook=_pairs
-        )
-    except RecursionError:
-        raise ValueError(f"{where}: nested too deeply to read") from None
-    except ValueError as exc:  # JSONDecodeError, our hooks, int digit limits
-        raise ValueError(f"{where} is not valid JSON: {printable(str(exc))[:300]}") from None
+    return load_json(data, what=f"{what}: {quote(str(path))}", max_depth=max_depth, finite=True)
 
 
 def list_files(case_dir: str | Path, *, what: str = "case") -> dict[str, Path]:
