@@ -45,6 +45,10 @@ def _param(text: str) -> tuple[str, object]:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw  # a bare word is a string
+    except RecursionError:  # tomllib parses nested arrays recursively
+        raise argparse.ArgumentTypeError(
+            f"--param: the value of {key.strip()!r} nests arrays or tables too deeply to parse"
+        ) from None
     return key.strip(), value
 
 

@@ -219,3 +219,11 @@ def test_default_render_lid_rim_is_a_line_not_dots(default_render):
     assert np.unique(xs).size > 150  # the front rim spans ~220 columns at 768x432
     ink = np.array([(1.0 - lum[y - 2 : y + 4, x]).sum() for y, x in zip(ys, xs, strict=True)])
     assert (ink >= 0.5).mean() >= 0.98  # measured 1.0 (no contours: 0.06)
+
+
+def test_a_param_nested_too_deeply_is_a_usage_error(capsys):
+    deep = "[" * 100_000 + "]" * 100_000
+    with pytest.raises(SystemExit) as info:
+        main(["render", "--param", f"n={deep}", "-o", "x.png"])
+    assert info.value.code == 2
+    assert "--param: the value of 'n' nests arrays or tables too deeply" in capsys.readouterr().err
