@@ -391,16 +391,8 @@ class CaseRenderer:
         derived = [c for c in self.channels if is_derivative(c) or c in ("lod", "dyadic_scale")]
         if not derived:
             raise NotApplicable("the style reads no screen-space derivatives")
-        gb = self._base()
+        gb, ys, xs, t, faces, bary = self._covered()
         tri = gb["tri_id"]
-        ys, xs = np.nonzero(tri >= 0)
-        t = tri[ys, xs].astype(np.int64)
-        positions, faces = world_geometry(self._meshes)
-        grid = (self.n * self.width, self.n * self.height)
-
-        def bary(x, y):
-            return perspective_bary(gb.view_projection, positions, faces, t, x, y, grid)
-
         x0, y0 = xs & ~1, ys & ~1
         row, col = (y0, x0) if coarse else (ys, xs)  # the quad row / column differenced
         bx0, bx1, by0, by1 = bary(x0, row), bary(x0 + 1, row), bary(col, y0), bary(col, y0 + 1)
@@ -445,16 +437,27 @@ class CaseRenderer:
                 new["dyadic_scale"] = dy_
         return self._render(self._keep(gb, new))
 
-    def _bug_no_renormalize(self) -> Any:
-        if "normal" not in self.channels:
-            raise NotApplicable("the style reads no normals")
+    def _covered(self) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, np.ndarray, Any]:
+        """The correct G-buffer, its covered samples (ys, xs) and their triangles t, the world
+        faces, and ``bary(x, y)``: the perspective-correct barycentrics of triangle t at the
+        sample positions (x, y)."""
         gb = self._base()
         tri = gb["tri_id"]
         ys, xs = np.nonzero(tri >= 0)
         t = tri[ys, xs].astype(np.int64)
         positions, faces = world_geometry(self._meshes)
         grid = (self.n * self.width, self.n * self.height)
-        b = perspective_bary(gb.view_projection, positions, faces, t, xs, ys, grid)
+
+        def bary(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+            return perspective_bary(gb.view_projection, positions, faces, t, x, y, grid)
+
+        return gb, ys, xs, t, faces, bary
+
+    def _bug_no_renormalize(self) -> Any:
+        if "normal" not in self.channels:
+            raise NotApplicable("the style reads no normals")
+        gb, ys, xs, t, faces, bary = self._covered()
+        b = bary(xs, ys)
         tab = vertex_table(self._meshes, "normal")[faces[t]]
         normal = np.array(gb["normal"])
         normal[ys, xs] = np.einsum("si,sic->sc", b, tab)
