@@ -495,7 +495,7 @@ def _scene_case(args: argparse.Namespace):
     spec = style or scene.style or DEFAULT_STYLE
     label = spec if isinstance(spec, str) else spec.get("name", "style")
     stem = Path(args.scene).stem if Path(args.scene).suffix else args.scene
-    name = args.name or re.sub(r"[^a-z0-9_-]+", "-", f"{stem}-{label}".lower()).strip("-_")
+    name = args.name or re.sub(r"[^a-z0-9_-]+", "-", f"{stem}-{label}".lower()).strip("-_")[:128]
     width, height = args.size or (256, 192)
     spp = 1 if args.spp is None else args.spp
     return scene_case(name, args.scene, style=style, width=width, height=height, spp=spp)

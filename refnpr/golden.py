@@ -47,7 +47,9 @@ Suite format::
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 import tempfile
 from collections.abc import Callable, Iterable, Sequence
 from contextlib import contextmanager
@@ -102,7 +104,9 @@ _DEFAULTS: dict[str, Any] = {
     "texture_size": None,
     "description": "",
 }
-_NAME = re.compile(r"^[a-z0-9][a-z0-9_\-]*$")
+#: A case name (full match): it names files and kit directories (the kit's own pattern allows
+#: dots too; both cap the length at 128).
+_NAME = re.compile(r"[a-z0-9][a-z0-9_\-]{0,127}")
 
 #: The golden suite shipped in the package: ``suite.toml``, the ``*.toml`` files it includes, the
 #: golden images (``*.png``) and G-buffers (``*.npz``).
@@ -130,11 +134,34 @@ def is_packaged_suite(suite_path: str | Path) -> bool:
 def default_failure_dir(suite_path: str | Path) -> Path:
     """Where :func:`check_suite` writes a failing case's images by default: ``_failures/`` beside
     the suite file, or, for the suite of an installed (not editable) refnpr, a
-    ``refnpr-golden-failures`` directory in the system temporary directory (site-packages is
-    no place for them, and may not be writable)."""
-    if is_packaged_suite(suite_path) and source_checkout() is None:
-        return Path(tempfile.gettempdir()) / "refnpr-golden-failures"
-    return Path(suite_path).parent / "_failures"
+    ``refnpr-golden-failures-<uid>`` directory of the user in the system temporary directory
+    (site-packages is no place for them, and may not be writable).
+
+    Raises
+    ------
+    ValueError
+        That temporary directory exists but is a symbolic link, not a directory, or another
+        user's (the shared temporary directory: someone else could redirect the images).
+    """
+    if not (is_packaged_suite(suite_path) and source_checkout() is None):
+        return Path(suite_path).parent / "_failures"
+    uid = os.getuid() if hasattr(os, "getuid") else None
+    out = Path(tempfile.gettempdir()) / f"refnpr-golden-failures-{uid if uid is not None else 0}"
+    try:
+        st = os.lstat(out)
+    except FileNotFoundError:
+        out.mkdir(mode=0o700)
+        return out
+    if (
+        stat.S_ISLNK(st.st_mode)
+        or not stat.S_ISDIR(st.st_mode)
+        or (uid is not None and st.st_uid != uid)
+    ):
+        raise ValueError(
+            f"{str(out)!r} is not a directory of yours (a symbolic link, a file or another "
+            "user's); remove it, or give check_suite a failure_dir"
+        )
+    return out
 
 
 def check_writable_suite(suite_path: str | Path) -> None:
@@ -213,9 +240,9 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
         raw = dict(raw)
         name = raw.pop("name", None)
         scene = raw.pop("scene", None)
-        if not isinstance(name, str) or not _NAME.match(name):
+        if not isinstance(name, str) or not _NAME.fullmatch(name):
             raise ValueError(
-                f"{path}: case #{i + 1}: 'name' must match [a-z0-9][a-z0-9_-]*, got {name!r}"
+                f"{path}: case #{i + 1}: 'name' must match [a-z0-9][a-z0-9_-]* (at most 128 characters), got {name!r}"
             )
         if name in seen:
             raise ValueError(f"{path}: case {name!r} is listed twice")
@@ -267,8 +294,10 @@ def scene_case(
     ValueError
         A bad name, size or spp, naming it; the scene and style are checked when exported.
     """
-    if not isinstance(name, str) or not _NAME.match(name):
-        raise ValueError(f"name: expected a case name matching [a-z0-9][a-z0-9_-]*, got {name!r}")
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise ValueError(
+            f"name: expected a case name matching [a-z0-9][a-z0-9_-]* (at most 128 characters), got {name!r}"
+        )
     params = {**_DEFAULTS, "style": style, "width": width, "height": height, "spp": spp}
     _check_case(Path(str(scene)), name, params)
     scene = str(scene)

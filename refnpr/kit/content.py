@@ -126,7 +126,9 @@ def read_bytes(path: str | Path, *, what: str, limit: int = MAX_FILE_BYTES) -> b
     """
     fd, size = _open(Path(path), what, limit)
     with os.fdopen(fd, "rb") as f:
-        data = f.read(limit + 1)
+        data = f.read(min(size, limit) + 1)  # what the file holds, not the limit, is allocated
+        if len(data) > size:  # grown since it was measured: read on, to the limit
+            data += f.read(limit + 1 - len(data))
     if len(data) > limit:
         raise ValueError(f"{what}: {quote(str(path))} grew over the limit of {limit} bytes")
     return data

@@ -299,7 +299,9 @@ def _decode_png(data: bytes, what: str) -> np.ndarray:
     import imageio.v3 as iio
 
     try:
-        a = np.asarray(iio.imread(data, extension=".png"))
+        # index 0: the first frame only, whose size the header check bounded (an animated PNG
+        # would otherwise decode every frame before any shape check)
+        a = np.asarray(iio.imread(data, extension=".png", index=0))
     except Exception as exc:  # noqa: BLE001 -- the decoder raises many types on corrupt data
         first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         raise ValueError(f"{what}: cannot read: {_q(first, 120)}; expected a PNG file") from None

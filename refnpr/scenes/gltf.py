@@ -56,6 +56,8 @@ __all__ = [
     "GltfError",
     "GltfWarning",
     "MAX_ANIMATION_KEYS",
+    "MAX_ANIMATION_WORK",
+    "MAX_ZERO_ACCESSOR_BYTES",
     "MAX_FILE_BYTES",
     "load_gltf",
 ]
@@ -68,6 +70,10 @@ MAX_FILE_BYTES = 1 << 31
 MAX_JSON_BYTES = 64 << 20
 #: The most keys (frames x animated values) an animation may produce.
 MAX_ANIMATION_KEYS = 2_000_000
+#: The most bytes an accessor without a bufferView (all zeros by the spec) may expand to.
+MAX_ZERO_ACCESSOR_BYTES = 64 << 20
+#: The most frames x (nodes + animation channels) an animation may evaluate (its work).
+MAX_ANIMATION_WORK = 20_000_000
 #: The material's ambient colour m_a is this fraction of the base colour (so that a base colour
 #: of 0.8 grey gives refnpr's default material, ambient 0.15 and diffuse 0.8).
 AMBIENT_FRACTION = 0.15 / 0.8
@@ -344,6 +350,8 @@ class _Reader:
                 "images beside the .gltf file (or embedded as data: URIs)",
             )
         rel = urllib.parse.unquote(parsed.path)
+        if "\x00" in rel:
+            raise self.fail(where, f"{uri!r} holds a NUL character; give a plain file name")
         if not rel or Path(rel).is_absolute() or rel.startswith(("/", "\\")):
             raise self.fail(
                 where, f"{uri!r} is an absolute path; give a path relative to the .gltf file"
@@ -423,9 +431,14 @@ class _Reader:
         dtype = _COMPONENTS[ctype][0]
         width = _WIDTHS[kind]
         elem = dtype.itemsize * width
-        if "bufferView" not in acc:  # all zeros (spec), bounded by the checks below
-            if n > MAX_FILE_BYTES // max(elem, 1):
-                raise self.fail(f"{aw}.count", f"{n} elements without a bufferView is too many")
+        if "bufferView" not in acc:  # all zeros (spec): no file data bounds it, so a cap does
+            if n * width * 8 > MAX_ZERO_ACCESSOR_BYTES:  # int64 / float64 as read below
+                raise self.fail(
+                    f"{aw}.count",
+                    f"{n} elements without a bufferView (all zeros) would take "
+                    f"{n * width * 8} bytes, more than the {MAX_ZERO_ACCESSOR_BYTES} refnpr "
+                    "allows; store the data in a bufferView",
+                )
             return np.zeros((n, width), dtype=np.int64 if ctype != _FLOAT else np.float64)
         vi = acc["bufferView"]
         view = self.item("bufferViews", vi, f"{aw}.bufferView")
@@ -1294,6 +1307,13 @@ def _animation(
     values = (
         3 * len(objs) + (3 if cam_moves else 0) + len(lts) + (1 if headlight and cam_moves else 0)
     )
+    work = frames * (len(order) + len(channels))
+    if work > MAX_ANIMATION_WORK:
+        raise r.fail(
+            f"animations[{ai}]",
+            f"{frames} frames x {len(order)} nodes and {len(channels)} animated nodes is more "
+            f"than the {MAX_ANIMATION_WORK} node evaluations refnpr allows; use a lower fps",
+        )
     if frames * values > MAX_ANIMATION_KEYS:
         raise r.fail(
             f"animations[{ai}]",

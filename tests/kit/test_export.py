@@ -491,7 +491,10 @@ def test_git_commit_is_read_from_dot_git_without_git(tmp_path):
     assert git_commit(tmp_path / "nowhere") is None
 
 
-def test_the_installed_suite_is_read_only_and_fails_into_the_temporary_directory(monkeypatch):
+def test_the_installed_suite_is_read_only_and_fails_into_the_temporary_directory(
+    monkeypatch, tmp_path
+):
+    import os
     import tempfile
 
     import refnpr.golden as golden
@@ -504,8 +507,16 @@ def test_the_installed_suite_is_read_only_and_fails_into_the_temporary_directory
     golden.check_writable_suite(golden.DEFAULT_SUITE)
     # installed from a wheel: the package's golden files are not to be rewritten
     monkeypatch.setattr(golden, "source_checkout", lambda: None)
+    monkeypatch.setattr(tempfile, "gettempdir", lambda: str(tmp_path))
     fail = golden.default_failure_dir(golden.DEFAULT_SUITE)
-    assert fail == Path(tempfile.gettempdir()) / "refnpr-golden-failures"
+    assert fail == tmp_path / f"refnpr-golden-failures-{os.getuid()}"
+    assert fail.is_dir() and (fail.stat().st_mode & 0o777) == 0o700  # made private
+    assert golden.default_failure_dir(golden.DEFAULT_SUITE) == fail  # and reused
+    # in the shared temporary directory, a link someone else put there is not followed
+    fail.rmdir()
+    fail.symlink_to(tmp_path / "elsewhere-dir")
+    with pytest.raises(ValueError, match="is not a directory of yours"):
+        golden.default_failure_dir(golden.DEFAULT_SUITE)
     with pytest.raises(ValueError, match="installed with refnpr.*--suite COPY/suite.toml"):
         golden.update_suite(golden.DEFAULT_SUITE, only=["sphere-toon3"])
     other = Path(tempfile.gettempdir()) / "elsewhere" / "suite.toml"

@@ -807,3 +807,21 @@ def test_memory_is_released_as_the_report_streams(setup, monkeypatch):
     monkeypatch.setattr(report, "write_report", fake_write_report)
     check_kit(setup.kit, setup.renders, report_dir=setup.tmp / "report")
     assert alive_at_each_step == [0, 0, 0]
+
+
+def test_an_animated_png_render_decodes_its_first_frame_only(setup):
+    """An APNG passes the header check (its IHDR is the case's size) and would decode to a
+    stack of every frame; only the first frame is read, so 400 frames cost one."""
+    first = iio.imread(setup.renders / "disc.png")
+    frames = np.repeat(first[None], 400, axis=0)
+    frames[1:, 0, 0, 0] ^= 1  # distinct frames, so the encoder keeps them all
+    iio.imwrite(setup.renders / "disc.png", frames, extension=".png")
+    assert iio.imread(setup.renders / "disc.png", extension=".png").shape[0] == 400
+    tracemalloc.start()
+    try:
+        results = {r.name: r for r in check_kit(setup.kit, setup.renders)}
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert results["disc"].passed, results["disc"].message
+    assert peak < 400 * first.nbytes  # the 400 frames alone, undecoded to float

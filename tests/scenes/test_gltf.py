@@ -467,6 +467,19 @@ MALFORMED = [
         r"accessors\[0\]\.count: 1000 elements",
     ),
     ("huge count", _set(["accessors", 0, "count"], 2**62), r"accessors\[0\]\.count"),
+    (  # all zeros by the spec: nothing in the file bounds it but the cap
+        "zero accessor of 300 million elements",
+        lambda doc: (
+            doc["accessors"].append({"componentType": 5121, "type": "SCALAR", "count": 300_000_000})
+            or doc["meshes"][0]["primitives"][0].__setitem__("indices", len(doc["accessors"]) - 1)
+        ),
+        r"accessors\[\d+\]\.count: 300000000 elements without a bufferView .* would take",
+    ),
+    (
+        "NUL in a buffer URI",
+        _set(["buffers", 0, "uri"], "a%00b.bin"),
+        r"buffers\[0\]\.uri: 'a%00b\.bin' holds a NUL character",
+    ),
     (
         "view beyond buffer",
         _set(["bufferViews", 0, "byteLength"], 10**6),
@@ -602,3 +615,17 @@ def test_truncated_glb_and_huge_byte_length(tmp_path):
         ValueError, match=r"h\.gltf: buffers\[0\]\.uri: buffer file 'model\.bin' has \d+ bytes"
     ):
         load_gltf(path)
+
+
+def test_animation_work_is_bounded_by_frames_times_nodes(tmp_path, monkeypatch):
+    """Each frame evaluates every node's world matrix: frames x (nodes + animated nodes) is
+    capped before any frame is evaluated (a small file could otherwise ask for hours)."""
+    import refnpr.scenes.gltf as gltf
+
+    path = animated("LINEAR", [0.0, 10.0], [[0, 0, 0], [1, 0, 0]]).write(tmp_path / "a.glb")
+    assert quiet(load_gltf, path, fps=4).frames == 41  # 41 frames x (1 node + 1 animated)
+    monkeypatch.setattr(gltf, "MAX_ANIMATION_WORK", 81)
+    with pytest.raises(
+        GltfError, match=r"animations\[0\]: 41 frames x 1 nodes .* node evaluations"
+    ):
+        quiet(load_gltf, path, fps=4)
