@@ -79,7 +79,8 @@ def validate_tolerance(tol: Any, kind: str) -> dict[str, Any]:
     -------
     dict
         Image: ``threshold``, ``max_frac_over``, ``min_ssim`` (floats), ``position_deviation``
-        (int, default 0) and ``compare_on`` when given. G-buffer: ``rtol``, ``atol``,
+        (int, default 0), and when given ``max_flip`` (the largest mean FLIP that passes, in
+        [0, 1]: only then does FLIP decide) and ``compare_on``. G-buffer: ``rtol``, ``atol``,
         ``max_frac_over`` (default 0) and ``discrete`` ({channel: {"max_pixels": int}},
         default {}; a bare integer stands for ``{"max_pixels": K}``).
 
@@ -93,7 +94,7 @@ def validate_tolerance(tol: Any, kind: str) -> dict[str, Any]:
     if not isinstance(tol, dict):
         raise ValueError(f"tolerance: expected an object, got {_short(repr(tol))}")
     spec = IMAGE_TOLERANCE if kind == "image" else GBUFFER_TOLERANCE
-    extra = {"compare_on"} if kind == "image" else {"discrete"}
+    extra = {"compare_on", "max_flip"} if kind == "image" else {"discrete"}
     unknown = sorted(set(tol) - set(spec) - extra)
     if unknown:
         raise ValueError(
@@ -102,6 +103,8 @@ def validate_tolerance(tol: Any, kind: str) -> dict[str, Any]:
         )
     out: dict[str, Any] = {key: _value(tol, key, s) for key, s in spec.items()}
     if kind == "image":
+        if "max_flip" in tol:  # optional: FLIP decides too only where a case says so
+            out["max_flip"] = _value(tol, "max_flip", (float, 0.0, 1.0, None))
         if "compare_on" in tol:
             if tol["compare_on"] != COMPARE_ON:
                 raise ValueError(

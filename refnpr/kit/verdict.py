@@ -426,6 +426,19 @@ def check_image(
         f"frac_over_position={metrics['frac_over_position']:.5f} (allowed {max_frac:g}, "
         f"N={dev}) ssim={metrics['ssim']:.4f} (min {min_ssim:g})"
     )
+    if "max_flip" in tol:  # FLIP decides too only where the case says so
+        from .diagnose import flip_error
+
+        flip = flip_error(data.reference, data.result)
+        if flip.mean is None:
+            raise CaseError(
+                "flip",
+                f"tolerance.max_flip: the case is judged by FLIP too, which is {flip.note}; "
+                "install it with `pip install 'refnpr[flip]'`",
+            )
+        metrics["flip"] = flip.mean
+        ok = ok and flip.mean <= tol["max_flip"]
+        msg += f" flip={flip.mean:.4f} (max {tol['max_flip']:g})"
     exr_path = _render_path(renders_root, f"{name}.exr")
     if exr_path is not None:
         try:

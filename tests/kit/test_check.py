@@ -619,3 +619,54 @@ def test_cli_kit_check_exit_status_report_and_json(tiny_kit, tmp_path, capsys):
     assert "no render" in out and "not compared: gradient-typo.png" in out
     assert main(["kit", "check", str(tmp_path / "nope"), str(renders)]) == 2
     assert "kit_dir: " in capsys.readouterr().err
+
+
+def _set_tolerance(kit: Path, name: str, **changes) -> None:
+    path = kit / name / "case.json"
+    case = json.loads(path.read_text())
+    case["tolerance"].update(changes)
+    path.write_text(json.dumps(case))
+
+
+def test_flip_decides_only_where_a_case_says_so(tiny_kit, tmp_path):
+    """FLIP is reported by the report; with ``tolerance.max_flip`` it also decides the case."""
+    pytest.importorskip("flip_evaluator")  # the `flip` extra (in the test extra)
+    renders = _perfect_renders(tiny_kit, tmp_path / "r")
+    # a render every other criterion lets pass: thresholds opened, a visible blotch of error
+    png = iio.imread(renders / "gradient.png").astype(np.int16)
+    png[4:20, 4:28, :3] += 40
+    iio.imwrite(renders / "gradient.png", np.clip(png, 0, 255).astype(np.uint8))
+    _set_tolerance(tiny_kit, "gradient", max_frac_over=1.0, min_ssim=-1.0)
+    by_name = {r.name: r for r in check_kit(tiny_kit, renders)}
+    assert by_name["gradient"].passed and "flip" not in by_name["gradient"].metrics
+    _set_tolerance(tiny_kit, "gradient", max_flip=0.01)
+    r = {r.name: r for r in check_kit(tiny_kit, renders)}["gradient"]
+    assert not r.passed and r.metrics["flip"] > 0.01 and "flip=" in r.message
+    _set_tolerance(tiny_kit, "gradient", max_flip=1.0)
+    assert {r.name: r for r in check_kit(tiny_kit, renders)}["gradient"].passed
+    _set_tolerance(tiny_kit, "disc", max_flip=0.0)  # identical images: FLIP 0 passes 0
+    assert {r.name: r for r in check_kit(tiny_kit, renders)}["disc"].passed
+
+
+@pytest.mark.parametrize("value", [-0.1, 1.5, float("nan"), True, "0.1"])
+def test_max_flip_out_of_range_fails_the_case(tiny_kit, tmp_path, value):
+    renders = _perfect_renders(tiny_kit, tmp_path / "r")
+    path = tiny_kit / "disc" / "case.json"
+    text = path.read_text().replace(
+        '"compare_on"', f'"max_flip": {json.dumps(value)}, "compare_on"'
+    )
+    path.write_text(text.replace("NaN", "NaN"))
+    r = {r.name: r for r in check_kit(tiny_kit, renders)}["disc"]
+    assert not r.passed and r.status == "kit"
+    assert "tolerance.max_flip: expected a finite number in [0, 1]" in r.message
+
+
+def test_max_flip_without_the_package_is_a_clear_case_failure(tiny_kit, tmp_path, monkeypatch):
+    import sys
+
+    renders = _perfect_renders(tiny_kit, tmp_path / "r")
+    _set_tolerance(tiny_kit, "disc", max_flip=0.05)
+    monkeypatch.setitem(sys.modules, "flip_evaluator", None)  # import fails
+    r = {r.name: r for r in check_kit(tiny_kit, renders)}["disc"]
+    assert not r.passed and r.status == "flip"
+    assert "pip install 'refnpr[flip]'" in r.message

@@ -496,7 +496,7 @@ KIT_CASE_ROWS: list[tuple[str, Callable[[Setup], None], Case]] = [
     ("min-ssim-string", _set_tol("min_ssim", "0.9"), Case("kit", "tolerance.min_ssim: expected a finite number in [-1, 1], got '0.9'")),
     ("threshold-missing", lambda s: s.edit_case(lambda c: c["tolerance"].pop("threshold")),
      Case("kit", "tolerance.threshold: expected a finite number in [0, 1], got nothing (the key is missing)")),
-    ("tolerance-unknown-key", _set_tol("max_flip", 0.1), Case("kit", "tolerance: unknown key(s) ['max_flip'] for a image case")),
+    ("tolerance-unknown-key", _set_tol("max_psnr", 30.0), Case("kit", "tolerance: unknown key(s) ['max_psnr'] for a image case")),
     ("compare-on-other", _set_tol("compare_on", "linear"), Case("kit", "tolerance.compare_on: this refnpr compares")),
     ("gbuffer-atol-huge", _set_tol("atol", 1e300, "gbuf"),
      Case("kit", "tolerance.atol: expected a finite number in [0, 1e+06], got 1e+300", name="gbuf")),
