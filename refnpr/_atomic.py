@@ -19,7 +19,24 @@ from typing import Any
 
 from ._memory import read_proc_number
 
-__all__ = ["atomic_file"]
+__all__ = ["atomic_file", "check_parent_writable"]
+
+
+def check_parent_writable(p: Path, shown: str, what: str) -> None:
+    """ValueError naming ``what`` and the path as given (``shown``) unless the nearest existing
+    directory above ``p`` is a writable directory (the missing ones below it are created by
+    :func:`atomic_file`)."""
+    parent = p.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if parent.exists() and not parent.is_dir():
+        raise ValueError(
+            f"{what}: cannot write {shown!r}: {str(parent)!r} is a file, not a directory"
+        )
+    if not os.access(parent, os.W_OK):
+        raise ValueError(
+            f"{what}: cannot write {shown!r} (directory {str(parent)!r} is not writable)"
+        )
 
 
 #: Signals whose default action ends the process: while an atomic write runs (main thread),

@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from ._atomic import atomic_file
+from ._atomic import atomic_file, check_parent_writable
 
 __all__ = [
     "EXR_PASSES",
@@ -89,15 +89,7 @@ def check_exr_path(path: str | os.PathLike, *, what: str = "path") -> Path:
             f"{what}: expected a .exr file name, got {shown!r} (such as "
             f"{str(p.with_suffix('.exr'))!r})"
         )
-    parent = p.parent
-    while not parent.exists() and parent != parent.parent:
-        parent = parent.parent
-    if parent.exists() and not parent.is_dir():
-        raise ValueError(f"{what}: cannot write {shown!r}: {str(parent)!r} is not a directory")
-    if not os.access(parent, os.W_OK):
-        raise ValueError(
-            f"{what}: cannot write {shown!r} (directory {str(parent)!r} is not writable)"
-        )
+    check_parent_writable(p, shown, what)
     try:
         import OpenEXR  # noqa: F401
     except ImportError:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._atomic import atomic_file
+from ._atomic import atomic_file, check_parent_writable
 
 __all__ = [
     "IMAGE_FORMATS",
@@ -106,17 +106,7 @@ def check_png_path(path: str | os.PathLike) -> Path:
             f"path: expected a .png file name, got {shown!r}; refnpr writes 8-bit PNG only "
             f"(such as {str(p.with_suffix('.png'))!r})"
         )
-    parent = p.parent
-    while not parent.exists() and parent != parent.parent:
-        parent = parent.parent
-    if parent.exists() and not parent.is_dir():
-        raise ValueError(
-            f"path: cannot write {shown!r}: {str(parent)!r} is a file, not a directory"
-        )
-    if not os.access(parent, os.W_OK):
-        raise ValueError(
-            f"path: cannot write {shown!r} (directory {str(parent)!r} is not writable)"
-        )
+    check_parent_writable(p, shown, "path")
     return p
 
 
