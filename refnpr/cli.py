@@ -299,6 +299,11 @@ def _cmd_styles(args: argparse.Namespace) -> int:
             return 0
         params = cls.PARAMS
     print(markdown_table(params) if args.markdown else text_table(params), end="")
+    kept = {} if args.name == "contours" else get_style_class(args.name).INTERMEDIATES
+    if kept and not args.markdown:
+        print("\nintermediates (EXR passes of `refnpr render --exr`):")
+        for name, what in kept.items():
+            print(f"  {name:10s} {what}")
     return 0
 
 

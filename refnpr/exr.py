@@ -29,6 +29,15 @@ others                     every other channel the frame computed: a scalar by  
                            components as ``name.X/Y/Z/W`` (``duv_dx.U/V``; more
                            than 4: ``name.0``, ``name.1``, ...); integer
                            channels as UINT like the ids
+style intermediates        the values the style's formulas computed on the way      FLOAT
+                           to the colour (``Style.INTERMEDIATES``): ``tone`` and
+                           ``detail`` (X-Toon), ``tone`` and ``threshold``
+                           (threshold), ``intensity`` and ``threshold``
+                           (halftone), ``darkness`` (tam, tamiss); 0 where empty
+``stroke_id.lo/.hi``       tamiss: the 64-bit stroke id of the first fragment       UINT
+                           gathered at the pixel, as its low and high 32 bits;
+                           both 4294967295 (-1) where none: ``(hi.astype(uint64)
+                           << 32 | lo).view(int64)``
 ========================== ======================================================== ==========
 
 Passes are per pixel, not per sample: see :func:`pixel_passes`.
@@ -254,13 +263,20 @@ def image_channels(
                 f"passes: {name!r} has shape {a.shape}; expected ({rgba.shape[0]}, "
                 f"{rgba.shape[1]}) or ({rgba.shape[0]}, {rgba.shape[1]}, C), the image's size"
             )
+        if a.ndim == 2 and a.dtype == np.int64:  # a 64-bit id: its two 32-bit halves
+            bits = a.view(np.uint64)
+            out[f"{name}.lo"] = np.ascontiguousarray((bits & 0xFFFFFFFF).astype(np.uint32))
+            out[f"{name}.hi"] = np.ascontiguousarray((bits >> np.uint64(32)).astype(np.uint32))
+            continue
         comps = 0 if a.ndim == 2 else a.shape[2]
         for i, n in enumerate(channel_names(name, comps)):
             out[n] = _as_exr_array(a if comps == 0 else a[..., i])
     return out
 
 
-def pixel_passes(gb: Any, names: Iterable[str] | None = None) -> dict[str, np.ndarray]:
+def pixel_passes(
+    gb: Any, names: Iterable[str] | None = None, samples: Mapping[str, np.ndarray] | None = None
+) -> dict[str, np.ndarray]:
     """Per-pixel copies of G-buffer channels: at each pixel, sample ``(k, k)`` of its n x n
     samples with ``k = (n - 1) // 2``.
 
@@ -276,6 +292,9 @@ def pixel_passes(gb: Any, names: Iterable[str] | None = None) -> dict[str, np.nd
         Channels ``(n H, n W)`` or ``(n H, n W, C)`` (``coverage``: ``(H, W)``).
     names : iterable of str, optional
         The channels to take (default: all of ``gb``).
+    samples : mapping of str to (n H, n W) array, optional
+        More per-sample arrays on the G-buffer's grid (a style's intermediates), picked the
+        same way; their names must not repeat a channel's.
 
     Returns
     -------
@@ -284,9 +303,14 @@ def pixel_passes(gb: Any, names: Iterable[str] | None = None) -> dict[str, np.nd
     """
     n = gb.n
     k = (n - 1) // 2
+    arrays = {name: gb[name] for name in (gb.channels if names is None else names)}
+    for name, a in (samples or {}).items():
+        if name in arrays:
+            raise ValueError(f"samples: {name!r} repeats a G-buffer channel's name")
+        arrays[name] = a
     out = {}
-    for name in sorted(gb.channels if names is None else names):
-        a = gb[name]
+    for name in sorted(arrays):
+        a = arrays[name]
         if a.shape[:2] == (gb.height, gb.width):  # per pixel (n == 1, or coverage)
             out[name] = np.array(a)
         else:

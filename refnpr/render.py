@@ -204,8 +204,10 @@ def render(
     passes : bool
         Also rasterize the G-buffer passes of :data:`refnpr.exr.EXR_PASSES` (depth, position,
         tri_id, mesh_id; normal and uv where every mesh has them) and attach every channel the
-        frame computed to the image, one sample per pixel (``Image.passes``, see
-        :func:`refnpr.exr.pixel_passes`), for ``image.save("x.exr")``. The pixels are the same.
+        frame computed to the image, with the style's intermediates (``style.INTERMEDIATES``:
+        tone, X-Toon's detail D, thresholds, stroke ids), one sample per pixel (``Image.passes``,
+        see :func:`refnpr.exr.pixel_passes`), for ``image.save("x.exr")``. The pixels are the
+        same.
 
     Returns
     -------
@@ -386,7 +388,8 @@ class RenderContext:
         shape = gb.sample_shape + (4,)
         if self._samples is None or self._samples.shape != shape:
             self._samples = np.empty(shape, dtype=np.float32)
-        ctx = ShadeContext(gb, scene.with_camera(cam), [self._samples])
+        kept: dict | None = {} if self.passes else None  # the style's intermediates
+        ctx = ShadeContext(gb, scene.with_camera(cam), [self._samples], kept)
         rgba = np.asarray((shade or style.shade)(ctx), dtype=np.float32)
         if rgba.shape != shape:
             raise ValueError(f"style {style.name!r} returned shape {rgba.shape}; expected {shape}")
@@ -407,7 +410,7 @@ class RenderContext:
         if self.passes:
             from .exr import pixel_passes
 
-            pixel = pixel_passes(gb)
+            pixel = pixel_passes(gb, samples=kept)
         image = Image._of_finite(out.copy() if copy else out, timings, pixel)  # checked them
         timings["total"] = time.perf_counter() - t0  # with the copy: what the caller waits for
         return image, gb

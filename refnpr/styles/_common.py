@@ -8,7 +8,7 @@ import numpy as np
 
 from ._declare import short_repr
 
-__all__ = ["rgba_out", "rgba_from", "needs_position", "check_uv_scale"]
+__all__ = ["rgba_out", "rgba_from", "kept_out", "keep_all", "needs_position", "check_uv_scale"]
 
 
 def rgba_out(ctx: Any, shape: tuple[int, int]) -> np.ndarray:
@@ -19,6 +19,22 @@ def rgba_out(ctx: Any, shape: tuple[int, int]) -> np.ndarray:
     if lend is None:
         return np.empty(tuple(shape) + (4,), dtype=np.float32)
     return lend(shape)
+
+
+def kept_out(ctx: Any, shape: tuple[int, int], count: int) -> np.ndarray:
+    """The buffer a kernel writes ``count`` intermediates per sample into: ``shape + (count,)``
+    float64 when ``ctx`` asks for intermediates (``ShadeContext.wants_intermediates``), else a
+    ``(0, 0, count)`` stand-in that tells the kernel to skip them."""
+    wants = getattr(ctx, "wants_intermediates", False)
+    return np.empty(tuple(shape) + (count,) if wants else (0, 0, count))
+
+
+def keep_all(ctx: Any, kept: np.ndarray, names: tuple[str, ...]) -> None:
+    """Hand the kernel's ``kept`` (:func:`kept_out`) to ``ctx.keep`` as one intermediate per
+    name (component i: ``names[i]``); nothing for a stand-in."""
+    if kept.shape[0]:
+        for i, name in enumerate(names):
+            ctx.keep(name, kept[..., i])
 
 
 def rgba_from(rgb: np.ndarray, mask: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:

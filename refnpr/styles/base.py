@@ -45,6 +45,9 @@ class Style:
     deprecated: ClassVar[tuple[str, ...]] = ()
     #: The style's parameter declaration (:class:`refnpr.styles._declare.Params`), if it has one.
     PARAMS: ClassVar[Any] = None
+    #: The intermediates the style stores when asked (``ShadeContext.keep``): channel name ->
+    #: what it holds, one line (the EXR passes of ``render(..., passes=True)``).
+    INTERMEDIATES: ClassVar[Mapping[str, str]] = {}
 
     @classmethod
     def parameters(cls) -> tuple[str, ...]:
@@ -122,11 +125,54 @@ class ShadeContext:
     spare : list of ndarray
         Buffers :meth:`rgba_out` hands out (a render context's, kept from its last frame);
         empty by default.
+    intermediates : dict or None
+        Where a style puts the per-sample values of its formulas that a compositor may want
+        (:meth:`keep`): a dict to fill when the caller asks for them (``render(...,
+        passes=True)``), None (the default) when nobody reads them, and then a style computes
+        none of them.
     """
 
     gb: Any
     scene: Any
     spare: list = field(default_factory=list, repr=False)
+    intermediates: dict | None = field(default=None, repr=False)
+
+    @property
+    def wants_intermediates(self) -> bool:
+        """Whether the caller reads the style's intermediates (:meth:`keep` stores them)."""
+        return self.intermediates is not None
+
+    def keep(self, name: str, samples: np.ndarray) -> None:
+        """Store the intermediate ``name`` of this frame's shading, if the caller asked for
+        intermediates (else nothing).
+
+        Parameters
+        ----------
+        name : str
+            Its channel name (``Style.INTERMEDIATES`` documents the style's).
+        samples : (nH, nW) float, or int32 / int64 for ids
+            One value per sample of the G-buffer's grid; 0 (ids: -1) where nothing is covered.
+            Floats are kept as float32, integers as they are.
+        """
+        if self.intermediates is None:
+            return
+        a = np.asarray(samples)
+        if a.shape != tuple(self.gb.sample_shape):
+            raise ValueError(
+                f"intermediate {name!r}: expected the sample grid {tuple(self.gb.sample_shape)}, "
+                f"got shape {a.shape}"
+            )
+        if a.dtype not in (np.int32, np.int64):
+            a = a.astype(np.float32)
+        self.intermediates[name] = a
+
+    def scatter(self, values: np.ndarray, mask: np.ndarray, fill: float = 0.0) -> np.ndarray:
+        """(nH, nW) array of ``values`` (K,) at the samples where ``mask`` (nH, nW) is true (in
+        row-major order), ``fill`` elsewhere; the dtype of ``values``."""
+        values = np.asarray(values)
+        out = np.full(mask.shape, fill, dtype=values.dtype)
+        out[mask] = values
+        return out
 
     def rgba_out(self, shape: tuple[int, int]) -> np.ndarray:
         """A C-contiguous ``shape + (4,)`` float32 array for a style's samples (``shape``: the

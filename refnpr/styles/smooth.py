@@ -19,4 +19,5 @@ class SmoothStyle(LitStyle):
     name = "smooth"
     description = "continuous ambient + diffuse + specular shading (Veryovka eq. 1)"
     PARAMS = SMOOTH
+    INTERMEDIATES = {"tone": "f_d of the first light (eq. 1)"}
     smooth = True

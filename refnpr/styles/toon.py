@@ -25,6 +25,10 @@ class ToonStyle(LitStyle):
     name = "toon"
     description = "n-tone toon shading (Veryovka eqs. 2-4 step, or Lake et al. 2000 ramp)"
     PARAMS = TOON
+    INTERMEDIATES = {
+        "tone": "f_d of the first light (eq. 1)",
+        "toon_tone": "the first light's toon tone: T_n(f_d, t) (eq. 4) or Lake's ramp at f_d",
+    }
 
     @staticmethod
     def _settled(p: Any) -> Any:

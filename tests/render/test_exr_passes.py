@@ -64,7 +64,10 @@ def test_render_exr_holds_rgba_and_every_gbuffer_layer(tmp_path, capsys):
         np.testing.assert_array_equal(got[c], rgba[..., i] * rgba[..., 3])  # premultiplied
     np.testing.assert_array_equal(got["A"], rgba[..., 3])
     want = expected_layers(gb, k)
-    assert set(got) == set(want) | set("RGBA")
+    kept = {"tone", "toon_tone"}  # the toon style's intermediates (test_exr_intermediates.py)
+    assert set(got) == set(want) | set("RGBA") | kept
+    for name in kept:
+        np.testing.assert_array_equal(got[name], image.passes[name], err_msg=name)
     for name, (kind, values) in want.items():
         if kind == "uint":
             assert got[name].dtype == np.uint32, name

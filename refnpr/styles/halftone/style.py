@@ -31,6 +31,10 @@ class HalftoneStyle(Style):
     name = "halftone"
     description = "halftoning against engraving/dither/stroke-map screens (Freudenberg et al. 2002)"
     PARAMS = PARAMS
+    INTERMEDIATES = {
+        "intensity": "the target intensity I after the indication map (show='intensity')",
+        "threshold": "the filtered screen value the intensity is compared with (show='screen')",
+    }
 
     def __init__(self, **params: Any) -> None:
         p = PARAMS.validate(params)

@@ -213,15 +213,26 @@ LAKE = TOON.code("mode", "lake")
 PHONG = SMOOTH.code("model", "phong")
 
 
+@njit
+def _keep_first(kept, y, x, a, b):
+    """``kept[y, x] = (a, b)`` where ``kept`` holds a frame's intermediates (a (0, 0, 2)
+    stand-in: nobody reads them)."""
+    if kept.shape[0] > 0:
+        kept[y, x, 0] = a
+        kept[y, x, 1] = b
+
+
 @banded("out")
-def shade_toon(lo, hi, frame, style, tables, out):
+def shade_toon(lo, hi, frame, style, tables, out, kept):
     """Toon shading of rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` (written in full; zero where
     empty): eq. 2 with both terms through T_n(., t, n) of eq. 4 (``style.mode`` STEP), or
     ``m_a l_a + sum m_d ramp(N.L) l_i`` (LAKE, Lake et al. 2000, nearest texel), from the frame
     record (cover, mesh_id, normal, position where read, eye, lights, materials), the toon
     style record (n, t, mode, specular) and :class:`Tables`. The specular T_n takes
     ``tables.tones[j]`` where the base lies in [edge_hi[j - 1], edge_lo[j]] (its tone is certain
-    there, see ``shading._step_edges``), elsewhere pow as the formula does.
+    there, see ``shading._step_edges``), elsewhere pow as the formula does. ``kept (nH, nW,
+    2)`` float64: the first light's f_d and its toon tone (T_n or the ramp), 0 where empty; or
+    a (0, 0, 2) stand-in.
     """
     mesh_id = frame.mesh_id
     m = frame.materials
@@ -252,16 +263,20 @@ def shade_toon(lo, hi, frame, style, tables, out):
         for x in range(nw):
             if cover[y, x] < 0:
                 _clear(out, y, x)
+                _keep_first(kept, y, x, 0.0, 0.0)
                 continue
             mi = max(mesh_id[y, x], 0)
             rgb = (ambient[mi, 0], ambient[mi, 1], ambient[mi, 2])  # eq. 1: m_a l_a
             p = shininess[mi]
+            _keep_first(kept, y, x, 0.0, 0.0)
             for i in range(n_lights):
                 f_d = row.f_d[i, x]
                 if lake:  # Lake et al.: nearest texel of clip(N.L, 0, 1)
                     tone = ramp[_toon_ramp(f_d, k_ramp)]
                 else:
                     tone = row.tone[i, x]  # eq. 4 in eq. 2, from _row_step_tones
+                if i == 0:
+                    _keep_first(kept, y, x, f_d, tone)
                 rgb = _add(rgb, m_d, mi, tone, color, i)
                 if specular and p > 0.0 and _spec_term(spec_on[mi, i], rgb):
                     base = row.base[i, x]  # max(N.H, 0)
@@ -313,7 +328,7 @@ def _same_float32(v, e):
 
 
 @banded("out")
-def shade_smooth(lo, hi, frame, style, tables, out):
+def shade_smooth(lo, hi, frame, style, tables, out, kept):
     """Smooth shading (Veryovka eq. 1) of rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` from the
     frame record, the smooth style record (specular, model) and :class:`Tables`, with f_s =
     base ** shininess by multiplications where ``tables.pow_int`` holds the object's integer
@@ -327,6 +342,8 @@ def shade_smooth(lo, hi, frame, style, tables, out):
     bound leaves the clipped float32 value in doubt the sample is shaded again with pow, so the
     stored result is the pow one, bit for bit. ``out`` must be float32, and every material
     and light colour non-negative (the terms summed then bound the rounding), where any k > 0.
+    ``kept (nH, nW, 2)`` float64: the first light's f_d twice, 0 where empty; or a (0, 0, 2)
+    stand-in.
     """
     mesh_id = frame.mesh_id
     m = frame.materials
@@ -346,10 +363,13 @@ def shade_smooth(lo, hi, frame, style, tables, out):
         for x in range(nw):
             if cover[y, x] < 0:
                 _clear(out, y, x)
+                _keep_first(kept, y, x, 0.0, 0.0)
                 continue
             mi = max(mesh_id[y, x], 0)
             p = shininess[mi]
             k = pow_int[mi]
+            f_0 = row.f_d[0, x] if n_lights > 0 else 0.0
+            _keep_first(kept, y, x, f_0, f_0)
             while True:  # with f_s by multiplications (k > 0), then with pow if in doubt
                 rgb = (ambient[mi, 0], ambient[mi, 1], ambient[mi, 2])  # eq. 1: m_a l_a
                 err = 0.0  # bound of the pow replacement, summed over the terms

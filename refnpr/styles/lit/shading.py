@@ -10,7 +10,7 @@ import numpy as np
 from refnpr.formulas import lighting
 from refnpr.formulas.threshold import step_n
 
-from .._common import needs_position, rgba_out
+from .._common import keep_all, kept_out, needs_position, rgba_out
 from .._frame import frame_record
 from ..base import ShadeContext, Style
 from . import _kernels as K
@@ -135,7 +135,9 @@ def lit_rgba(
         tables = K.Tables(
             np.zeros(1), none, none, np.zeros(1), spec_on, powers, np.ascontiguousarray(spec_mag)
         )
-        K.shade_smooth(frame, record, tables, out)
+        kept = kept_out(ctx, shape, 2)
+        K.shade_smooth(frame, record, tables, out, kept)
+        keep_all(ctx, kept, ("tone",))
         return out
     ramp = lake_ramp(record.n, record.t) if record.mode == K.LAKE else np.zeros(1)
     edge_lo, edge_hi, tones = none, none, np.zeros(1)
@@ -144,7 +146,9 @@ def lit_rgba(
     tables = K.Tables(
         ramp, edge_lo, edge_hi, tones, spec_on, np.zeros(1, dtype=np.int64), np.zeros((1, 1))
     )
-    K.shade_toon(frame, record, tables, out)
+    kept = kept_out(ctx, shape, 2)
+    K.shade_toon(frame, record, tables, out, kept)
+    keep_all(ctx, kept, ("tone", "toon_tone"))
     return out
 
 

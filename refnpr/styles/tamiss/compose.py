@@ -10,7 +10,14 @@ from .._common import rgba_out
 from .._declare import short_repr
 from ..base import ShadeContext, Style, nested_style
 
-__all__ = ["check_color", "field_channels", "base_style", "composite_ink", "FieldStyle"]
+__all__ = [
+    "check_color",
+    "field_channels",
+    "base_style",
+    "composite_ink",
+    "keep_darkness",
+    "FieldStyle",
+]
 
 
 def check_color(
@@ -47,6 +54,21 @@ def field_channels(
     if derivatives == "smooth":
         req |= {"bary", "normal", "position", "dposition_dx", "dposition_dy"}
     return req
+
+
+def keep_darkness(ctx: ShadeContext, inputs: Any) -> None:
+    """Keep the stroke field's darkness rho of each sample (``inputs``: the ``FieldInputs`` the
+    strokes were made from) as the intermediate ``darkness`` when ``ctx`` asks for intermediates;
+    0 where nothing is covered. A finer gather grid (``gather_scale`` s) gives each sample the
+    value of gather sample ``(s - 1) // 2`` of its s x s (the centre for odd s)."""
+    if not ctx.wants_intermediates:
+        return
+    full = np.zeros(inputs.shape)
+    full.reshape(-1)[inputs.sample] = inputs.darkness
+    s = inputs.shape[0] // ctx.gb.sample_shape[0]
+    if s > 1:
+        full = full[(s - 1) // 2 :: s, (s - 1) // 2 :: s]
+    ctx.keep("darkness", full)
 
 
 def base_style(base: Any) -> Style | None:

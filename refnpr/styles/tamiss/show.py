@@ -23,7 +23,7 @@ from .pipeline import PipelineResult
 from .raster import rasterize_strips
 from .strokes import drawn_segments, extrude
 
-__all__ = ["LEVEL_COLORS", "id_colors", "level_colors", "show_layers"]
+__all__ = ["LEVEL_COLORS", "first_ids", "id_colors", "level_colors", "show_layers"]
 
 #: Salts of the three colour channels of an id.
 _SALT_RGB = (11, 12, 13)
@@ -59,22 +59,33 @@ def level_colors(ids: np.ndarray) -> np.ndarray:
     return LEVEL_COLORS[np.minimum(level, len(LEVEL_COLORS) - 1)]
 
 
-def _ids_view(result: PipelineResult) -> tuple[np.ndarray, np.ndarray]:
+def first_ids(result: PipelineResult) -> np.ndarray:
+    """(nH, nW) int64 on the output grid of ``result.ink``: the stroke id of the first fragment
+    gathered at each sample (fig. 6's stroke-ID TAM, ordered as gathered), -1 where none; a
+    finer gather grid (``gather_scale``) gives each output sample the first fragment gathered
+    inside it."""
     frags = result.fragments
     nh, nw = result.ink.shape
-    alpha = np.zeros(nh * nw)
-    rgb = np.zeros((nh * nw, 3))
+    ids = np.full(nh * nw, -1, dtype=np.int64)
     if len(frags) and frags.n_axis == result.n:
         first = np.r_[True, frags.sample[1:] != frags.sample[:-1]]  # ordered by sample
-        alpha[frags.sample[first]] = 1.0
-        rgb[frags.sample[first]] = id_colors(frags.id[first])
+        ids[frags.sample[first]] = frags.id[first]
     elif len(frags):  # gathered on a finer grid (gather_scale): the first id per output sample
         n = result.n
         sx = np.minimum((frags.x * n).astype(np.int64), nw - 1)
         sy = np.minimum((frags.y * n).astype(np.int64), nh - 1)
         out, first = np.unique(sy * nw + sx, return_index=True)
-        alpha[out] = 1.0
-        rgb[out] = id_colors(frags.id[first])
+        ids[out] = frags.id[first]
+    return ids.reshape(nh, nw)
+
+
+def _ids_view(result: PipelineResult) -> tuple[np.ndarray, np.ndarray]:
+    ids = first_ids(result).reshape(-1)
+    seen = ids >= 0
+    alpha = seen.astype(np.float64)
+    rgb = np.zeros((ids.size, 3))
+    rgb[seen] = id_colors(ids[seen])
+    nh, nw = result.ink.shape
     return alpha.reshape(nh, nw), rgb.reshape(nh, nw, 3)
 
 

@@ -14,11 +14,11 @@ from refnpr.raster import rasterize
 
 from ..base import ShadeContext, register
 from .aggregate import AggregateHistory, aggregate_exact
-from .compose import FieldStyle
+from .compose import FieldStyle, keep_darkness
 from .motion import MOTION_CHANNELS, stroke_anchors
 from .params import PARAMS
 from .pipeline import PipelineResult, TamissParams, run_pipeline
-from .show import show_layers
+from .show import first_ids, show_layers
 from .state import StrokeCoefficients, TamissState
 
 __all__ = ["TamissStyle"]
@@ -42,6 +42,10 @@ class TamissStyle(FieldStyle):
     renamed = PARAMS.renamed  # fill: the halftone style's name for the paper colour
     description = "TAMISS: stroke-ID TAM fragments fitted to image-space strokes (Szécsi et al.)"
     PARAMS = PARAMS
+    INTERMEDIATES = {
+        "darkness": "the stroke field's darkness rho of the sample, in [0, 1]",
+        "stroke_id": "the 64-bit id of the first fragment gathered at the sample (fig. 6), -1: none",
+    }
 
     def __init__(self, **params: Any) -> None:
         self.pipeline_params = p = TamissParams(PARAMS.validate(params))
@@ -169,6 +173,9 @@ class TamissStyle(FieldStyle):
         return self._composite(ctx, self.run_frame(ctx, self.initial_state(), next_state=False)[0])
 
     def _composite(self, ctx: ShadeContext, result: PipelineResult) -> np.ndarray:
+        if ctx.wants_intermediates:
+            keep_darkness(ctx, result.inputs)
+            ctx.keep("stroke_id", first_ids(result))
         if self.pipeline_params.show == "color":
             return self.composite(ctx, result.ink, self.ink)
         return self.composite(ctx, *show_layers(result))

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..base import ShadeContext, register
-from .compose import FieldStyle
+from .compose import FieldStyle, keep_darkness
 from .field import StrokeField
 from .gather import field_inputs, tam_ink
 from .params import TAM_PARAMS, resolve_field
@@ -38,6 +38,7 @@ class TamStyle(FieldStyle):
     renamed = TAM_PARAMS.renamed  # fill: the halftone style's name for the paper colour
     description = "TAM/RPTAM texture-space hatching on the TAMISS stroke field (baseline)"
     PARAMS = TAM_PARAMS
+    INTERMEDIATES = {"darkness": "the stroke field's darkness rho of the sample, in [0, 1]"}
 
     def __init__(self, **params: Any) -> None:
         self.values = p = resolve_field(TAM_PARAMS.validate(params))
@@ -55,6 +56,7 @@ class TamStyle(FieldStyle):
             derivatives=v.derivatives,
             orient_charts=v.orient_charts,
         )
+        keep_darkness(ctx, inp)
         return tam_ink(inp, self.field, width=v.width, density_mode=v.density_mode, fade=v.fade)
 
     def shade(self, ctx: ShadeContext) -> np.ndarray:

@@ -142,10 +142,14 @@ def shade_threshold_for(src, cross, filtered):
     lines = src == LINES or src == ANALYTIC
 
     @banded("out")
-    def shade_threshold(lo, hi, frame, style, tables, out):
+    def shade_threshold(lo, hi, frame, style, tables, out, kept):
         """Shade rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` float32 (written in full; zero
         where empty) from the :class:`refnpr.styles._frame.Frame` ``frame``, the style record
-        ``style`` (``PARAMS.Record``) and the :class:`Tables` ``tables``."""
+        ``style`` (``PARAMS.Record``) and the :class:`Tables` ``tables``. ``kept (nH, nW, 2)``
+        float64: each sample's tone (f_d of the first light) and threshold (the mean of its
+        thresholds, weighted as the PCF weighs them; the analytic filter: the lines' threshold
+        at the sample itself), 0 where empty; or a ``(0, 0, 2)`` stand-in where nobody reads
+        them."""
         # the records' arrays as locals, taken once (read from a record inside the loops, each
         # access takes and drops a reference to the array)
         cover, mesh_id, normal, position = frame.cover, frame.mesh_id, frame.normal, frame.position
@@ -186,12 +190,16 @@ def shade_threshold_for(src, cross, filtered):
         ldy = np.empty(n_dirs)
         ls = np.empty(n_dirs)
         layers = (lv, ldx, ldy, ls)
+        keep = kept.shape[0] == nh
         for y in range(lo, hi):
             idx = row_start[y]
             for x in range(nw):
                 if cover[y, x] < 0:
                     for c in range(4):
                         out[y, x, c] = 0.0
+                    if keep:
+                        kept[y, x, 0] = 0.0
+                        kept[y, x, 1] = 0.0
                     continue
                 mi = max(mesh_id[y, x], 0)
                 # ---- the sample's thresholds (taken once, used by every term)
@@ -258,6 +266,21 @@ def shade_threshold_for(src, cross, filtered):
                     if src == LINES and cross:  # the union of the layers' dark lines
                         for j in range(kk):
                             tk[j] = _combine_thresholds(fk[j], schedule[0], schedule[1])
+                    if src == ANALYTIC and keep:  # the lines' threshold at the sample
+                        for d in range(n_dirs):
+                            fk[0, d] = _line_threshold(lv[d], ls[d], uniform, nz)
+                        tk[0] = fk[0, 0]
+                        if cross:
+                            tk[0] = _combine_thresholds(fk[0], schedule[0], schedule[1])
+                if keep:  # the sample's threshold: its thresholds' (weighted) mean
+                    t_sum = 0.0
+                    w_sum = 0.0
+                    for j in range(kk if src != ANALYTIC else 1):
+                        wj = wk[j] if has_w else 1.0
+                        t_sum += wj * tk[j]
+                        w_sum += wj
+                    kept[y, x, 1] = t_sum / w_sum if w_sum > 0.0 else tk[0]
+                    kept[y, x, 0] = 0.0  # the first light's f_d, below
                 # ---- eq. 1's vectors
                 if normals.shape[0] > 0:
                     n = (normals[idx, 0], normals[idx, 1], normals[idx, 2])
@@ -295,6 +318,8 @@ def shade_threshold_for(src, cross, filtered):
                         q = (light_unit[i, 0], light_unit[i, 1], light_unit[i, 2])
                     f_d = _diffuse(un, q, False)  # eq. 1: f_d = max(N.L, 0) of unit vectors
                     f_d = f_d if f_d <= 1.0 else 1.0  # (<= 1 up to rounding)
+                    if keep and i == 0:
+                        kept[y, x, 0] = f_d
                     if src == ANALYTIC:
                         tx = _analytic(f_d, steps, layers, n_sub, uniform, noise, schedule)
                     elif filtered:

@@ -15,7 +15,7 @@ import numpy as np
 from refnpr.formulas import threshold as thr
 from refnpr.formulas.threshold.stipple import NO_TABLE, seed_bits
 
-from .._common import rgba_out
+from .._common import keep_all, kept_out, rgba_out
 from .._frame import frame_record
 from . import _kernels as K
 from .images import grid_offsets
@@ -145,7 +145,10 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
     )
     out = rgba_out(ctx, mask.shape)  # written in full by the kernel
     filtered = tables.t.shape[1] > 1 or tables.w.shape[1] > 0 or tables.offsets.shape[0] > 1
-    K.shade_threshold_for(src, len(dirs) > 1, bool(filtered))(frame, record, tables, out)
+    kept = kept_out(ctx, mask.shape, 2)
+    kernel = K.shade_threshold_for(src, len(dirs) > 1, bool(filtered))
+    kernel(frame, record, tables, out, kept)
+    keep_all(ctx, kept, ("tone", "threshold"))
     return out
 
 

@@ -41,6 +41,11 @@ class ThresholdStyle(Style):
         "lines/cross-hatching/stipple; filtered thresholding; strength blending"
     )
     PARAMS = PARAMS
+    INTERMEDIATES = {
+        "tone": "f_d of the first light (eq. 1), the tone thresholded by eqs. 2-4",
+        "threshold": "the threshold t of the sample (eqs. 3-8; pcf: the weighted mean of its "
+        "thresholds; the analytic filter: the lines' threshold at the sample)",
+    }
 
     def __init__(self, **params: Any) -> None:
         kw, self.scale = deprecated_forms(params)

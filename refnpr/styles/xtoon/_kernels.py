@@ -142,11 +142,13 @@ def _lookup_row(tex, texels, rows, mrow, diffuse, orow, span):
 
 
 @banded("out")
-def shade_xtoon(lo, hi, frame, style, tables, out, bad_rows):
+def shade_xtoon(lo, hi, frame, style, tables, out, bad_rows, kept):
     """Shade rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` float32 (written in full; zero where
     empty) from the :class:`refnpr.styles._frame.Frame` ``frame`` (mesh_id; normal, position and
     depth as the style reads them), the style record ``style`` (``PARAMS.Record``) and the
-    :class:`Tables` (the texture, and tone and D where given). ``bad_rows (nH,)`` uint8: set to 1 where a tone or D is NaN.
+    :class:`Tables` (the texture, and tone and D where given). ``bad_rows (nH,)`` uint8: set to
+    1 where a tone or D is NaN. ``kept (nH, nW, 2)`` float64: each sample's tone and D (0 where
+    empty), or a ``(0, 0, 2)`` stand-in where nobody reads them.
     """
     # the records' arrays as locals, taken once: read from a record inside the loops, each
     # access takes and drops a reference to the array (atomic operations, per sample)
@@ -168,6 +170,7 @@ def shade_xtoon(lo, hi, frame, style, tables, out, bad_rows):
     has_position = position.shape[0] == nh and position.shape[1] == nw  # else a stand-in
     has_depth = depth.shape[0] == nh and depth.shape[1] == nw
     color = style.show == COLOR
+    keep = kept.shape[0] == nh
     # a row in two passes (colour): tone and D of each sample into the row's scratch, and the
     # span of covered samples; then the lookup over that span (_lookup_row), zeros around
     tone_row = np.empty(nw)
@@ -181,6 +184,9 @@ def shade_xtoon(lo, hi, frame, style, tables, out, bad_rows):
             if mesh_id[y, x] < 0:
                 tone_row[x] = 0.0
                 d_row[x] = 0.0
+                if keep:
+                    kept[y, x, 0] = 0.0
+                    kept[y, x, 1] = 0.0
                 if not color:
                     for ch in range(4):
                         out[y, x, ch] = 0.0
@@ -199,6 +205,9 @@ def shade_xtoon(lo, hi, frame, style, tables, out, bad_rows):
                 bad_rows[y] = 1
                 t = 0.0
                 d = 0.0
+            if keep:
+                kept[y, x, 0] = t
+                kept[y, x, 1] = d
             if not color:
                 grey = _shown(style.show, t, d)
                 out[y, x, 0] = grey

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._common import rgba_out
+from .._common import keep_all, kept_out, rgba_out
 from .._frame import frame_record
 from . import _kernels as K
 from .detail import style_record
@@ -56,11 +56,13 @@ def shade_rgba(cfg: Config, ctx: Any) -> np.ndarray:
         tables = K.Tables(tex, True, offsets, *given)
     out = rgba_out(ctx, shape)  # written in full by the kernel
     bad = np.zeros(shape[0], dtype=np.uint8)
-    K.shade_xtoon(frame, style, tables, out, bad)
+    kept = kept_out(ctx, shape, 2)
+    K.shade_xtoon(frame, style, tables, out, bad, kept)
     if bad.any():
         row = int(np.flatnonzero(bad)[0])
         raise ValueError(
             f"tone/detail: NaN at a covered sample of row {row}; the G-buffer normals, depths "
             "or positions there are not finite (mask them first)"
         )
+    keep_all(ctx, kept, ("tone", "detail"))
     return out

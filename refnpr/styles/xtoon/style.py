@@ -70,6 +70,10 @@ class XToonStyle(Style):
         "with shape abstraction (Barla et al. 2006)"
     )
     PARAMS = PARAMS
+    INTERMEDIATES = {
+        "tone": "the tone n.l (or half-Lambert) of the lookup's first axis (sec. 3)",
+        "detail": "the detail D of the lookup's second axis (secs. 3.1, 3.2)",
+    }
 
     def __init__(self, **params: Any) -> None:
         p = _checked(PARAMS.validate(params))
