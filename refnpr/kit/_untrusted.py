@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from ..texture.embedded import png_size
+
 __all__ = [
     "ExrHeader",
     "NpyHeader",
@@ -157,37 +159,6 @@ def read_regular(path: Path, *, what: str, max_bytes: int, head: int | None = No
 
 
 # -- PNG ---------------------------------------------------------------------------------------
-
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-#: Valid (colour type: bit depths) pairs of the PNG specification, and the channels they give.
-_PNG_TYPES = {0: ((1, 2, 4, 8, 16), 1), 2: ((8, 16), 3), 3: ((1, 2, 4, 8), 3), 4: ((8, 16), 2),
-              6: ((8, 16), 4)}  # fmt: skip
-
-
-def png_size(data: bytes, *, what: str) -> tuple[int, int]:
-    """``(width, height)`` from a PNG's IHDR chunk (nothing is decoded).
-
-    Raises
-    ------
-    ValueError
-        No PNG signature, no IHDR chunk first, a zero size, or an invalid colour type / bit
-        depth pair.
-    """
-    if data[:8] != _PNG_SIGNATURE:
-        raise ValueError(f"{what}: cannot read: not a PNG file (no PNG signature); expected a PNG")
-    if len(data) < 33 or data[12:16] != b"IHDR" or struct.unpack(">I", data[8:12])[0] != 13:
-        raise ValueError(f"{what}: cannot read: no IHDR chunk first (truncated or corrupt PNG)")
-    width, height, depth, colour = struct.unpack(">IIBB", data[16:26])
-    if width == 0 or height == 0:
-        raise ValueError(f"{what}: the PNG header gives a size of {width}x{height}")
-    depths = _PNG_TYPES.get(colour, ((), 0))[0]
-    if depth not in depths:
-        raise ValueError(
-            f"{what}: the PNG header gives colour type {colour} with bit depth {depth}, which "
-            "PNG does not define"
-        )
-    return width, height
-
 
 # -- OpenEXR -----------------------------------------------------------------------------------
 

@@ -8,8 +8,11 @@ transforms are exact. What it reads (docs/scenes.md has the full table):
   node's world matrix: triangles (indexed or not), strips and fans (converted to triangles);
   ``POSITION``, ``NORMAL`` (flat normals when absent, as the glTF spec requires) and
   ``TEXCOORD_0`` (verbatim: glTF's uv origin is the image's first row, as refnpr's textures);
+  accessors dense or sparse (a base, from a buffer view or zeros, with substitutions);
 - materials: ``baseColorFactor`` as the diffuse colour, ambient ``AMBIENT_FRACTION`` of it;
-  ``baseColorTexture`` as the material texture when it is an image file beside the scene;
+  ``baseColorTexture`` as the material texture: an image file beside the scene (its path) or
+  an embedded PNG or JPEG (a ``data:`` URI, or a buffer view with a ``mimeType``, as in a
+  ``.glb``) as a :class:`~refnpr.texture.EmbeddedImage`, decoded when a style samples it;
 - cameras: perspective (``yfov``, ``znear``, ``zfar``), the first camera node of the scene by
   default, another by ``camera=`` (camera or node name, or node index);
 - lights of ``KHR_lights_punctual``: directional and point, spot as point; colour x intensity;
@@ -24,7 +27,8 @@ texture transforms) is ignored and named once in a :class:`GltfWarning`.
 
 The file is untrusted input: every failure is a :class:`GltfError` (a ``ValueError``) that names
 the file and the glTF path of the bad field (``model.gltf: accessors[3].count: ...``); sizes are
-checked before anything is allocated.
+checked before anything is allocated (an embedded image's from its PNG or JPEG header, before it
+is decoded).
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from ..raster import Camera, Mesh
+from ..texture.embedded import EmbeddedImage, probe_image
 from .animation import MAX_FRAMES, Animation, Track
 from .scene import Light, Material, Scene, SceneObject
 from .toml_format import SceneFileError
@@ -135,6 +140,8 @@ class _Reader:
         self.ignored: list[str] = []  # glTF inputs not read, named once in a warning
         self._buffers: dict[int, memoryview] = {}
         self._glb_bin: bytes | None = None
+        # images read, by index: file paths or EmbeddedImages (shared by the materials)
+        self.images: dict[int, str | EmbeddedImage] = {}
         self.doc = self._load()
 
     # -- errors and fields ---------------------------------------------------------------------
@@ -328,6 +335,11 @@ class _Reader:
         self._buffers[index] = view
         return view
 
+    def data_uri(self, uri: str, where: str) -> bytes:
+        """The bytes of a base64 ``data:`` URI (an image's: no byteLength bounds it, but the
+        JSON, which holds it, is at most MAX_JSON_BYTES)."""
+        return self._data_uri(uri, MAX_JSON_BYTES, where)
+
     def _data_uri(self, uri: str, length: int, where: str) -> bytes:
         head, sep, payload = uri.partition(",")
         if not sep or not head.endswith(";base64"):
@@ -386,6 +398,34 @@ class _Reader:
         except OSError as exc:
             raise self.fail(where, f"cannot read {uri!r} ({exc.strerror})") from None
 
+    def view(self, index: Any, where: str) -> tuple[memoryview, dict, str]:
+        """Buffer view ``index`` (referenced at ``where``): its bytes (bounds-checked against its
+        buffer), its JSON object and its glTF path (``bufferViews[i]``)."""
+        view = self.item("bufferViews", index, where)
+        vw = f"bufferViews[{index}]"
+        buf = self.buffer(self.get_int(view, "buffer", vw), f"{vw}.buffer")
+        v_off = self.get_int(view, "byteOffset", vw, default=0)
+        v_len = self.get_int(view, "byteLength", vw, lo=1)
+        if v_off + v_len > len(buf):
+            raise self.fail(
+                vw,
+                f"byteOffset {v_off} + byteLength {v_len} = {v_off + v_len} lies beyond the end "
+                f"of its buffer ({len(buf)} bytes)",
+            )
+        return buf[v_off : v_off + v_len], view, vw
+
+    def packed_view(self, index: Any, where: str, what: str) -> tuple[memoryview, str]:
+        """Buffer view ``index`` that holds ``what`` (sparse indices or values, an image), which
+        glTF stores tightly packed: a ``byteStride`` is refused."""
+        data, view, vw = self.view(index, where)
+        if "byteStride" in view:
+            raise self.fail(
+                where,
+                f"{vw} has a byteStride ({view['byteStride']!r}); {what} must be tightly "
+                "packed (byteStride is for vertex attributes only): remove it",
+            )
+        return data, vw
+
     # -- accessors -------------------------------------------------------------------------------
     def accessor(
         self,
@@ -397,14 +437,10 @@ class _Reader:
         count: int | None = None,
     ) -> np.ndarray:
         """Accessor ``index`` (referenced at ``where``) as an (count, width) float64 array
-        (integer accessors as int64, normalized ones scaled to [0, 1] or [-1, 1])."""
+        (integer accessors as int64, normalized ones scaled to [0, 1] or [-1, 1]); a sparse
+        accessor with its substitutions applied."""
         acc = self.item("accessors", index, where)
         aw = f"accessors[{index}]"
-        if "sparse" in acc:
-            raise self.fail(
-                f"{aw}.sparse",
-                "sparse accessors are not supported; re-export the file without sparse storage",
-            )
         ctype = acc.get("componentType")
         if ctype not in _COMPONENTS:
             raise self.fail(
@@ -439,47 +475,35 @@ class _Reader:
                     f"{n * width * 8} bytes, more than the {MAX_ZERO_ACCESSOR_BYTES} refnpr "
                     "allows; store the data in a bufferView",
                 )
-            return np.zeros((n, width), dtype=np.int64 if ctype != _FLOAT else np.float64)
-        vi = acc["bufferView"]
-        view = self.item("bufferViews", vi, f"{aw}.bufferView")
-        vw = f"bufferViews[{vi}]"
-        buf = self.buffer(self.get_int(view, "buffer", vw), f"{vw}.buffer")
-        v_off = self.get_int(view, "byteOffset", vw, default=0)
-        v_len = self.get_int(view, "byteLength", vw, lo=1)
-        if v_off + v_len > len(buf):
-            raise self.fail(
-                vw,
-                f"byteOffset {v_off} + byteLength {v_len} = {v_off + v_len} lies beyond the end "
-                f"of its buffer ({len(buf)} bytes)",
-            )
-        stride = elem
-        if "byteStride" in view:
-            stride = self.get_int(view, "byteStride", vw, lo=4, hi=252)
-            if stride < elem:
+            raw = np.zeros((n, width), dtype=dtype)
+        else:
+            data, view, vw = self.view(acc["bufferView"], f"{aw}.bufferView")
+            stride = elem
+            if "byteStride" in view:
+                stride = self.get_int(view, "byteStride", vw, lo=4, hi=252)
+                if stride < elem:
+                    raise self.fail(
+                        f"{vw}.byteStride",
+                        f"{stride} is smaller than one element of accessors[{index}] ({elem} "
+                        "bytes)",
+                    )
+            a_off = self._offset(acc, aw, dtype.itemsize)
+            end = a_off + stride * (n - 1) + elem
+            if end > len(data):
                 raise self.fail(
-                    f"{vw}.byteStride",
-                    f"{stride} is smaller than one element of accessors[{index}] ({elem} bytes)",
+                    f"{aw}.count",
+                    f"{n} elements of {elem} bytes (stride {stride}, byteOffset {a_off}) need "
+                    f"{end} bytes, beyond the end of {vw} ({len(data)} bytes)",
                 )
-        a_off = self.get_int(acc, "byteOffset", aw, default=0)
-        if a_off % dtype.itemsize:
-            raise self.fail(
-                f"{aw}.byteOffset",
-                f"{a_off} is not a multiple of the component size {dtype.itemsize}",
+            raw = np.ndarray(
+                (n, width),
+                dtype=dtype,
+                buffer=data,
+                offset=a_off,
+                strides=(stride, dtype.itemsize),
             )
-        end = a_off + stride * (n - 1) + elem
-        if end > v_len:
-            raise self.fail(
-                f"{aw}.count",
-                f"{n} elements of {elem} bytes (stride {stride}, byteOffset {a_off}) need {end} "
-                f"bytes, beyond the end of {vw} ({v_len} bytes)",
-            )
-        raw = np.ndarray(
-            (n, width),
-            dtype=dtype,
-            buffer=buf,
-            offset=v_off + a_off,
-            strides=(stride, dtype.itemsize),
-        )
+        if "sparse" in acc:
+            raw = self._sparse(acc["sparse"], f"{aw}.sparse", raw)
         if ctype == _FLOAT:
             out = raw.astype(np.float64)
             bad = ~np.isfinite(out)
@@ -493,6 +517,86 @@ class _Reader:
             return raw.astype(np.int64)
         scale = float(np.iinfo(dtype).max)
         return np.maximum(raw.astype(np.float64) / scale, -1.0)
+
+    def _offset(self, obj: dict, where: str, size: int) -> int:
+        """``obj.byteOffset`` (default 0), a multiple of the component ``size``."""
+        offset = self.get_int(obj, "byteOffset", where, default=0)
+        if offset % size:
+            raise self.fail(
+                f"{where}.byteOffset", f"{offset} is not a multiple of the component size {size}"
+            )
+        return offset
+
+    def _sparse(self, sparse: Any, sw: str, base: np.ndarray) -> np.ndarray:
+        """``base`` (count, width) with the substitutions of a sparse accessor (glTF 2.0 sec.
+        3.6.2.3): ``sparse.count`` element indices, strictly increasing, and their values, each
+        tightly packed in a buffer view."""
+        n, width = base.shape
+        if not isinstance(sparse, dict):
+            raise self.fail(sw, f"expected a JSON object, got {type(sparse).__name__}")
+        k = self.get_int(sparse, "count", sw, lo=1)
+        if k > n:
+            raise self.fail(
+                f"{sw}.count",
+                f"{k} substitutions for an accessor of {n} elements; expected 1 to {n}",
+            )
+        parts = {}
+        for key in ("indices", "values"):
+            part = sparse.get(key)
+            if not isinstance(part, dict):
+                raise self.fail(
+                    f"{sw}.{key}",
+                    "missing (a sparse accessor needs `indices` and `values` objects)"
+                    if part is None
+                    else f"expected a JSON object, got {type(part).__name__}",
+                )
+            parts[key] = part
+        iw, vw = f"{sw}.indices", f"{sw}.values"
+        ictype = parts["indices"].get("componentType")
+        if ictype not in (5121, 5123, 5125):
+            raise self.fail(
+                f"{iw}.componentType",
+                f"{ictype!r}; expected 5121 (UNSIGNED_BYTE), 5123 (UNSIGNED_SHORT) or 5125 "
+                "(UNSIGNED_INT)",
+            )
+        idx = self._packed(parts["indices"], iw, "sparse indices", _COMPONENTS[ictype][0], k, 1)
+        idx = idx[:, 0].astype(np.int64)
+        values = self._packed(parts["values"], vw, "sparse values", base.dtype, k, width)
+        if k > 1 and np.any(np.diff(idx) <= 0):
+            j = int(np.argmax(np.diff(idx) <= 0)) + 1
+            raise self.fail(
+                iw,
+                f"index {int(idx[j])} at position {j} is not greater than the one before it "
+                f"({int(idx[j - 1])}); sparse indices must be strictly increasing",
+            )
+        if idx[-1] >= n:
+            j = int(np.argmax(idx >= n))
+            raise self.fail(
+                iw,
+                f"index {int(idx[j])} at position {j} is out of range for the accessor's {n} "
+                f"elements (0 to {n - 1})",
+            )
+        out = np.array(base)  # a copy: the base may be a view of the file's buffer
+        out[idx] = values
+        return out
+
+    def _packed(
+        self, part: dict, where: str, what: str, dtype: np.dtype, k: int, width: int
+    ) -> np.ndarray:
+        """(k, width) elements of ``dtype`` tightly packed at ``part.byteOffset`` of the buffer
+        view ``part.bufferView``."""
+        if "bufferView" not in part:
+            raise self.fail(f"{where}.bufferView", "missing (an index of bufferViews is required)")
+        data, vname = self.packed_view(part["bufferView"], f"{where}.bufferView", what)
+        offset = self._offset(part, where, dtype.itemsize)
+        need = offset + k * width * dtype.itemsize
+        if need > len(data):
+            raise self.fail(
+                f"{where}.byteOffset",
+                f"{k} elements of {width * dtype.itemsize} bytes at byteOffset {offset} need "
+                f"{need} bytes, beyond the end of {vname} ({len(data)} bytes)",
+            )
+        return np.ndarray((k, width), dtype=dtype, buffer=data, offset=offset)
 
 
 def _trs_matrix(t: np.ndarray, q: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -735,8 +839,9 @@ def _material(r: _Reader, index: Any, where: str, cache: dict) -> Material:
     return out
 
 
-def _base_texture(r: _Reader, info: Any, where: str) -> str | None:
-    """The image file of ``baseColorTexture`` beside the scene, or None (with a note)."""
+def _base_texture(r: _Reader, info: Any, where: str) -> str | EmbeddedImage | None:
+    """The image of ``baseColorTexture``: a file beside the scene (its path), an embedded image
+    (an :class:`~refnpr.texture.EmbeddedImage`), or None (with a note)."""
     if info is None:
         return None
     if not isinstance(info, dict):
@@ -749,18 +854,65 @@ def _base_texture(r: _Reader, info: Any, where: str) -> str | None:
     if "source" not in tex:
         r.ignore("textures without a source image")
         return None
-    src = tex["source"]
-    image = r.item("images", src, f"textures[{ti}].source")
-    uri = image.get("uri")
-    if not isinstance(uri, str) or uri.startswith("data:"):
-        r.ignore("embedded images (a baseColorTexture read needs an image file beside the scene)")
-        return None
-    path = r.resolve_uri(uri, f"images[{src}].uri")
-    if path.suffix.lower() not in _IMAGE_SUFFIXES:
-        raise r.fail(f"images[{src}].uri", f"{uri!r} is not a PNG, JPEG, BMP or TIFF image")
-    if not path.is_file():
-        raise r.fail(f"images[{src}].uri", f"image file {uri!r} not found beside the .gltf")
-    return str(path)
+    return _image(r, tex["source"], f"textures[{ti}].source")
+
+
+def _image(r: _Reader, src: Any, where: str) -> str | EmbeddedImage:
+    """``images[src]``: the path of its file beside the scene, or its embedded PNG or JPEG (a
+    ``data:`` URI, or a buffer view with a ``mimeType``) as an EmbeddedImage."""
+    image = r.item("images", src, where)
+    if src in r.images:
+        return r.images[src]
+    iw = f"images[{src}]"
+    uri, vi = image.get("uri"), image.get("bufferView")
+    mime = image.get("mimeType")
+    if (uri is None) == (vi is None):
+        raise r.fail(
+            iw,
+            "has both `uri` and `bufferView`; give one"
+            if uri is not None
+            else "has neither `uri` nor `bufferView` (an image needs one)",
+        )
+    if mime is not None and not isinstance(mime, str):
+        raise r.fail(f"{iw}.mimeType", f"expected a string, got {mime!r}")
+    if vi is not None:
+        if mime is None:
+            raise r.fail(
+                f"{iw}.mimeType",
+                "missing: an image stored in a bufferView needs a mimeType ('image/png' or "
+                "'image/jpeg')",
+            )
+        data, _ = r.packed_view(vi, f"{iw}.bufferView", "image data")
+        found = _embedded(r, data, mime, f"{iw}.bufferView", f"{r.path.name}#{iw}")
+    elif not isinstance(uri, str):
+        raise r.fail(f"{iw}.uri", f"expected a string, got {uri!r}")
+    elif uri.startswith("data:"):
+        media = uri[5:].partition(",")[0].partition(";")[0]
+        if media in ("", "application/octet-stream"):  # untyped: the data's signature tells
+            media = None
+        if mime is not None and media is not None and media != mime:
+            raise r.fail(f"{iw}.uri", f"a data: URI of type {media!r}, but mimeType is {mime!r}")
+        data = r.data_uri(uri, f"{iw}.uri")
+        found = _embedded(r, data, media or mime, f"{iw}.uri", f"{r.path.name}#{iw}")
+    else:
+        path = r.resolve_uri(uri, f"{iw}.uri")
+        if path.suffix.lower() not in _IMAGE_SUFFIXES:
+            raise r.fail(f"{iw}.uri", f"{uri!r} is not a PNG, JPEG, BMP or TIFF image")
+        if not path.is_file():
+            raise r.fail(f"{iw}.uri", f"image file {uri!r} not found beside the .gltf")
+        found = str(path)
+    r.images[src] = found
+    return found
+
+
+def _embedded(r: _Reader, data: Any, mime: str | None, where: str, name: str) -> EmbeddedImage:
+    """The bytes of an embedded image, its type and size checked from its header."""
+    data = bytes(data)
+    try:
+        probe_image(data, mime)
+    except ValueError as exc:
+        raise r.fail(where, str(exc)) from None
+    return EmbeddedImage(name, data, mime)
 
 
 def _lights(r: _Reader) -> list[dict]:

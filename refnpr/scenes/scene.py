@@ -40,8 +40,11 @@ class Material:
     shininess : float
         Specular exponent (> 0).
     texture : str or None
-        Name of a built-in texture or a file path (a threshold texture or screen); styles decide
-        how to use it. Paths in scene files are resolved against the file's directory.
+        Name of a built-in texture, a file path, or an image held in memory (a
+        :class:`refnpr.texture.EmbeddedImage`, a ``str`` that carries a glTF file's embedded
+        PNG or JPEG): a threshold texture or screen; styles decide how to use it (through
+        :func:`refnpr.texture.load_texture`). Paths in scene files are resolved against the
+        file's directory.
     uv_scale : tuple of 2 float
         Multiplies uv before texture lookup (> 0). A single number scales both.
     """
@@ -62,8 +65,8 @@ class Material:
         texture = str(self.texture) if isinstance(self.texture, Path) else self.texture
         if texture is not None and (not isinstance(texture, str) or not texture):
             raise TypeError(
-                f"texture: expected a texture name or a file path (non-empty str) or None, "
-                f"got {texture!r}"
+                f"texture: expected a texture name or a file path (non-empty str; an "
+                f"EmbeddedImage for an image in memory) or None, got {texture!r}"
             )
         uv_scale = check_vec("uv_scale", self.uv_scale, 2, broadcast_scalar=True, positive=True)
         _set(self, **colors, shininess=shininess, texture=texture, uv_scale=uv_scale)

@@ -1,9 +1,11 @@
 """Textures: mip pyramids, CLAHE pyramids, sampling at an explicit LOD, built-in images (all
-tileable), periodic plus smooth decomposition for images that do not tile."""
+tileable), encoded images in memory (glTF embedded images), periodic plus smooth decomposition
+for images that do not tile."""
 
 from .brickwork import brick_texture
 from .builtin import BUILTIN_TEXTURES, builtin_image, load_texture
 from .clahe import periodic_clahe
+from .embedded import EmbeddedImage
 from .periodic import TILINGS, check_tiling, periodic_component, smooth_component
 from .pyramid import MipPyramid, as_texture, build_pyramid, clahe_pyramid, rank_equalize
 from .sample import level_weights, sample_level, sample_trilinear
@@ -20,6 +22,7 @@ from .screens import (
 
 __all__ = [
     "BUILTIN_TEXTURES",
+    "EmbeddedImage",
     "TILINGS",
     "MipPyramid",
     "StrokeSet",

@@ -1,4 +1,5 @@
-"""Built-in textures (all tile seamlessly), or image files (as given, or made to tile)."""
+"""Built-in textures (all tile seamlessly), image files or encoded images in memory (as given,
+or made to tile)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import numpy as np
 
 from ..image import IMAGE_FORMATS, read_image_file
 from .brickwork import brick_texture
+from .embedded import EmbeddedImage
 from .periodic import TILINGS, check_tiling, make_tileable, periodic_component
 from .pyramid import as_texture
 
@@ -61,23 +63,26 @@ def load_texture(
     param: str = "texture",
     tiling: str | None = None,
 ) -> np.ndarray:
-    """A texture as float32 in [0, 1]: a built-in name (``BUILTIN_TEXTURES``) or an image file.
+    """A texture as float32 in [0, 1]: a built-in name (``BUILTIN_TEXTURES``), an image file,
+    or an encoded image in memory.
 
     Parameters
     ----------
-    name_or_path : str or path
-        A name of ``BUILTIN_TEXTURES``, or the path of a PNG, JPEG, TIFF or BMP image.
+    name_or_path : str, path or EmbeddedImage
+        A name of ``BUILTIN_TEXTURES``, the path of a PNG, JPEG, TIFF or BMP image, or an
+        :class:`~refnpr.texture.EmbeddedImage` (a glTF file's embedded PNG or JPEG), decoded
+        from memory after its header's size is checked, then treated as an image file.
     gray : bool
         Convert colour images to gray (luminance, scikit-image ``rgb2gray``).
     param : str
         The user's parameter that named the texture (``"screen"``, ``"brush"``, ...), which
         error messages start with.
     tiling : {None, "none", "periodic"}
-        How an image file is made to repeat (GL_REPEAT). None or "none": as given, seams and
-        all. "periodic": the image's periodic component (Moisan 2011, per channel, after the
-        gray conversion), clipped to [0, 1], which removes the seam of an image whose opposite
-        borders differ while keeping every local difference inside it. Built-in textures tile
-        already and are returned as they are for every value.
+        How an image file (or embedded image) is made to repeat (GL_REPEAT). None or "none":
+        as given, seams and all. "periodic": the image's periodic component (Moisan 2011, per
+        channel, after the gray conversion), clipped to [0, 1], which removes the seam of an
+        image whose opposite borders differ while keeping every local difference inside it.
+        Built-in textures tile already and are returned as they are for every value.
 
     Returns
     -------
@@ -87,11 +92,14 @@ def load_texture(
     ------
     ValueError
         Naming the texture as given: neither a built-in name nor a file (listing the built-in
-        names), a directory, or a file that is not a readable image (with the reason); or
+        names), a directory, a file that is not a readable image (with the reason), an
+        embedded image that does not decode to the size its header gives; or
         ``tiling`` not among ``TILINGS`` (named ``<param>.tiling``).
     """
     tiling = check_tiling(tiling, param=f"{param}.tiling")
-    if isinstance(name_or_path, str) and name_or_path in BUILTIN_TEXTURES:
+    if isinstance(name_or_path, EmbeddedImage):
+        tex = as_texture(name_or_path.decode(what=param), name=f"texture {str(name_or_path)!r}")
+    elif isinstance(name_or_path, str) and name_or_path in BUILTIN_TEXTURES:
         tex = as_texture(builtin_image(name_or_path), name=f"texture {name_or_path!r}")
         tiling = "none"  # built-in textures tile already
     else:

@@ -2,7 +2,8 @@
 against values computed here from the file's numbers, and malformed files with their messages.
 
 The files are written here: geometry from trimesh, JSON (nodes, cameras, lights, animations) by
-hand, packed as .gltf with a data: URI, an external .bin, or .glb.
+hand, packed as .gltf with a data: URI, an external .bin, or .glb. Embedded images:
+test_gltf_images.py.
 """
 
 from __future__ import annotations
@@ -57,6 +58,15 @@ class Doc:
             }
         )
         return len(self.doc["accessors"]) - 1
+
+    def view(self, array, dtype, **extra) -> int:
+        """A buffer view of ``array`` packed as ``dtype`` (no accessor): its index."""
+        data = np.ascontiguousarray(array, dtype=dtype).tobytes()
+        self.doc["bufferViews"].append(
+            {"buffer": 0, "byteOffset": len(self.blob), "byteLength": len(data), **extra}
+        )
+        self.blob += data + b"\0" * (-len(data) % 4)
+        return len(self.doc["bufferViews"]) - 1
 
     def mesh(self, tm: trimesh.Trimesh, *, normals=True, indexed=True, name=None, **prim) -> int:
         pos = np.asarray(tm.vertices)
@@ -536,7 +546,11 @@ MALFORMED = [
         _set(["extensionsRequired"], ["KHR_draco_mesh_compression"]),
         r"extensionsRequired: 'KHR_draco",
     ),
-    ("sparse", _set(["accessors", 0, "sparse"], {}), r"accessors\[0\]\.sparse: sparse accessors"),
+    (
+        "sparse without count",
+        _set(["accessors", 0, "sparse"], {}),
+        r"accessors\[0\]\.sparse\.count: missing",
+    ),
     (
         "ortho",
         lambda doc: (
@@ -629,3 +643,134 @@ def test_animation_work_is_bounded_by_frames_times_nodes(tmp_path, monkeypatch):
         GltfError, match=r"animations\[0\]: 41 frames x 1 nodes .* node evaluations"
     ):
         quiet(load_gltf, path, fps=4)
+
+
+# -- sparse accessors --------------------------------------------------------------------------------
+
+
+def sparse_triangle(base=True, index_type="<u2", indices=(1,), values=((2.0, 0.5, 0.0),)):
+    """A triangle whose POSITION accessor has a sparse override of ``indices`` by ``values``
+    (over the dense base [[0,0,0],[1,0,0],[0,1,0]], or over zeros without ``base``)."""
+    d = Doc()
+    dense = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    if base:
+        pos = d.accessor(dense)
+    else:
+        d.doc["accessors"].append({"componentType": 5126, "count": 3, "type": "VEC3"})
+        pos = len(d.doc["accessors"]) - 1
+    ctype = {"<u1": 5121, "<u2": 5123, "<u4": 5125}[index_type]
+    d.doc["accessors"][pos]["sparse"] = {
+        "count": len(indices),
+        "indices": {"bufferView": d.view(indices, index_type), "componentType": ctype},
+        "values": {"bufferView": d.view(values, "<f4")},
+    }
+    d.doc["meshes"].append({"primitives": [{"attributes": {"POSITION": pos}}]})
+    d.node(name="tri", mesh=0, translation=[0.0, 0.0, -3.0])
+    return d, dense if base else np.zeros((3, 3))
+
+
+@pytest.mark.parametrize("index_type", ["<u1", "<u2", "<u4"])
+def test_sparse_accessor_moves_the_given_vertices(tmp_path, index_type):
+    """glTF 2.0 sec. 3.6.2.3: the base, with element indices[j] replaced by values[j]."""
+    for base, indices, values in [
+        (True, (1,), ((2.0, 0.5, 0.0),)),
+        (True, (0, 2), ((-1.0, 0.0, 0.0), (0.0, 3.0, 0.0))),
+        (False, (1, 2), ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))),  # over zeros (no bufferView)
+    ]:
+        d, want = sparse_triangle(base, index_type, indices, values)
+        want = want.copy()
+        want[list(indices)] = values
+        scene = quiet(load_gltf, d.write(tmp_path / "s.glb"))
+        world = scene.objects[0].world_mesh().positions
+        # flat normals unshare the vertices in face order (0, 1, 2): one triangle
+        np.testing.assert_array_equal(world, want + [0.0, 0.0, -3.0])
+
+
+def _sparse_edit(*path, value=None, drop=False):
+    def edit(doc):
+        obj = doc["accessors"][0]["sparse"]
+        for key in path[:-1]:
+            obj = obj[key]
+        if drop:
+            del obj[path[-1]]
+        else:
+            obj[path[-1]] = value
+
+    return edit
+
+
+SPARSE_BAD = [
+    ("zero count", _sparse_edit("count", value=0), r"sparse\.count: expected an integer >= 1"),
+    (
+        "count over accessor",
+        _sparse_edit("count", value=4),
+        r"sparse\.count: 4 substitutions for an accessor of 3 elements",
+    ),
+    ("not an object", lambda doc: doc["accessors"][0].update(sparse=[1]), r"sparse: expected"),
+    ("no values", _sparse_edit("values", drop=True), r"sparse\.values: missing"),
+    (
+        "index type",
+        _sparse_edit("indices", "componentType", value=5126),
+        r"sparse\.indices\.componentType: 5126; expected 5121",
+    ),
+    (
+        "indices beyond view",
+        _sparse_edit("indices", "byteOffset", value=4),
+        r"sparse\.indices\.byteOffset: 2 elements of 2 bytes at byteOffset 4 need 8 bytes, "
+        r"beyond the end of bufferViews\[1\] \(4 bytes\)",
+    ),
+    (
+        "count beyond indices view",
+        _sparse_edit("count", value=3),
+        r"sparse\.indices\.byteOffset: 3 elements of 2 bytes at byteOffset 0 need 6 bytes",
+    ),
+    (
+        "values beyond view",
+        _sparse_edit("values", "byteOffset", value=12),
+        r"sparse\.values\.byteOffset: 2 elements of 12 bytes at byteOffset 12 need 36 bytes, "
+        r"beyond the end of bufferViews\[2\] \(24 bytes\)",
+    ),
+    (
+        "misaligned",
+        _sparse_edit("indices", "byteOffset", value=1),
+        r"sparse\.indices\.byteOffset: 1 is not a multiple of the component size 2",
+    ),
+    (
+        "stride",
+        lambda doc: doc["bufferViews"][2].update(byteStride=12),
+        r"sparse\.values\.bufferView: bufferViews\[2\] has a byteStride \(12\)",
+    ),
+    (
+        "view index",
+        _sparse_edit("values", "bufferView", value=7),
+        r"sparse\.values\.bufferView: 7 is not an index of bufferViews",
+    ),
+]
+
+
+@pytest.mark.parametrize("label, edit, message", SPARSE_BAD, ids=[m[0] for m in SPARSE_BAD])
+def test_sparse_malformed(tmp_path, label, edit, message):
+    d, _ = sparse_triangle(True, "<u2", (0, 2), ((-1.0, 0.0, 0.0), (0.0, 3.0, 0.0)))
+    edit(d.doc)
+    with pytest.raises(GltfError, match=r"bad\.glb: accessors\[0\]\." + message):
+        quiet(load_gltf, d.write(tmp_path / "bad.glb"))
+
+
+@pytest.mark.parametrize(
+    "indices, message",
+    [
+        ((2, 1), r"index 1 at position 1 is not greater than the one before it \(2\)"),
+        ((1, 1), r"index 1 at position 1 is not greater"),
+        ((0, 3), r"index 3 at position 1 is out of range for the accessor's 3 elements"),
+    ],
+)
+def test_sparse_indices_increasing_and_in_range(tmp_path, indices, message):
+    d, _ = sparse_triangle(True, "<u1", indices, ((1.0, 1.0, 0.0), (2.0, 2.0, 0.0)))
+    with pytest.raises(GltfError, match=r"accessors\[0\]\.sparse\.indices: " + message):
+        quiet(load_gltf, d.write(tmp_path / "bad.glb"))
+
+
+def test_sparse_values_must_be_finite(tmp_path):
+    d, _ = sparse_triangle(True, "<u2", (1,), ((float("nan"), 0.0, 0.0),))
+    with pytest.raises(GltfError, match=r"accessors\[0\]: element 1 .* not finite"):
+        quiet(load_gltf, d.write(tmp_path / "nan.glb"))

@@ -35,6 +35,7 @@ import numpy as np
 from refnpr.texture import (
     BUILTIN_TEXTURES,
     TILINGS,
+    EmbeddedImage,
     MipPyramid,
     clahe_pyramid,
     load_texture,
@@ -253,7 +254,8 @@ def _reads_no_file(spec: dict[str, Any], material_texture: str | None) -> bool:
     if spec["kind"] == "strokes":
         return "set" in spec
     name = material_texture if spec["texture"] == "material" else spec["texture"]
-    return isinstance(name, str) and name in BUILTIN_TEXTURES
+    # an embedded image's text holds its content's digest: the key names the pixels
+    return isinstance(name, EmbeddedImage) or (isinstance(name, str) and name in BUILTIN_TEXTURES)
 
 
 def cached_screen(spec: dict[str, Any], material_texture: str | None) -> Screen:

@@ -44,7 +44,7 @@ class TamissStyle(FieldStyle):
     PARAMS = PARAMS
     INTERMEDIATES = {
         "darkness": "the stroke field's darkness rho of the sample, in [0, 1]",
-        "stroke_id": "the 64-bit id of the first fragment gathered at the sample (fig. 6), -1: none",
+        "stroke_id": "the 64-bit id of the sample's first gathered fragment (fig. 6), -1: none",
     }
 
     def __init__(self, **params: Any) -> None:
