@@ -17,7 +17,25 @@ import numpy as np
 
 from refnpr._jit import njit
 
+#: Smallest footprint / gradient ``gl_lod`` takes the logarithm of (a finite LOD).
+LOD_FLOOR = 2.0**-64
+
+
+@njit
+def gl_lod(dx, dy, texels_u, texels_v):
+    """OpenGL 4.x sec. 8.14 isotropic LOD lambda = log2 rho, rho = max(|d(u,v)/dx|, |d(u,v)/dy|)
+    in texels of a ``texels_u x texels_v`` texture (libm's hypot and log2), at least LOD_FLOOR;
+    ``dx = (du/dx, dv/dx)``, ``dy = (du/dy, dv/dy)`` per pixel."""
+    rho = max(
+        math.hypot(dx[0] * texels_u, dx[1] * texels_v),
+        math.hypot(dy[0] * texels_u, dy[1] * texels_v),
+    )
+    return math.log2(max(rho, LOD_FLOOR))
+
+
 __all__ = [
+    "LOD_FLOOR",
+    "gl_lod",
     "wrap",
     "taps",
     "tap_value",

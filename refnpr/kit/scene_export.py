@@ -57,10 +57,12 @@ def lights_entry(scene: Any) -> list[dict[str, Any]]:
 
 def material_entry(material: Any) -> dict[str, Any]:
     """Every field of a refnpr Material, with its value (``texture``: the name or path as the
-    scene gives it; a style that samples it exports the texture file itself)."""
+    scene gives it; a style that samples it exports the texture file itself);
+    ``color_texture`` only where the material has one."""
     return {
         f.name: jsonable(getattr(material, f.name), where=f"material.{f.name}")
         for f in fields(material)
+        if not (f.name == "color_texture" and material.color_texture is None)
     }
 
 

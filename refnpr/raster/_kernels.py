@@ -32,13 +32,12 @@ import numpy as np
 
 from refnpr._jit import banded, njit, specialised
 from refnpr.device.projection import clip_of, pixel_of
+from refnpr.device.sampling import LOD_FLOOR, gl_lod
 
 # Clip planes as (a, b, c, d): inside where a x + b y + c z + d w >= 0. Guard band G fills d for x, y.
 # Order: near, far, left, right, bottom, top.
 N_PLANES = 6
 MAX_POLY = 3 + N_PLANES  # Sutherland-Hodgman adds at most one vertex per plane
-#: Smallest footprint / gradient ``lod`` and ``dyadic_scale`` take (finite logarithms).
-LOD_FLOOR = 2.0**-64
 
 
 # --- Records
@@ -823,18 +822,6 @@ def mesh_ids(lo, hi, tri_id, first_tri, mesh_id):
 
 
 # --- Screen-space scales of the uv derivatives
-
-
-@njit
-def gl_lod(dx, dy, texels_u, texels_v):
-    """OpenGL 4.x sec. 8.14 isotropic LOD lambda = log2 rho, rho = max(|d(u,v)/dx|, |d(u,v)/dy|)
-    in texels of a ``texels_u x texels_v`` texture (libm's hypot and log2), at least LOD_FLOOR;
-    ``dx = (du/dx, dv/dx)``, ``dy = (du/dy, dv/dy)`` per pixel."""
-    rho = max(
-        math.hypot(dx[0] * texels_u, dx[1] * texels_v),
-        math.hypot(dy[0] * texels_u, dy[1] * texels_v),
-    )
-    return math.log2(max(rho, LOD_FLOOR))
 
 
 @njit

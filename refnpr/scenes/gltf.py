@@ -10,9 +10,11 @@ transforms are exact. What it reads (docs/scenes.md has the full table):
   ``TEXCOORD_0`` (verbatim: glTF's uv origin is the image's first row, as refnpr's textures);
   accessors dense or sparse (a base, from a buffer view or zeros, with substitutions);
 - materials: ``baseColorFactor`` as the diffuse colour, ambient ``AMBIENT_FRACTION`` of it;
-  ``baseColorTexture`` as the material texture: an image file beside the scene (its path) or
-  an embedded PNG or JPEG (a ``data:`` URI, or a buffer view with a ``mimeType``, as in a
-  ``.glb``) as a :class:`~refnpr.texture.EmbeddedImage`, decoded when a style samples it;
+  ``baseColorTexture`` as the material's colour map (``Material.color_texture``, multiplying
+  the base colour in the styles that shade with it) and its texture (``Material.texture``, the
+  image the threshold and halftone styles may sample): an image file beside the scene (its
+  path) or an embedded PNG or JPEG (a ``data:`` URI, or a buffer view with a ``mimeType``, as
+  in a ``.glb``) as a :class:`~refnpr.texture.EmbeddedImage`, decoded when a style samples it;
 - cameras: perspective (``yfov``, ``znear``, ``zfar``), the first camera node of the scene by
   default, another by ``camera=`` (camera or node name, or node index);
 - lights of ``KHR_lights_punctual``: directional and point, spot as point; colour x intensity;
@@ -834,7 +836,12 @@ def _material(r: _Reader, index: Any, where: str, cache: dict) -> Material:
         r, pbr.get("baseColorTexture"), f"{mw}.pbrMetallicRoughness.baseColorTexture"
     )
     rgb = base[:3]
-    out = Material(ambient=tuple(AMBIENT_FRACTION * rgb), diffuse=tuple(rgb), texture=texture)
+    out = Material(
+        ambient=tuple(AMBIENT_FRACTION * rgb),
+        diffuse=tuple(rgb),
+        texture=texture,
+        color_texture=texture,
+    )
     cache[index] = out
     return out
 
@@ -1091,13 +1098,28 @@ def load_gltf(
             "one triangle mesh"
         )
 
+    # a colour map is sampled at uv, which the rasterizer interpolates for every mesh of a
+    # frame: where some material has one, a primitive without TEXCOORD_0 whose own material has
+    # none gets uv (0, 0) (never sampled); one whose material has a map is refused
+    mapped = any(mat.color_texture is not None for mat in obj_materials.values())
+
     def instance(pl: _Placed, m: np.ndarray) -> SceneObject:
-        mesh = meshes[(r.doc["nodes"][pl.node]["mesh"], pl.index)]
+        mi = r.doc["nodes"][pl.node]["mesh"]
+        mesh = meshes[(mi, pl.index)]
         name = obj_names[(pl.node, pl.index)]
-        if mesh.name != name:
-            mesh = Mesh(mesh.positions, mesh.faces, mesh.normals, mesh.uv, mesh.attributes, name)
+        material = obj_materials[(pl.node, pl.index)]
+        uv = mesh.uv
+        if uv is None and material.color_texture is not None:
+            raise r.fail(
+                f"meshes[{mi}].primitives[{pl.index}].attributes",
+                "the material has a baseColorTexture but the primitive has no TEXCOORD_0",
+            )
+        if uv is None and mapped:
+            uv = np.zeros((mesh.positions.shape[0], 2))
+        if mesh.name != name or uv is not mesh.uv:
+            mesh = Mesh(mesh.positions, mesh.faces, mesh.normals, uv, mesh.attributes, name)
         try:
-            return SceneObject(mesh, m, obj_materials[(pl.node, pl.index)], name)
+            return SceneObject(mesh, m, material, name)
         except (TypeError, ValueError) as exc:
             raise r.fail(f"nodes[{pl.node}]", f"object {name!r}: {exc}") from None
 

@@ -47,6 +47,12 @@ class Material:
         file's directory.
     uv_scale : tuple of 2 float
         Multiplies uv before texture lookup (> 0). A single number scales both.
+    color_texture : str or None
+        The material's colour map (glTF's ``baseColorTexture``): an RGB image (a file path,
+        built-in name or :class:`refnpr.texture.EmbeddedImage`) whose values, sRGB-decoded
+        and sampled trilinearly at the scaled uv, multiply m_a and m_d per sample in the
+        styles that shade with the material's colour (``smooth``, ``toon``:
+        :func:`refnpr.styles.albedo.albedo_grid`). None: m_a and m_d alone.
     """
 
     ambient: tuple[float, float, float] = (0.15, 0.15, 0.15)
@@ -55,6 +61,7 @@ class Material:
     shininess: float = 32.0
     texture: str | None = None
     uv_scale: tuple[float, float] = (1.0, 1.0)
+    color_texture: str | None = None
 
     def __post_init__(self) -> None:
         colors = {
@@ -62,14 +69,18 @@ class Material:
             for k in ("ambient", "diffuse", "specular")
         }
         shininess = check_real("shininess", self.shininess, positive=True)
-        texture = str(self.texture) if isinstance(self.texture, Path) else self.texture
-        if texture is not None and (not isinstance(texture, str) or not texture):
-            raise TypeError(
-                f"texture: expected a texture name or a file path (non-empty str; an "
-                f"EmbeddedImage for an image in memory) or None, got {texture!r}"
-            )
+        textures = {}
+        for key in ("texture", "color_texture"):
+            value = getattr(self, key)
+            value = str(value) if isinstance(value, Path) else value
+            if value is not None and (not isinstance(value, str) or not value):
+                raise TypeError(
+                    f"{key}: expected a texture name or a file path (non-empty str; an "
+                    f"EmbeddedImage for an image in memory) or None, got {value!r}"
+                )
+            textures[key] = value
         uv_scale = check_vec("uv_scale", self.uv_scale, 2, broadcast_scalar=True, positive=True)
-        _set(self, **colors, shininess=shininess, texture=texture, uv_scale=uv_scale)
+        _set(self, **colors, shininess=shininess, **textures, uv_scale=uv_scale)
 
 
 @dataclass(frozen=True)

@@ -42,6 +42,7 @@ A scene file has a few top-level keys and tables (unknown keys are errors)::
     texture = "brick"                      # a built-in texture name, or a path (has a suffix or
                                            # a slash) relative to this file
     uv_scale = [4.0, 4.0]                  # or one number
+    color_texture = "albedo.png"           # a colour map multiplying m_a and m_d (smooth, toon)
 
     [animation]                            # optional: an animated scene (docs/animation.md)
 
@@ -150,21 +151,23 @@ def _is_path(value: str) -> bool:
 
 def _material(source: str, where: str, value, base_dir: Path) -> Material:
     spec = _table(source, where, value, _MATERIAL_KEYS)
-    texture = spec.get("texture")
-    if isinstance(texture, str) and _is_path(texture):
+    for key in ("texture", "color_texture"):
+        texture = spec.get(key)
+        if not (isinstance(texture, str) and _is_path(texture)):
+            continue
         path = base_dir / texture
         if path.is_dir():
             raise SceneFileError(
-                f"{source}: {where}: texture: {str(path)!r} is a directory; expected an image "
+                f"{source}: {where}: {key}: {str(path)!r} is a directory; expected an image "
                 "file (PNG, JPEG, TIFF or BMP) or a built-in texture name"
             )
         if not path.is_file():
             raise SceneFileError(
-                f"{source}: {where}: texture: file {str(path)!r} not found (a texture with a "
+                f"{source}: {where}: {key}: file {str(path)!r} not found (a texture with a "
                 "suffix or a slash is a path relative to the scene file; built-in texture names "
                 "have neither)"
             )
-        spec["texture"] = str(path)
+        spec[key] = str(path)
     with _where(source, where):
         return Material(**spec)
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from refnpr._jit import banded, njit
 from refnpr.device.projection import clip_of, pixel_of
+from refnpr.device.sampling import gl_lod, trilinear
 
 
 @njit
@@ -206,3 +207,31 @@ def ink_composite(lo, hi, under, ink, out):
                 v = premult / alpha if alpha > 0.0 else 0.0
                 out[j, i, c] = min(max(v, 0.0), 1.0)
             out[j, i, 3] = alpha
+
+
+@banded("out")
+def sample_albedo(lo, hi, grids, objects, pyr, out):
+    """``out[y, x, :3]`` = the trilinear sample of the packed pyramid ``pyr`` (3 channels) at
+    the sample's uv times its object's uv scale, at the GL isotropic LOD of the scaled per-pixel
+    derivatives, for the samples whose object is marked; others are not written.
+    ``grids = (mesh_id, uv, duv_dx, duv_dy)``, ``objects = (marked (O,) bool, uv_scale (O, 2))``
+    (``refnpr.styles.albedo``)."""
+    mesh_id, uv, gx, gy = grids
+    marked, scale = objects
+    shapes = pyr[2]
+    tu = np.float64(shapes[0, 1])
+    tv = np.float64(shapes[0, 0])
+    for y in range(lo, hi):
+        for x in range(mesh_id.shape[1]):
+            mi = mesh_id[y, x]
+            if mi < 0 or not marked[mi]:
+                continue
+            su = scale[mi, 0]
+            sv = scale[mi, 1]
+            u = np.float64(uv[y, x, 0]) * su
+            v = np.float64(uv[y, x, 1]) * sv
+            dx = (np.float64(gx[y, x, 0]) * su, np.float64(gx[y, x, 1]) * sv)
+            dy = (np.float64(gy[y, x, 0]) * su, np.float64(gy[y, x, 1]) * sv)
+            lod = gl_lod(dx, dy, tu, tv)
+            for c in range(3):
+                out[y, x, c] = trilinear(pyr, u, v, lod, c)

@@ -602,3 +602,57 @@ def test_a_suite_file_may_name_a_gltf_scene(tmp_path):
     assert case.scene == str((tmp_path / "model.glb").resolve())
     written = export_kit(tmp_path / "kit", suite=tmp_path / "suite.toml", log=None)
     assert [p.parent.name for p in written] == ["mine"]
+
+
+def _textured_glb(path, texel_rgb):
+    """A quad .glb whose baseColorTexture (8 x 8 RGB) repeats 2.5 times, beside a ball without."""
+    import trimesh
+    from PIL import Image as PILImage
+
+    pos = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype=np.float64)
+    quad = trimesh.Trimesh(pos, [[0, 1, 2], [0, 2, 3]], process=False)
+    quad.visual = trimesh.visual.TextureVisuals(
+        uv=(pos[:, :2] + 1.0) / 2.0 * 2.5, image=PILImage.fromarray(texel_rgb)
+    )
+    scene = trimesh.Scene()
+    scene.add_geometry(quad, node_name="quad")
+    scene.add_geometry(
+        trimesh.creation.icosphere(1, radius=0.4),
+        node_name="ball",
+        transform=trimesh.transformations.translation_matrix([0.0, 0.0, 0.6]),
+    )
+    scene.export(path)
+    return path
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+@pytest.mark.parametrize("style", ["smooth", "toon"])
+def test_colour_maps_are_exported_with_their_levels_roles_and_text(tmp_path, style):
+    from refnpr.kit.styles._albedo import COLOR_TEXTURE
+    from refnpr.scenes import load_scene
+    from refnpr.styles.albedo import color_pyramid
+
+    texels = np.random.default_rng(3).integers(0, 256, (8, 8, 3), dtype=np.uint8)
+    glb = _textured_glb(tmp_path / "q.glb", texels)
+    kit = tmp_path / "kit"
+    assert main(["kit", "export", str(kit), "--scene", str(glb), "--style", style, "-q"]) == 0
+    case = json.loads((kit / f"q-{style}" / "case.json").read_text())
+    jsonschema.validate(case, load_schema())
+    names = [o["name"] for o in case["objects"]]
+    roles = case["style"]["params"]["color_texture"]
+    assert roles == [("color_0" if n == "quad" else None) for n in names]
+    quad = case["objects"][names.index("quad")]["material"]
+    ball = case["objects"][names.index("ball")]["material"]
+    assert "images[0]@sha256:" in quad["color_texture"] and "color_texture" not in ball
+    assert {"uv", "duv_dx", "duv_dy"} <= set(case["channels"])
+    assert case["derived"]["color_texture"] == COLOR_TEXTURE
+    entry = case["textures"]["color_0"]
+    assert entry["filter"] == "linear_mipmap_linear" and entry["wrap"] == "repeat"
+    pyr = color_pyramid(load_scene(glb).objects[names.index("quad")].material.color_texture)
+    assert len(entry["levels"]) == len(pyr.levels)
+    for rel, level in zip(entry["levels"], pyr.levels, strict=True):
+        np.testing.assert_array_equal(read_exr(kit / f"q-{style}" / rel), level)
+    # docs/kit.md quotes the text a backend codes from
+    lines = (REPO / "docs" / "kit.md").read_text(encoding="utf-8").splitlines()
+    doc = " ".join(" ".join(ln.removeprefix("> ") for ln in lines).split())
+    assert " ".join(COLOR_TEXTURE.split()) in doc

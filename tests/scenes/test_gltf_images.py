@@ -392,3 +392,24 @@ def test_kit_export_of_a_glb_with_an_embedded_texture(tmp_path):
     (obj,) = doc["objects"]
     assert obj["material"]["texture"] == str(texture)
     assert doc["style"]["params"]["object_textures"] == ["threshold_0"]
+
+
+def test_base_colour_texture_is_the_colour_map_and_uv_less_primitives_beside_it(tmp_path):
+    path = textured_quad(IN_VIEW, png_bytes(stripes()), "glb", tmp_path / "m.glb")
+    scene = quiet(load_gltf, path)
+    mat = scene.objects[0].material
+    assert mat.color_texture is mat.texture and isinstance(mat.color_texture, EmbeddedImage)
+    raw = path.read_bytes()
+    (n,) = struct.unpack_from("<I", raw, 12)
+    doc = json.loads(raw[20 : 20 + n])
+    # a second primitive without TEXCOORD_0 and without a material: uv (0, 0), never sampled
+    doc["meshes"][0]["primitives"].append({"attributes": {"POSITION": 0}, "indices": 2})
+    _rewrite_glb(path, doc)
+    a, b = quiet(load_gltf, path).objects
+    assert b.material.color_texture is None
+    assert b.mesh.uv.shape == (len(b.mesh.positions), 2) and not b.mesh.uv.any()
+    # ... but one whose material has the map needs its uv
+    doc["meshes"][0]["primitives"][1]["material"] = 0
+    _rewrite_glb(path, doc)
+    with pytest.raises(ValueError, match=r"meshes\[0\]\.primitives\[1\]\.attributes: the "):
+        quiet(load_gltf, path)

@@ -13,6 +13,7 @@ from typing import Any
 from refnpr.styles.lit.params import SMOOTH
 
 from .._json import jsonable
+from ._albedo import COLOR_TEXTURE, export_color_maps
 from ._export import StyleExport
 
 __all__ = ["export", "derived", "unresolved", "DERIVED"]
@@ -43,11 +44,15 @@ def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dic
 def export(
     style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
-    """Every parameter of the declaration as used (``specular``, ``model``); no textures."""
+    """Every parameter of the declaration as used (``specular``, ``model``); the colour maps
+    of the scene's materials (``params.color_texture``, roles ``color_<k>``) where it has any."""
     params = jsonable(SMOOTH.resolved(style.p), where="smooth params")
-    return StyleExport(
-        params=params, derived=derived(style, scene, width=width, height=height, spp=spp)
-    )
+    derived_texts = derived(style, scene, width=width, height=height, spp=spp)
+    roles, textures = export_color_maps(scene, case_dir)
+    if roles:  # the material colour maps
+        params["color_texture"] = roles
+        derived_texts["color_texture"] = COLOR_TEXTURE
+    return StyleExport(params=params, textures=textures, derived=derived_texts)
 
 
 def unresolved(params: dict[str, Any]) -> list[str]:

@@ -17,6 +17,7 @@ from refnpr.styles.lit.shading import lake_ramp
 
 from .._json import jsonable
 from ..textures import write_table
+from ._albedo import COLOR_TEXTURE, export_color_maps
 from ._export import StyleExport
 
 __all__ = ["export", "derived", "unresolved", "DERIVED"]
@@ -57,7 +58,8 @@ def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dic
 def export(
     style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
-    """n, t, mode, specular; in lake mode also the ramp texture ``textures/ramp/level_0.exr``."""
+    """n, t, mode, specular; in lake mode also the ramp texture ``textures/ramp/level_0.exr``;
+    the colour maps of the scene's materials (``params.color_texture``) where it has any."""
     # every parameter as the style holds it (specular false in lake mode, as the style forces)
     params = {**TOON.resolved(style.p), "specular": bool(style.specular)}
     textures = {}
@@ -72,10 +74,14 @@ def export(
         )
         params["ramp"] = "ramp"
         params["ramp_size"] = ramp.shape[-1]
+    derived_texts = derived(style, scene, width=width, height=height, spp=spp)
+    roles, maps = export_color_maps(scene, case_dir)
+    if roles:  # the material colour maps
+        params["color_texture"] = roles
+        textures.update(maps)
+        derived_texts["color_texture"] = COLOR_TEXTURE
     return StyleExport(
-        params=jsonable(params, where="toon params"),
-        textures=textures,
-        derived=derived(style, scene, width=width, height=height, spp=spp),
+        params=jsonable(params, where="toon params"), textures=textures, derived=derived_texts
     )
 
 

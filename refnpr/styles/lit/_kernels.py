@@ -46,6 +46,8 @@ class Tables(NamedTuple):
     pow_int : (O,) int64, the integer shininess k >= 1 whose f_s ``shade_smooth`` forms by
         multiplications (0: pow)
     spec_mag : (O, L) float64, 1.01 sum_c |m_s l_c|: the weight of an error in f_s
+    albedo : (nH, nW, 3) float64, the colour map's factor a of each sample, multiplying m_a and
+        m_d (``refnpr.styles.albedo``), or a (0, 0, 3) stand-in: a = 1
     """
 
     ramp: np.ndarray
@@ -55,6 +57,7 @@ class Tables(NamedTuple):
     spec_on: np.ndarray
     pow_int: np.ndarray
     spec_mag: np.ndarray
+    albedo: np.ndarray
 
 
 class Row(NamedTuple):
@@ -173,13 +176,26 @@ def _spec_term(nonzero, rgb):
 
 
 @njit
-def _add(rgb, m, mi, f, color, i):
-    """``rgb`` plus light i's term m f l (eq. 1) for object mi, channel by channel."""
+def _add(rgb, m, mi, a, f, color, i):
+    """``rgb`` plus light i's term (m a) f l (eq. 1) for object mi, channel by channel; ``a``
+    the colour map's factor (1, 1, 1 without one: m a is m exactly)."""
     return (
-        _term(rgb[0], m[mi, 0], f, color[i, 0]),
-        _term(rgb[1], m[mi, 1], f, color[i, 1]),
-        _term(rgb[2], m[mi, 2], f, color[i, 2]),
+        _term(rgb[0], m[mi, 0] * a[0], f, color[i, 0]),
+        _term(rgb[1], m[mi, 1] * a[1], f, color[i, 1]),
+        _term(rgb[2], m[mi, 2] * a[2], f, color[i, 2]),
     )
+
+
+#: The factor of a term the colour map does not scale (specular), and of a sample without one.
+_ONE = (1.0, 1.0, 1.0)
+
+
+@njit
+def _albedo_at(albedo, y, x):
+    """The colour map's factor at sample (y, x): ``albedo[y, x]``, or 1 for a stand-in."""
+    if albedo.shape[0] == 0:
+        return _ONE
+    return (albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2])
 
 
 @njit
@@ -241,7 +257,7 @@ def shade_toon(lo, hi, frame, style, tables, out, kept):
     lights = frame.lights
     eye = (frame.eye[0], frame.eye[1], frame.eye[2])
     ramp, edge_lo, edge_hi = tables.ramp, tables.edge_lo, tables.edge_hi
-    tones, spec_on = tables.tones, tables.spec_on
+    tones, spec_on, albedo = tables.tones, tables.spec_on, tables.albedo
     arrays = _grids(frame)
     cover = arrays[0]
     n_lights = color.shape[0]
@@ -266,7 +282,8 @@ def shade_toon(lo, hi, frame, style, tables, out, kept):
                 _keep_first(kept, y, x, 0.0, 0.0)
                 continue
             mi = max(mesh_id[y, x], 0)
-            rgb = (ambient[mi, 0], ambient[mi, 1], ambient[mi, 2])  # eq. 1: m_a l_a
+            a = _albedo_at(albedo, y, x)
+            rgb = (ambient[mi, 0] * a[0], ambient[mi, 1] * a[1], ambient[mi, 2] * a[2])  # m_a l_a
             p = shininess[mi]
             _keep_first(kept, y, x, 0.0, 0.0)
             for i in range(n_lights):
@@ -277,7 +294,7 @@ def shade_toon(lo, hi, frame, style, tables, out, kept):
                     tone = row.tone[i, x]  # eq. 4 in eq. 2, from _row_step_tones
                 if i == 0:
                     _keep_first(kept, y, x, f_d, tone)
-                rgb = _add(rgb, m_d, mi, tone, color, i)
+                rgb = _add(rgb, m_d, mi, a, tone, color, i)
                 if specular and p > 0.0 and _spec_term(spec_on[mi, i], rgb):
                     base = row.base[i, x]  # max(N.H, 0)
                     if f_d > 0.0:
@@ -290,7 +307,7 @@ def shade_toon(lo, hi, frame, style, tables, out, kept):
                             f_s = tones[j]  # the same: T_n is constant around base**p
                     else:
                         f_s = _step_n(0.0, t, steps)  # eq. 1: f_s = 0 where N.L <= 0
-                    rgb = _add(rgb, m_s, mi, f_s, color, i)
+                    rgb = _add(rgb, m_s, mi, _ONE, f_s, color, i)
             _store(out, y, x, rgb)
 
 
@@ -352,6 +369,7 @@ def shade_smooth(lo, hi, frame, style, tables, out, kept):
     lights = frame.lights
     eye = (frame.eye[0], frame.eye[1], frame.eye[2])
     pow_int, spec_mag, spec_on = tables.pow_int, tables.spec_mag, tables.spec_on
+    albedo = tables.albedo
     arrays = _grids(frame)
     cover = arrays[0]
     n_lights = color.shape[0]
@@ -370,12 +388,13 @@ def shade_smooth(lo, hi, frame, style, tables, out, kept):
             k = pow_int[mi]
             f_0 = row.f_d[0, x] if n_lights > 0 else 0.0
             _keep_first(kept, y, x, f_0, f_0)
+            a = _albedo_at(albedo, y, x)
             while True:  # with f_s by multiplications (k > 0), then with pow if in doubt
-                rgb = (ambient[mi, 0], ambient[mi, 1], ambient[mi, 2])  # eq. 1: m_a l_a
+                rgb = (ambient[mi, 0] * a[0], ambient[mi, 1] * a[1], ambient[mi, 2] * a[2])
                 err = 0.0  # bound of the pow replacement, summed over the terms
                 for i in range(n_lights):
                     f_d = row.f_d[i, x]
-                    rgb = _add(rgb, m_d, mi, f_d, color, i)  # eq. 1: diffuse sum
+                    rgb = _add(rgb, m_d, mi, a, f_d, color, i)  # eq. 1: diffuse sum
                     if not (specular and p > 0.0):
                         continue
                     if f_d > 0.0 and spec_on[mi, i]:
@@ -385,12 +404,12 @@ def shade_smooth(lo, hi, frame, style, tables, out, kept):
                             err = err + spec_mag[mi, i] * (abs(f_s) * (k + 3) * _POW_REL + _POW_ABS)
                         else:
                             f_s = base**p  # eq. 1: f_s
-                        rgb = _add(rgb, m_s, mi, f_s, color, i)  # eq. 1: specular sum
+                        rgb = _add(rgb, m_s, mi, _ONE, f_s, color, i)  # eq. 1: specular sum
                     elif rgb[0] == 0.0 or rgb[1] == 0.0 or rgb[2] == 0.0:
                         # f_s = 0 (eq. 1: N.L <= 0), or m_s l_i zero channel by channel: the
                         # term is the signed zero m_s 0 l_i, which changes only a zero sum
                         # (-0 + +0 = +0; see _spec_term); elsewhere it is skipped
-                        rgb = _add(rgb, m_s, mi, 0.0, color, i)
+                        rgb = _add(rgb, m_s, mi, _ONE, 0.0, color, i)
                 if k == 0 or err == 0.0:
                     break
                 # and the rounding differences of the operations after a replaced pow, at most

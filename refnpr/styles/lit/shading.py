@@ -12,6 +12,7 @@ from refnpr.formulas.threshold import step_n
 
 from .._common import keep_all, kept_out, needs_position, rgba_out
 from .._frame import frame_record
+from ..albedo import ALBEDO_CHANNELS, albedo_grid, uses_color_textures
 from ..base import ShadeContext, Style
 from . import _kernels as K
 
@@ -118,6 +119,8 @@ def lit_rgba(
         np.any((m.specular[:, None, :] != 0.0) & (color[None, :, :] != 0.0), axis=2)
     )
     none = np.zeros((1, 0))
+    albedo = albedo_grid(ctx)  # the colour maps' factors (None: no object has one)
+    albedo = np.ones((0, 0, 3)) if albedo is None else albedo
     if smooth:
         # f_s = base ** shininess by multiplications where the shininess is a small integer,
         # checked against pow's float32 result in the kernel (a float64 ``out``: pow itself)
@@ -132,9 +135,8 @@ def lit_rgba(
         ):
             powers[:] = 0
         spec_mag = 1.01 * np.abs(m.specular[:, None, :] * color[None, :, :]).sum(axis=2)
-        tables = K.Tables(
-            np.zeros(1), none, none, np.zeros(1), spec_on, powers, np.ascontiguousarray(spec_mag)
-        )
+        spec_mag = np.ascontiguousarray(spec_mag)
+        tables = K.Tables(np.zeros(1), none, none, np.zeros(1), spec_on, powers, spec_mag, albedo)
         kept = kept_out(ctx, shape, 2)
         K.shade_smooth(frame, record, tables, out, kept)
         keep_all(ctx, kept, ("tone",))
@@ -143,9 +145,8 @@ def lit_rgba(
     edge_lo, edge_hi, tones = none, none, np.zeros(1)
     if specular and record.mode != K.LAKE:
         edge_lo, edge_hi, tones = _step_edges(m.shininess, record.n, record.t)
-    tables = K.Tables(
-        ramp, edge_lo, edge_hi, tones, spec_on, np.zeros(1, dtype=np.int64), np.zeros((1, 1))
-    )
+    no_powers = np.zeros(1, dtype=np.int64)
+    tables = K.Tables(ramp, edge_lo, edge_hi, tones, spec_on, no_powers, np.zeros((1, 1)), albedo)
     kept = kept_out(ctx, shape, 2)
     K.shade_toon(frame, record, tables, out, kept)
     keep_all(ctx, kept, ("tone", "toon_tone"))
@@ -175,6 +176,8 @@ class LitStyle(Style):
         req = {"normal", "mesh_id"}
         if needs_position(scene, self.p.specular):
             req.add("position")
+        if uses_color_textures(scene):  # the colour maps multiplying m_a and m_d
+            req |= ALBEDO_CHANNELS
         return frozenset(req)
 
     def shade(self, ctx: ShadeContext, out: np.ndarray | None = None) -> np.ndarray:
