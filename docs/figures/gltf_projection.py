@@ -1,5 +1,5 @@
-"""Figure for docs/scenes.md: a glTF scene written by trimesh, rendered by refnpr from the file's
-camera, beside the file's camera's own expectation: the corners of every box projected with a
+"""Figure for docs/scenes.md: a glTF scene written by trimesh (three boxes, one with a checker
+colour map), rendered by refnpr from the file's camera, beside the file's camera's own expectation: the corners of every box projected with a
 float64 pinhole of the glTF camera (yfov, node matrix) read straight from the file's JSON.
 
 Run from the repository root: ``python docs/figures/gltf_projection.py`` (writes
@@ -28,14 +28,36 @@ W, H = 480, 320
 OUT = Path(__file__).resolve().parents[1] / "images" / "gltf-projection.png"
 
 
+def checker_box(s: float) -> trimesh.Trimesh:
+    """A cube of side ``s`` whose faces carry a 4 x 4 checker colour map (baseColorTexture):
+    vertices unshared, each face's uv its two in-plane coordinates over [0, 1]."""
+    box = trimesh.creation.box(extents=(s, s, s))
+    box.unmerge_vertices()
+    axis = np.abs(box.face_normals).argmax(axis=1).repeat(3)  # each vertex's face normal axis
+    keep = np.array([[1, 2], [0, 2], [0, 1]])[axis]
+    uv = np.take_along_axis(box.vertices, keep, axis=1) / s + 0.5
+    cells = (np.indices((64, 64)) // 16).sum(axis=0) % 2
+    image = np.where(cells[..., None] == 1, (235, 200, 120), (150, 60, 40)).astype(np.uint8)
+    box.visual = trimesh.visual.TextureVisuals(
+        uv=uv,
+        material=trimesh.visual.material.PBRMaterial(
+            baseColorFactor=(1.0, 1.0, 1.0, 1.0), baseColorTexture=Image.fromarray(image)
+        ),
+    )
+    return box
+
+
 def build(path: Path) -> None:
     scene = trimesh.Scene()
     for i, (x, z, s) in enumerate([(-1.6, 0.0, 0.8), (0.0, -0.8, 1.2), (1.7, 0.6, 0.6)]):
-        box = trimesh.creation.box(extents=(s, s, s))
-        colour = [(0.35, 0.5, 0.8, 1.0), (0.8, 0.45, 0.3, 1.0), (0.4, 0.7, 0.4, 1.0)][i]
-        box.visual = trimesh.visual.TextureVisuals(
-            material=trimesh.visual.material.PBRMaterial(baseColorFactor=colour)
-        )
+        if i == 1:  # a colour map, as user content has
+            box = checker_box(s)
+        else:
+            box = trimesh.creation.box(extents=(s, s, s))
+            colour = [(0.35, 0.5, 0.8, 1.0), None, (0.4, 0.7, 0.4, 1.0)][i]
+            box.visual = trimesh.visual.TextureVisuals(
+                material=trimesh.visual.material.PBRMaterial(baseColorFactor=colour)
+            )
         move = trimesh.transformations.translation_matrix([x, s / 2, z])
         scene.add_geometry(box, node_name=f"box{i}", transform=move)
     scene.camera.resolution = (W, H)
