@@ -18,8 +18,7 @@ literature it captures.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from refnpr import _lazy
 
 #: Public name -> submodule. Imported on first use: ``import refnpr.coherence`` does not pay for
 #: the renderer.
@@ -40,14 +39,4 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = _lazy(__name__, _EXPORTS)
