@@ -4,9 +4,10 @@ Reads only the kit: ``case.data["style"]["params"]`` (every parameter resolved b
 exporter, ``refnpr/kit/styles/threshold.py``), the objects' materials, the lights, the eye, and
 the textures the style samples (threshold pyramids with every mip level, interpolation tone
 maps, the stipple tone table, the bump pyramid). The shader sources are in
-``refnpr_glsl/shaders/threshold/``; this module generates the per-case constants (materials,
+``refnpr_glsl/shaders/threshold/`` (and the pyramid sampling shared with other styles in
+``shaders/common/pyramid.glsl``); this module generates the per-case constants (materials,
 lights, uv scales, layer schedule, buffer offsets) that precede them, packs the texture levels
-into one float storage buffer, and runs the pass.
+into one float storage buffer (:class:`refnpr_glsl.pyramids.TexelBuffer`), and runs the pass.
 
 Precision (``precision``, default :data:`PRECISION` = "float"): "float" runs everything in
 float32, as a GPU shader would; "double" runs the line coordinates, their analytic box filter,
@@ -27,6 +28,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from ..pyramids import PYRAMID_GLSL, TexelBuffer
 
 __all__ = [
     "shade",
@@ -77,58 +80,6 @@ def _vec3(v: Any) -> str:
     return f"vec3({_f(a[0])}, {_f(a[1])}, {_f(a[2])})"
 
 
-class _Data:
-    """The float storage buffer: texture levels and tables, with offsets."""
-
-    def __init__(self) -> None:
-        self.chunks: list[np.ndarray] = []
-        self.size = 0
-        self.lv_off: list[int] = []
-        self.lv_rows: list[int] = []
-        self.lv_cols: list[int] = []
-        self.lv0: list[int] = []
-        self.nlev: list[int] = []
-        self.pyramids: list[list[np.ndarray]] = []
-
-    def add(self, arr: np.ndarray) -> int:
-        flat = np.ascontiguousarray(arr, dtype=np.float32).ravel()
-        off = self.size
-        self.chunks.append(flat)
-        self.size += flat.size
-        return off
-
-    def add_pyramid(self, levels: list[np.ndarray], role: str) -> int:
-        """Append a gray pyramid; returns its pyramid index g."""
-        self.lv0.append(len(self.lv_off))
-        self.nlev.append(len(levels))
-        self.pyramids.append([])
-        for k, lv in enumerate(levels):
-            lv = np.asarray(lv, dtype=np.float32)
-            if lv.ndim == 3 and lv.shape[2] == 1:
-                lv = lv[..., 0]
-            if lv.ndim != 2:
-                raise ValueError(
-                    f"texture {role!r} level {k}: expected a gray (H, W) level, got {lv.shape}"
-                )
-            self.pyramids[-1].append(lv)
-            self.lv_off.append(self.add(lv))
-            self.lv_rows.append(int(lv.shape[0]))
-            self.lv_cols.append(int(lv.shape[1]))
-        return len(self.lv0) - 1
-
-    def array(self) -> np.ndarray:
-        if not self.chunks:
-            return np.zeros(1, dtype=np.float32)
-        return np.concatenate(self.chunks)
-
-
-def _gray(arr: np.ndarray) -> np.ndarray:
-    a = np.asarray(arr)
-    if a.dtype == np.uint8:
-        a = a.astype(np.float32) / 255.0
-    return a.astype(np.float32)
-
-
 def fragment_source(
     case: Any, *, precision: str | None = None, sampling: str | None = None
 ) -> tuple[str, np.ndarray, dict[str, list[np.ndarray]]]:
@@ -170,7 +121,7 @@ def fragment_source(
             f"case {data.get('name')!r}: params.uv_scales has {len(uvs)} entries for "
             f"{len(objects)} objects"
         )
-    buf = _Data()
+    buf = TexelBuffer()
     src = p["source"]
     filt = p["filter"]
     k = int(round(math.sqrt(p["samples"]))) if filt == "pcf" else 1
@@ -256,7 +207,7 @@ def fragment_source(
             if role is None:
                 continue
             if role not in role_group:
-                g = buf.add_pyramid([_gray(a) for a in case.texture(role)], role)
+                g = buf.add_pyramid(case.texture(role), role)
                 role_group[role] = g
                 tm_role = tone_roles[i]
                 if p["tone_correct"]:
@@ -276,18 +227,14 @@ def fragment_source(
             groups[i] = role_group[role]
         d["TONE_CORRECT"] = int(bool(p["tone_correct"]))
     if p.get("bump") is not None:
-        d["BUMP_G"] = buf.add_pyramid([_gray(a) for a in case.texture(p["bump"])], "bump")
+        d["BUMP_G"] = buf.add_pyramid(case.texture(p["bump"]), "bump")
     if src == "stipple" and p["uniform"]:
         nt, _, ny = p["stipple_tone_shape"]
         table = np.asarray(case.texture(p["stipple_tone"])[0], dtype=np.float32)
         d.update(STIPPLE_TONE=1, STIPPLE_NT=nt, STIPPLE_NY=ny, STIPPLE_OFF=buf.add(table))
     consts.append(_arr("int", "GROUP", [str(g) for g in groups]))
     consts.append(_arr("int", "TM_OFF", [str(o) for o in tm_off]))
-    consts.append(_arr("int", "LV0", [str(o) for o in buf.lv0]))
-    consts.append(_arr("int", "NLEV", [str(o) for o in buf.nlev]))
-    consts.append(_arr("int", "LV_OFF", [str(o) for o in buf.lv_off]))
-    consts.append(_arr("int", "LV_ROWS", [str(o) for o in buf.lv_rows]))
-    consts.append(_arr("int", "LV_COLS", [str(o) for o in buf.lv_cols]))
+    consts.append(buf.tables())
     if src == "lines":
         rad = [math.radians(a) for a in p["directions"]]
         consts.append(_arr("real", "SIN_A", [rl(math.sin(a)) for a in rad]))
@@ -317,7 +264,7 @@ def fragment_source(
             + cases
             + "    }\n    return 0.0;\n}\n"
         )
-    body = "".join((SHADER_DIR / f).read_text() for f in _FILES)
+    body = PYRAMID_GLSL.read_text() + "".join((SHADER_DIR / f).read_text() for f in _FILES)
     return head + "".join(consts) + body, buf.array(), samplers
 
 

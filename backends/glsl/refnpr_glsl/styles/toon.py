@@ -5,6 +5,9 @@ l_i`` with eq. 4's T_n bounded by ceil(x n) / n (refnpr's ``step_n``), computed 
 ``mode="lake"`` (Lake et al. 2000): ``I = m_a l_a + sum m_d ramp(N.L) l_i``, a nearest-texel lookup
 of the kit's 1D ramp texture (role "ramp": ``K`` texels, texel ``min(floor(clamp(N.L, 0, 1) K),
 K - 1)``) with ``texelFetch``; without the texture, the ramp is evaluated from n and t.
+With colour maps (``params.color_texture``, :mod:`refnpr_glsl.color_maps`) m_a and m_d are
+multiplied by the map's linear RGB ``a`` at the sample: ``(m_a l_a) a`` and ``(m_d a) tone l_i``
+(the specular term is not scaled).
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from typing import Any
 
 import moderngl
 
+from ..color_maps import ColorMaps, bind, color_maps, shading_terms
 from ..context import GL
 from ..kit_io import Case
 from ..lighting import dlit, preamble
@@ -30,10 +34,21 @@ double step_n(double x, double t, double n) {
 """
 
 
-def fragment_source(case: Case, gbuffer: dict[str, Any], *, ramp_size: int | None) -> str:
+def fragment_source(
+    case: Case,
+    gbuffer: dict[str, Any],
+    *,
+    ramp_size: int | None,
+    maps: ColorMaps | None | bool = True,
+) -> str:
     """The full-screen fragment shader (parameters inlined); ``ramp_size``: texels of the ramp
-    texture bound as ``ramp`` (lake mode), or None to evaluate the ramp analytically."""
+    texture bound as ``ramp`` (lake mode), or None to evaluate the ramp analytically; ``maps``:
+    the case's colour maps (:func:`refnpr_glsl.color_maps.color_maps`; True: read them from
+    the case)."""
     p = case.params
+    if maps is True:
+        maps = color_maps(case)
+    setup, ambient, diffuse = shading_terms(maps or None)
     n = int(p.get("n", 2))
     t = float(p.get("t", 0.5))
     mode = p.get("mode", "step")
@@ -70,6 +85,7 @@ double lake_tone(double fd, int k) {{
     )
     return (
         preamble(case, gbuffer)
+        + (maps.source if maps else "")
         + _STEP_N
         + decl
         + f"""
@@ -77,12 +93,12 @@ out vec4 o_rgba;
 void main() {{
     shade_inputs();
     if (!covered) {{ o_rgba = vec4(0.0); return; }}
-    dvec3 rgb = M_ambient[mid] * AMBIENT;  // eq. 2
+    {setup}dvec3 rgb = {ambient};  // eq. 2
     for (int i = 0; i < N_LIGHTS; ++i) {{
         dvec3 L = light_dir(i, P);
         dvec3 c = light_color(i);
         double fd = f_diffuse(N, L);
-        rgb += M_diffuse[mid] * {tone} * c;
+        rgb += {diffuse} * {tone} * c;
         {spec}
     }}
     o_rgba = vec4(vec3(clamp(rgb, 0.0LF, 1.0LF)), 1.0);
@@ -105,8 +121,15 @@ def shade(
         ramp = ramp.reshape(1, -1)
         ramp_size = ramp.shape[1]
         textures["ramp"] = gl.texture_from_array(ramp, dtype="f4", wrap="clamp", filter="nearest")
+    maps = color_maps(case)
     out = gl.empty(size, 4, "f4")
-    gl.fullscreen(fragment_source(case, gbuffer, ramp_size=ramp_size), out, textures)
-    if "ramp" in textures:
-        textures["ramp"].release()
+    ssbo = bind(gl, maps)
+    try:
+        source = fragment_source(case, gbuffer, ramp_size=ramp_size, maps=maps)
+        gl.fullscreen(source, out, textures)
+    finally:
+        if ssbo is not None:
+            ssbo.release()
+        if "ramp" in textures:
+            textures["ramp"].release()
     return out

@@ -1,45 +1,28 @@
 // threshold style: image threshold pyramids (sec. 3.1) and the bump height pyramid, sampled
 // exactly as refnpr/texture/_kernels.py does (GL_REPEAT bilinear per level, texel centres at
-// (i + 0.5) / size, linear between levels) from texels in the DATA buffer (level k of pyramid
-// g: rows LV_ROWS[LV0[g] + k], cols LV_COLS[...], row-major at DATA[LV_OFF[...]]).
+// (i + 0.5) / size, linear between levels) from texels in the DATA buffer (common/pyramid.glsl:
+// level k of pyramid g: rows LV_ROWS[LV0[g] + k], cols LV_COLS[...], row-major at DATA[LV_OFF[...]]).
 // refnpr: refnpr/styles/threshold/images.py, refnpr/texture/sample.py.
 // HW_SAMPLING 1: the sampler hardware instead (textureLod on the kit's mip levels, GL_REPEAT,
 // LINEAR_MIPMAP_LINEAR; hw_sample(g, uv, lod) is generated), to measure what a plain GPU
 // texture fetch changes.
 
-int wrap_i(int i, int n) {
-    int r = i % n;
-    return r < 0 ? r + n : r;
-}
-
-float texel(int lv, int row, int col) { return DATA[LV_OFF[lv] + row * LV_COLS[lv] + col]; }
-
-// bilinear GL_REPEAT sample of level k of pyramid g (k clamped to the pyramid)
+// bilinear GL_REPEAT sample of level k of pyramid g (k clamped to the pyramid); the taps and
+// level weights are common/pyramid.glsl's
 real sample_level(int g, rvec2 uv, int k) {
 #if HW_SAMPLING
     return real(hw_sample(g, vec2(uv), float(clamp(k, 0, NLEV[g] - 1))));
 #endif
     int lv = LV0[g] + clamp(k, 0, NLEV[g] - 1);
-    int rows = LV_ROWS[lv], cols = LV_COLS[lv];
-    real x = (uv.x - floor(uv.x)) * real(cols) - 0.5;
-    real y = (uv.y - floor(uv.y)) * real(rows) - 0.5;
-    real x0 = floor(x), y0 = floor(y);
-    real fx = x - x0, fy = y - y0;
-    int i0 = wrap_i(int(x0), cols), i1 = wrap_i(int(x0) + 1, cols);
-    int j0 = wrap_i(int(y0), rows), j1 = wrap_i(int(y0) + 1, rows);
-    real s = (1.0 - fx) * (1.0 - fy) * real(texel(lv, j0, i0))
-             + fx * (1.0 - fy) * real(texel(lv, j0, i1))
-             + (1.0 - fx) * fy * real(texel(lv, j1, i0))
-             + fx * fy * real(texel(lv, j1, i1));
+    int o = LV_OFF[lv];
+    ivec4 t;
+    real fx, fy;
+    bilinear_taps(lv, uv, t, fx, fy);
+    real s = (1.0 - fx) * (1.0 - fy) * real(DATA[o + t.x])
+             + fx * (1.0 - fy) * real(DATA[o + t.y])
+             + (1.0 - fx) * fy * real(DATA[o + t.z])
+             + fx * fy * real(DATA[o + t.w]);
     return s;
-}
-
-// the two levels trilinear filtering blends: lambda clamped to [0, L - 1]
-void level_weights(int g, float lod, out int k0, out int k1, out float f) {
-    float lam = clamp(lod, 0.0, float(NLEV[g] - 1));
-    k0 = int(floor(lam));
-    k1 = min(k0 + 1, NLEV[g] - 1);
-    f = lam - float(k0);
 }
 
 real sample_trilinear(int g, rvec2 uv, float lod) {
