@@ -1,4 +1,4 @@
-"""Smooth shading's kernel (``lit._kernels.shade_smooth``): f_s = base ** k by multiplications
+"""Smooth shading's kernel (``lit._kernels.shade_smooth_for``): f_s = base ** k by multiplications
 for integer shininess, checked against pow. Oracles: the numpy shade() of
 tests/styles/test_shade_kernels.py and the same kernel with pow for every f_s (``pow_int=False``),
 exact float32 equality; the fallback to pow forced by an inflated error bound; 1 vs 2 numba
@@ -75,13 +75,14 @@ def test_fallback_to_pow_when_in_doubt():
     real = K._POW_REL
     try:  # module constants are frozen into the compiled kernel: rebuild it uncached
         K._POW_REL = real * 1e12
-        body = numba.njit(error_model="numpy", nogil=True)(K.shade_smooth.py_func)
-        inflated = Banded(body, K.shade_smooth.count)
-        saved, K.shade_smooth = K.shade_smooth, inflated
+        kernel = K.shade_smooth_for(False, False)
+        body = numba.njit(error_model="numpy", nogil=True)(kernel.py_func)
+        inflated = Banded(body, kernel.count)
+        saved, K.shade_smooth_for = K.shade_smooth_for, lambda *modes: inflated
         same_bits(SmoothStyle().shade(ctx), want)
     finally:
         K._POW_REL = real
-        K.shade_smooth = saved
+        K.shade_smooth_for = saved
 
 
 def test_same_result_for_one_and_two_threads():

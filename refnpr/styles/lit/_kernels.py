@@ -2,8 +2,8 @@
 
 Banded over the sample rows (a row per task, no reductions, so the result does not depend on
 the thread count): per covered sample, Veryovka eq. 1's ambient + diffuse + specular sums
-(``shade_smooth``), or their multi-tone steps of eqs. 2-4 and Lake et al.'s ramp
-(``shade_toon``), from the formulas of :mod:`refnpr.formulas.lighting` and
+(``shade_smooth_for``), or their multi-tone steps of eqs. 2-4 and Lake et al.'s ramp
+(``shade_toon_for``), from the formulas of :mod:`refnpr.formulas.lighting` and
 :mod:`refnpr.formulas.threshold`, stored as float32 straight-alpha RGBA clipped to [0, 1].
 
 Each row first goes through branch-free passes over contiguous float64 scratch rows (V, each
@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from refnpr._jit import banded, njit
+from refnpr._jit import banded, njit, specialised
 from refnpr.device.lights import LIGHT_POINT
 from refnpr.device.vectors import towards
 from refnpr.formulas.lighting import diffuse, illumination_term, specular_base, toon_ramp
@@ -43,7 +43,7 @@ class Tables(NamedTuple):
         ``shading._step_edges``), else any
     spec_on : (O, L) bool, m_s and the light's colour both nonzero in some channel (else the
         specular term, a signed zero, is skipped: ``_spec_term``)
-    pow_int : (O,) int64, the integer shininess k >= 1 whose f_s ``shade_smooth`` forms by
+    pow_int : (O,) int64, the integer shininess k >= 1 whose f_s the smooth kernel forms by
         multiplications (0: pow)
     spec_mag : (O, L) float64, 1.01 sum_c |m_s l_c|: the weight of an error in f_s
     albedo : (nH, nW, 3) float64, the colour map's factor a of each sample, multiplying m_a and
@@ -191,14 +191,6 @@ _ONE = (1.0, 1.0, 1.0)
 
 
 @njit
-def _albedo_at(albedo, y, x):
-    """The colour map's factor at sample (y, x): ``albedo[y, x]``, or 1 for a stand-in."""
-    if albedo.shape[0] == 0:
-        return _ONE
-    return (albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2])
-
-
-@njit
 def _store(out, y, x, rgb):
     out[y, x, 0] = min(max(rgb[0], 0.0), 1.0)
     out[y, x, 1] = min(max(rgb[1], 0.0), 1.0)
@@ -229,86 +221,92 @@ LAKE = TOON.code("mode", "lake")
 PHONG = SMOOTH.code("model", "phong")
 
 
-@njit
-def _keep_first(kept, y, x, a, b):
-    """``kept[y, x] = (a, b)`` where ``kept`` holds a frame's intermediates (a (0, 0, 2)
-    stand-in: nobody reads them)."""
-    if kept.shape[0] > 0:
-        kept[y, x, 0] = a
-        kept[y, x, 1] = b
+@specialised
+def shade_toon_for(mapped, keep):
+    """:func:`shade_toon` with (``mapped``) or without the colour maps' factors
+    (``tables.albedo``) and with (``keep``) or without the intermediates (``kept``): numba
+    prunes the other branches, so a frame without them runs the code it ran before."""
 
-
-@banded("out")
-def shade_toon(lo, hi, frame, style, tables, out, kept):
-    """Toon shading of rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` (written in full; zero where
-    empty): eq. 2 with both terms through T_n(., t, n) of eq. 4 (``style.mode`` STEP), or
-    ``m_a l_a + sum m_d ramp(N.L) l_i`` (LAKE, Lake et al. 2000, nearest texel), from the frame
-    record (cover, mesh_id, normal, position where read, eye, lights, materials), the toon
-    style record (n, t, mode, specular) and :class:`Tables`. The specular T_n takes
-    ``tables.tones[j]`` where the base lies in [edge_hi[j - 1], edge_lo[j]] (its tone is certain
-    there, see ``shading._step_edges``), elsewhere pow as the formula does. ``kept (nH, nW,
-    2)`` float64: the first light's f_d and its toon tone (T_n or the ramp), 0 where empty; or
-    a (0, 0, 2) stand-in.
-    """
-    mesh_id = frame.mesh_id
-    m = frame.materials
-    ambient, m_d, m_s, shininess = m.ambient, m.diffuse, m.specular, m.shininess
-    color = frame.lights.color
-    lights = frame.lights
-    eye = (frame.eye[0], frame.eye[1], frame.eye[2])
-    ramp, edge_lo, edge_hi = tables.ramp, tables.edge_lo, tables.edge_hi
-    tones, spec_on, albedo = tables.tones, tables.spec_on, tables.albedo
-    arrays = _grids(frame)
-    cover = arrays[0]
-    n_lights = color.shape[0]
-    nw = cover.shape[1]
-    steps = style.n
-    t = style.t
-    specular = style.specular
-    lake = style.mode == LAKE
-    k_ramp = ramp.shape[0]
-    n_edges = edge_lo.shape[1]
-    row = _scratch(n_lights, nw)
-    for y in range(lo, hi):
-        # phong as a bool, not the literal False: _light_row and _specular_base then compile
-        # once for both kernels
-        x0, x1 = _row_terms(lights, eye, arrays, y, (specular, np.bool_(False)), row)
-        if not lake:
-            for i in range(n_lights):
-                _row_step_tones(row.f_d[i, x0:x1], t, steps, row.tone[i, x0:x1])
-        for x in range(nw):
-            if cover[y, x] < 0:
-                _clear(out, y, x)
-                _keep_first(kept, y, x, 0.0, 0.0)
-                continue
-            mi = max(mesh_id[y, x], 0)
-            a = _albedo_at(albedo, y, x)
-            rgb = (ambient[mi, 0] * a[0], ambient[mi, 1] * a[1], ambient[mi, 2] * a[2])  # m_a l_a
-            p = shininess[mi]
-            _keep_first(kept, y, x, 0.0, 0.0)
-            for i in range(n_lights):
-                f_d = row.f_d[i, x]
-                if lake:  # Lake et al.: nearest texel of clip(N.L, 0, 1)
-                    tone = ramp[_toon_ramp(f_d, k_ramp)]
-                else:
-                    tone = row.tone[i, x]  # eq. 4 in eq. 2, from _row_step_tones
-                if i == 0:
-                    _keep_first(kept, y, x, f_d, tone)
-                rgb = _add(rgb, m_d, mi, a, tone, color, i)
-                if specular and p > 0.0 and _spec_term(spec_on[mi, i], rgb):
-                    base = row.base[i, x]  # max(N.H, 0)
-                    if f_d > 0.0:
-                        j = 0
-                        while j < n_edges and base >= edge_hi[mi, j]:
-                            j += 1
-                        if (j < n_edges and base > edge_lo[mi, j]) or tones[j] < 0.0:
-                            f_s = _step_n(base**p, t, steps)  # eq. 4 of eq. 1's f_s
-                        else:
-                            f_s = tones[j]  # the same: T_n is constant around base**p
+    @banded("out")
+    def shade_toon(lo, hi, frame, style, tables, out, kept):
+        """Toon shading of rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` (written in full; zero
+        where empty): eq. 2 with both terms through T_n(., t, n) of eq. 4 (``style.mode``
+        STEP), or ``m_a l_a + sum m_d ramp(N.L) l_i`` (LAKE, Lake et al. 2000, nearest texel),
+        from the frame record (cover, mesh_id, normal, position where read, eye, lights,
+        materials), the toon style record (n, t, mode, specular) and :class:`Tables`. The
+        specular T_n takes ``tables.tones[j]`` where the base lies in [edge_hi[j - 1],
+        edge_lo[j]] (its tone is certain there, see ``shading._step_edges``), elsewhere pow as
+        the formula does. ``kept (nH, nW, 2)`` float64 (``keep``): the first light's f_d and its
+        toon tone (T_n or the ramp), 0 where empty.
+        """
+        mesh_id = frame.mesh_id
+        m = frame.materials
+        ambient, m_d, m_s, shininess = m.ambient, m.diffuse, m.specular, m.shininess
+        color = frame.lights.color
+        lights = frame.lights
+        eye = (frame.eye[0], frame.eye[1], frame.eye[2])
+        ramp, edge_lo, edge_hi = tables.ramp, tables.edge_lo, tables.edge_hi
+        tones, spec_on, albedo = tables.tones, tables.spec_on, tables.albedo
+        arrays = _grids(frame)
+        cover = arrays[0]
+        n_lights = color.shape[0]
+        nw = cover.shape[1]
+        steps = style.n
+        t = style.t
+        specular = style.specular
+        lake = style.mode == LAKE
+        k_ramp = ramp.shape[0]
+        n_edges = edge_lo.shape[1]
+        row = _scratch(n_lights, nw)
+        for y in range(lo, hi):
+            # phong as a bool, not the literal False: _light_row and _specular_base then compile
+            # once for both kernels
+            x0, x1 = _row_terms(lights, eye, arrays, y, (specular, np.bool_(False)), row)
+            if not lake:
+                for i in range(n_lights):
+                    _row_step_tones(row.f_d[i, x0:x1], t, steps, row.tone[i, x0:x1])
+            for x in range(nw):
+                if cover[y, x] < 0:
+                    _clear(out, y, x)
+                    if keep:
+                        kept[y, x, 0] = 0.0
+                        kept[y, x, 1] = 0.0
+                    continue
+                mi = max(mesh_id[y, x], 0)
+                a = _ONE
+                if mapped:  # the colour map's factor
+                    a = (albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2])
+                rgb = (ambient[mi, 0] * a[0], ambient[mi, 1] * a[1], ambient[mi, 2] * a[2])
+                p = shininess[mi]
+                if keep:
+                    kept[y, x, 0] = 0.0
+                    kept[y, x, 1] = 0.0
+                for i in range(n_lights):
+                    f_d = row.f_d[i, x]
+                    if lake:  # Lake et al.: nearest texel of clip(N.L, 0, 1)
+                        tone = ramp[_toon_ramp(f_d, k_ramp)]
                     else:
-                        f_s = _step_n(0.0, t, steps)  # eq. 1: f_s = 0 where N.L <= 0
-                    rgb = _add(rgb, m_s, mi, _ONE, f_s, color, i)
-            _store(out, y, x, rgb)
+                        tone = row.tone[i, x]  # eq. 4 in eq. 2, from _row_step_tones
+                    if keep and i == 0:
+                        kept[y, x, 0] = f_d
+                        kept[y, x, 1] = tone
+                    rgb = _add(rgb, m_d, mi, a, tone, color, i)
+                    if specular and p > 0.0 and _spec_term(spec_on[mi, i], rgb):
+                        base = row.base[i, x]  # max(N.H, 0)
+                        if f_d > 0.0:
+                            j = 0
+                            while j < n_edges and base >= edge_hi[mi, j]:
+                                j += 1
+                            if (j < n_edges and base > edge_lo[mi, j]) or tones[j] < 0.0:
+                                f_s = _step_n(base**p, t, steps)  # eq. 4 of eq. 1's f_s
+                            else:
+                                f_s = tones[j]  # the same: T_n is constant around base**p
+                        else:
+                            f_s = _step_n(0.0, t, steps)  # eq. 1: f_s = 0 where N.L <= 0
+                        rgb = _add(rgb, m_s, mi, _ONE, f_s, color, i)
+                _store(out, y, x, rgb)
+
+    return shade_toon
 
 
 #: Relative error of f_s by repeated multiplication, per unit of the exponent (u = 2^-53 with
@@ -344,82 +342,101 @@ def _same_float32(v, e):
     return lo == hi
 
 
-@banded("out")
-def shade_smooth(lo, hi, frame, style, tables, out, kept):
-    """Smooth shading (Veryovka eq. 1) of rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` from the
-    frame record, the smooth style record (specular, model) and :class:`Tables`, with f_s =
-    base ** shininess by multiplications where ``tables.pow_int`` holds the object's integer
-    shininess k >= 1 (0: pow). A sample whose N.L <= 0 has f_s = 0 (eq. 1) whatever the base,
-    and an object without a specular colour (``tables.spec_on``) a zero term: there the term is
-    a signed zero, added only to a zero sum (where it can turn -0 into +0, as the formula does;
-    ``_spec_term``).
+@specialised
+def shade_smooth_for(mapped, keep):
+    """:func:`shade_smooth` with (``mapped``) or without the colour maps' factors
+    (``tables.albedo``) and with (``keep``) or without the intermediates (``kept``), as
+    :func:`shade_toon_for`."""
 
-    Such a sample's colour carries a bound on its distance from the colour with libm's pow
-    (relative (k + 3) u on f_s, then the rounding of the operations that follow); where the
-    bound leaves the clipped float32 value in doubt the sample is shaded again with pow, so the
-    stored result is the pow one, bit for bit. ``out`` must be float32, and every material
-    and light colour non-negative (the terms summed then bound the rounding), where any k > 0.
-    ``kept (nH, nW, 2)`` float64: the first light's f_d twice, 0 where empty; or a (0, 0, 2)
-    stand-in.
-    """
-    mesh_id = frame.mesh_id
-    m = frame.materials
-    ambient, m_d, m_s, shininess = m.ambient, m.diffuse, m.specular, m.shininess
-    color = frame.lights.color
-    lights = frame.lights
-    eye = (frame.eye[0], frame.eye[1], frame.eye[2])
-    pow_int, spec_mag, spec_on = tables.pow_int, tables.spec_mag, tables.spec_on
-    albedo = tables.albedo
-    arrays = _grids(frame)
-    cover = arrays[0]
-    n_lights = color.shape[0]
-    nw = cover.shape[1]
-    specular = style.specular
-    row = _scratch(n_lights, nw)
-    for y in range(lo, hi):
-        _row_terms(lights, eye, arrays, y, (specular, style.model == PHONG), row)
-        for x in range(nw):
-            if cover[y, x] < 0:
-                _clear(out, y, x)
-                _keep_first(kept, y, x, 0.0, 0.0)
-                continue
-            mi = max(mesh_id[y, x], 0)
-            p = shininess[mi]
-            k = pow_int[mi]
-            f_0 = row.f_d[0, x] if n_lights > 0 else 0.0
-            _keep_first(kept, y, x, f_0, f_0)
-            a = _albedo_at(albedo, y, x)
-            while True:  # with f_s by multiplications (k > 0), then with pow if in doubt
-                rgb = (ambient[mi, 0] * a[0], ambient[mi, 1] * a[1], ambient[mi, 2] * a[2])
-                err = 0.0  # bound of the pow replacement, summed over the terms
-                for i in range(n_lights):
-                    f_d = row.f_d[i, x]
-                    rgb = _add(rgb, m_d, mi, a, f_d, color, i)  # eq. 1: diffuse sum
-                    if not (specular and p > 0.0):
-                        continue
-                    if f_d > 0.0 and spec_on[mi, i]:
-                        base = row.base[i, x]  # max(R.V, 0) or max(N.H, 0)
-                        if k > 0:  # base ** p within e_s (checked below)
-                            f_s = _int_pow(base, k)
-                            err = err + spec_mag[mi, i] * (abs(f_s) * (k + 3) * _POW_REL + _POW_ABS)
-                        else:
-                            f_s = base**p  # eq. 1: f_s
-                        rgb = _add(rgb, m_s, mi, _ONE, f_s, color, i)  # eq. 1: specular sum
-                    elif rgb[0] == 0.0 or rgb[1] == 0.0 or rgb[2] == 0.0:
-                        # f_s = 0 (eq. 1: N.L <= 0), or m_s l_i zero channel by channel: the
-                        # term is the signed zero m_s 0 l_i, which changes only a zero sum
-                        # (-0 + +0 = +0; see _spec_term); elsewhere it is skipped
-                        rgb = _add(rgb, m_s, mi, _ONE, 0.0, color, i)
-                if k == 0 or err == 0.0:
-                    break
-                # and the rounding differences of the operations after a replaced pow, at most
-                # an ulp of the (non-negative) terms summed, r + g + b
-                err = err + (4 * n_lights + 4) * _ULP * (abs(rgb[0]) + abs(rgb[1]) + abs(rgb[2]))
-                if (
-                    _same_float32(rgb[0], err)
-                    and _same_float32(rgb[1], err)
-                    and _same_float32(rgb[2], err)
-                ):
-                    break
-                k = 0
-            _store(out, y, x, rgb)
+    @banded("out")
+    def shade_smooth(lo, hi, frame, style, tables, out, kept):
+        """Smooth shading (Veryovka eq. 1) of rows ``lo..hi - 1`` of ``out (nH, nW, 4)`` from
+        the frame record, the smooth style record (specular, model) and :class:`Tables`, with
+        f_s = base ** shininess by multiplications where ``tables.pow_int`` holds the object's
+        integer shininess k >= 1 (0: pow). A sample whose N.L <= 0 has f_s = 0 (eq. 1)
+        whatever the base, and an object without a specular colour (``tables.spec_on``) a zero
+        term: there the term is a signed zero, added only to a zero sum (where it can turn -0
+        into +0, as the formula does; ``_spec_term``).
+
+        Such a sample's colour carries a bound on its distance from the colour with libm's pow
+        (relative (k + 3) u on f_s, then the rounding of the operations that follow); where the
+        bound leaves the clipped float32 value in doubt the sample is shaded again with pow, so
+        the stored result is the pow one, bit for bit. ``out`` must be float32, and every
+        material and light colour non-negative (the terms summed then bound the rounding),
+        where any k > 0. ``kept (nH, nW, 2)`` float64 (``keep``): the first light's f_d twice,
+        0 where empty.
+        """
+        mesh_id = frame.mesh_id
+        m = frame.materials
+        ambient, m_d, m_s, shininess = m.ambient, m.diffuse, m.specular, m.shininess
+        color = frame.lights.color
+        lights = frame.lights
+        eye = (frame.eye[0], frame.eye[1], frame.eye[2])
+        pow_int, spec_mag, spec_on = tables.pow_int, tables.spec_mag, tables.spec_on
+        albedo = tables.albedo
+        arrays = _grids(frame)
+        cover = arrays[0]
+        n_lights = color.shape[0]
+        nw = cover.shape[1]
+        specular = style.specular
+        row = _scratch(n_lights, nw)
+        for y in range(lo, hi):
+            _row_terms(lights, eye, arrays, y, (specular, style.model == PHONG), row)
+            for x in range(nw):
+                if cover[y, x] < 0:
+                    _clear(out, y, x)
+                    if keep:
+                        kept[y, x, 0] = 0.0
+                        kept[y, x, 1] = 0.0
+                    continue
+                mi = max(mesh_id[y, x], 0)
+                p = shininess[mi]
+                k = pow_int[mi]
+                if keep:
+                    f_0 = row.f_d[0, x] if n_lights > 0 else 0.0
+                    kept[y, x, 0] = f_0
+                    kept[y, x, 1] = f_0
+                a = _ONE
+                if mapped:  # the colour map's factor
+                    a = (albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2])
+                m_a = (ambient[mi, 0] * a[0], ambient[mi, 1] * a[1], ambient[mi, 2] * a[2])
+                while True:  # with f_s by multiplications (k > 0), then with pow if in doubt
+                    rgb = m_a  # eq. 1: m_a l_a
+                    err = 0.0  # bound of the pow replacement, summed over the terms
+                    for i in range(n_lights):
+                        f_d = row.f_d[i, x]
+                        rgb = _add(rgb, m_d, mi, a, f_d, color, i)  # eq. 1: diffuse sum
+                        if not (specular and p > 0.0):
+                            continue
+                        if f_d > 0.0 and spec_on[mi, i]:
+                            base = row.base[i, x]  # max(R.V, 0) or max(N.H, 0)
+                            if k > 0:  # base ** p within e_s (checked below)
+                                f_s = _int_pow(base, k)
+                                err = err + spec_mag[mi, i] * (
+                                    abs(f_s) * (k + 3) * _POW_REL + _POW_ABS
+                                )
+                            else:
+                                f_s = base**p  # eq. 1: f_s
+                            rgb = _add(rgb, m_s, mi, _ONE, f_s, color, i)  # eq. 1: specular sum
+                        elif rgb[0] == 0.0 or rgb[1] == 0.0 or rgb[2] == 0.0:
+                            # f_s = 0 (eq. 1: N.L <= 0), or m_s l_i zero channel by channel: the
+                            # term is the signed zero m_s 0 l_i, which changes only a zero sum
+                            # (-0 + +0 = +0; see _spec_term); elsewhere it is skipped
+                            rgb = _add(rgb, m_s, mi, _ONE, 0.0, color, i)
+                    if k == 0 or err == 0.0:
+                        break
+                    # and the rounding differences of the operations after a replaced pow, at most
+                    # an ulp of the (non-negative) terms summed, r + g + b
+                    err = err + (4 * n_lights + 4) * _ULP * (
+                        abs(rgb[0]) + abs(rgb[1]) + abs(rgb[2])
+                    )
+                    if (
+                        _same_float32(rgb[0], err)
+                        and _same_float32(rgb[1], err)
+                        and _same_float32(rgb[2], err)
+                    ):
+                        break
+                    k = 0
+                _store(out, y, x, rgb)
+
+    return shade_smooth

@@ -1,5 +1,5 @@
-"""Toon and smooth shading of a whole frame in one numba pass (``_kernels.shade_toon``,
-``_kernels.shade_smooth``): the kernels' records and tables, built once per frame."""
+"""Toon and smooth shading of a whole frame in one numba pass (``_kernels.shade_toon_for``,
+``_kernels.shade_smooth_for``): the kernels' records and tables, built once per frame."""
 
 from __future__ import annotations
 
@@ -138,7 +138,7 @@ def lit_rgba(
         spec_mag = np.ascontiguousarray(spec_mag)
         tables = K.Tables(np.zeros(1), none, none, np.zeros(1), spec_on, powers, spec_mag, albedo)
         kept = kept_out(ctx, shape, 2)
-        K.shade_smooth(frame, record, tables, out, kept)
+        K.shade_smooth_for(albedo.shape[0] > 0, kept.shape[0] > 0)(frame, record, tables, out, kept)
         keep_all(ctx, kept, ("tone",))
         return out
     ramp = lake_ramp(record.n, record.t) if record.mode == K.LAKE else np.zeros(1)
@@ -148,7 +148,7 @@ def lit_rgba(
     no_powers = np.zeros(1, dtype=np.int64)
     tables = K.Tables(ramp, edge_lo, edge_hi, tones, spec_on, no_powers, np.zeros((1, 1)), albedo)
     kept = kept_out(ctx, shape, 2)
-    K.shade_toon(frame, record, tables, out, kept)
+    K.shade_toon_for(albedo.shape[0] > 0, kept.shape[0] > 0)(frame, record, tables, out, kept)
     keep_all(ctx, kept, ("tone", "toon_tone"))
     return out
 
