@@ -33,11 +33,14 @@ style intermediates        the values the style's formulas computed on the way  
                            to the colour (``Style.INTERMEDIATES``): ``tone`` and
                            ``detail`` (X-Toon), ``tone`` and ``threshold``
                            (threshold), ``intensity`` and ``threshold``
-                           (halftone), ``darkness`` (tam, tamiss); 0 where empty
-``stroke_id.lo/.hi``       tamiss: the 64-bit stroke id of the first fragment       UINT
-                           gathered at the pixel, as its low and high 32 bits;
-                           both 4294967295 (-1) where none: ``(hi.astype(uint64)
-                           << 32 | lo).view(int64)``
+                           (halftone), ``darkness`` (tam, tamiss), ``tone`` and
+                           ``toon_tone`` (toon), ``tone`` (smooth); a base style
+                           under strokes adds its own as ``base.<name>``; 0
+                           where empty
+``stroke_id.lo/.hi``       a 64-bit integer pass (tamiss: the stroke id of the       UINT
+                           first fragment gathered at the pixel) as its low and
+                           high 32 bits; both 4294967295 (-1) where none:
+                           ``(hi.astype(uint64) << 32 | lo).view(int64)``
 ========================== ======================================================== ==========
 
 Passes are per pixel, not per sample: see :func:`pixel_passes`.
@@ -228,10 +231,17 @@ def channel_names(name: str, components: int) -> tuple[str, ...]:
     return tuple(f"{name}.{i}" for i in range(components))
 
 
-def _as_exr_array(a: np.ndarray) -> np.ndarray:
-    """A pass component as FLOAT (float32) or UINT (an integer's 32-bit pattern)."""
+def _as_exr_array(a: np.ndarray, name: str = "pass") -> np.ndarray:
+    """A pass component as FLOAT (float32) or UINT (an integer's 32-bit pattern; an integer
+    outside the int32 / uint32 range is refused, naming the channel)."""
     if a.dtype.kind in "iub":
-        return np.ascontiguousarray(a.astype(np.int64, copy=False).astype(np.uint32))
+        wide = a.astype(np.int64, copy=False)
+        if wide.size and (wide.min() < -(1 << 31) or wide.max() >= 1 << 32):
+            raise ValueError(
+                f"passes: channel {name!r} holds integers beyond 32 bits; give a 64-bit id "
+                "pass as a 2-D int64 array (written as name.lo / name.hi)"
+            )
+        return np.ascontiguousarray(wide.astype(np.uint32))
     return np.ascontiguousarray(a, dtype=np.float32)
 
 
@@ -270,7 +280,7 @@ def image_channels(
             continue
         comps = 0 if a.ndim == 2 else a.shape[2]
         for i, n in enumerate(channel_names(name, comps)):
-            out[n] = _as_exr_array(a if comps == 0 else a[..., i])
+            out[n] = _as_exr_array(a if comps == 0 else a[..., i], n)
     return out
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -14,6 +15,7 @@ __all__ = [
     "IMAGE_FORMATS",
     "Image",
     "atomic_file",
+    "decode_image",
     "check_png_path",
     "linear_to_srgb",
     "read_image_file",
@@ -58,7 +60,6 @@ def read_image_file(path: str | os.PathLike, *, what: str = "image") -> np.ndarr
         Naming ``what`` and the file: it does not exist, is a directory, is empty, or cannot be
         decoded (truncated, corrupt, or not an image), with the decoder's reason.
     """
-    import imageio.v3 as iio
 
     shown = str(path)
     p = Path(path)
@@ -69,10 +70,29 @@ def read_image_file(path: str | os.PathLike, *, what: str = "image") -> np.ndarr
     if p.stat().st_size == 0:
         raise ValueError(f"{what}: {shown!r} is an empty file; expected {IMAGE_FORMATS}")
     try:
-        return np.asarray(iio.imread(p))
+        return decode_image(p)
     except Exception as exc:  # noqa: BLE001 -- imageio and its plugins raise many types
         reason = _decode_reason(exc)
     raise ValueError(f"{what}: cannot read {shown!r}: {reason}; expected {IMAGE_FORMATS}") from None
+
+
+#: Colour modes whose channels are not RGB: decoded as RGB (a CMYK JPEG's four channels would
+#: otherwise read as RGBA).
+_CONVERTED_MODES = ("CMYK", "YCbCr", "LAB", "HSV")
+
+
+def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
+    """Decode an image (a path or the encoded bytes, ``extension`` naming the format of bytes)
+    as the array imageio gives, except that an image in a colour model other than grey or RGB
+    (a CMYK JPEG) is converted to RGB. Decoder errors propagate."""
+    import imageio.v3 as iio
+
+    pixels = np.asarray(iio.imread(source, extension=extension))
+    if pixels.ndim == 3 and pixels.shape[2] in (3, 4):
+        mode = iio.immeta(source, extension=extension).get("mode")
+        if mode in _CONVERTED_MODES:
+            pixels = np.asarray(iio.imread(source, extension=extension, mode="RGB"))
+    return pixels
 
 
 def _decode_reason(exc: BaseException) -> str:

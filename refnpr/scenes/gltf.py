@@ -104,7 +104,10 @@ _INTERPOLATIONS = ("LINEAR", "STEP", "CUBICSPLINE")
 _PATH_WIDTH = {"translation": 3, "rotation": 4, "scale": 3}
 _MATERIAL_READ = {"name", "pbrMetallicRoughness", "extras"}
 _PBR_READ = {"baseColorFactor", "baseColorTexture", "extras"}
-_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
+#: How much of an image file beside the scene is read to find its size (a JPEG's frame header
+#: follows its metadata segments).
+_IMAGE_HEAD_BYTES = 4 << 20
 
 
 class GltfError(SceneFileError):
@@ -858,6 +861,14 @@ def _base_texture(r: _Reader, info: Any, where: str) -> str | EmbeddedImage | No
         return None
     tex = r.item("textures", info.get("index"), f"{where}.index")
     ti = info["index"]
+    ext = info.get("extensions")
+    for key in ext if isinstance(ext, dict) else ():
+        r.ignore(f"baseColorTexture extension {key}")  # KHR_texture_transform: uv as stored
+    if "sampler" in tex:  # refnpr samples GL_REPEAT, linear, trilinear between levels
+        sampler = r.item("samplers", tex["sampler"], f"textures[{ti}].sampler")
+        defaults = {"wrapS": 10497, "wrapT": 10497, "magFilter": 9729, "minFilter": 9987}
+        if any(sampler.get(k, v) != v for k, v in defaults.items()):
+            r.ignore("texture sampler wrap and filter modes (refnpr samples GL_REPEAT, trilinear)")
     if "source" not in tex:
         r.ignore("textures without a source image")
         return None
@@ -904,9 +915,15 @@ def _image(r: _Reader, src: Any, where: str) -> str | EmbeddedImage:
     else:
         path = r.resolve_uri(uri, f"{iw}.uri")
         if path.suffix.lower() not in _IMAGE_SUFFIXES:
-            raise r.fail(f"{iw}.uri", f"{uri!r} is not a PNG, JPEG, BMP or TIFF image")
+            raise r.fail(f"{iw}.uri", f"{uri!r} is not a PNG or JPEG image (glTF's image types)")
         if not path.is_file():
             raise r.fail(f"{iw}.uri", f"image file {uri!r} not found beside the .gltf")
+        with open(path, "rb") as f:  # its size from its header, as an embedded image's
+            head = f.read(_IMAGE_HEAD_BYTES)
+        try:
+            probe_image(head, mime)
+        except ValueError as exc:
+            raise r.fail(f"{iw}.uri", f"{uri!r}: {exc}") from None
         found = str(path)
     r.images[src] = found
     return found

@@ -14,6 +14,7 @@ ignored.
 from __future__ import annotations
 
 import os
+import threading
 from collections import OrderedDict
 from typing import Any
 
@@ -24,14 +25,22 @@ from refnpr.texture import EmbeddedImage, MipPyramid, build_pyramid, load_textur
 
 from . import _kernels as K
 
-__all__ = ["ALBEDO_CHANNELS", "albedo_grid", "color_pyramid", "uses_color_textures"]
+__all__ = [
+    "ALBEDO_CHANNELS",
+    "albedo_channels",
+    "albedo_grid",
+    "color_pyramid",
+    "uses_color_textures",
+]
 
 #: G-buffer channels a colour map reads.
 ALBEDO_CHANNELS = frozenset({"mesh_id", "uv", "duv_dx", "duv_dy"})
-#: Built pyramids kept across frames, keyed by the map's text and, for files, their size and
-#: modification time (an edited file is read again). Bounded; oldest out first.
+#: Built pyramids kept across frames (a sequence's frames, a kit export's cases), keyed by the
+#: embedded image's digest, or the file's path, size and modification time (an edited file is
+#: read again). At most this many bytes of texels; least recently used out first.
 _PYRAMIDS: OrderedDict[tuple, MipPyramid] = OrderedDict()
-_PYRAMIDS_MAX = 8
+_PYRAMIDS_BYTES = 512 << 20
+_LOCK = threading.Lock()
 
 
 def uses_color_textures(scene: Any) -> bool:
@@ -39,11 +48,37 @@ def uses_color_textures(scene: Any) -> bool:
     return any(o.material.color_texture is not None for o in scene.objects)
 
 
+def albedo_channels(scene: Any) -> frozenset[str]:
+    """The G-buffer channels the colour maps of ``scene`` read (:data:`ALBEDO_CHANNELS`; none
+    without maps).
+
+    Raises
+    ------
+    ValueError
+        Some object has a colour map and some mesh has no texture coordinates: the rasterizer
+        interpolates uv for every mesh of a frame. Names both.
+    """
+    if not uses_color_textures(scene):
+        return frozenset()
+    bare = [o.name for o in scene.objects if o.mesh.uv is None]
+    if bare:
+        mapped = next(o.name for o in scene.objects if o.material.color_texture is not None)
+        raise ValueError(
+            f"color_texture: object {mapped!r} has a colour map, so every mesh of the scene "
+            f"needs texture coordinates (uv is rasterized for all of them), but {bare} have "
+            "none; give them uv (refnpr.scenes.project_uv(mesh, 'planar'|'box'|'spherical'|"
+            "'cylindrical'), or zeros where nothing samples them)"
+        )
+    return ALBEDO_CHANNELS
+
+
 def _key(name: str) -> tuple:
-    if isinstance(name, EmbeddedImage) or not os.path.isfile(name):
-        return (str(name),)  # an embedded image's text holds its digest; built-in names
+    if isinstance(name, EmbeddedImage):
+        return ("embedded", name.sha256)  # its bytes' digest
+    if not os.path.isfile(name):
+        return ("name", str(name))  # a built-in texture name (or an error to come)
     st = os.stat(name)
-    return (str(name), st.st_size, st.st_mtime_ns)
+    return ("file", str(name), st.st_size, st.st_mtime_ns)
 
 
 def color_pyramid(name: str) -> MipPyramid:
@@ -52,20 +87,27 @@ def color_pyramid(name: str) -> MipPyramid:
     [0, 1], the image's values sRGB-decoded (RGB of a colour image; grey repeated; alpha
     dropped). Cached across calls; errors name ``color_texture``."""
     key = _key(name)
-    pyr = _PYRAMIDS.get(key)
-    if pyr is not None:
-        _PYRAMIDS.move_to_end(key)
-        return pyr
-    image = np.asarray(load_texture(name, gray=False, param="color_texture"), dtype=np.float64)
+    with _LOCK:
+        pyr = _PYRAMIDS.get(key)
+        if pyr is not None:
+            _PYRAMIDS.move_to_end(key)
+            return pyr
+    image = np.asarray(load_texture(name, gray=False, param="color_texture"))
     if image.ndim == 2:
         image = image[..., None]
     rgb = image[..., :3] if image.shape[2] >= 3 else image[..., :1]
     rgb = np.broadcast_to(rgb, image.shape[:2] + (3,))
     pyr = build_pyramid(srgb_to_linear(rgb).astype(np.float32))
-    _PYRAMIDS[key] = pyr
-    if len(_PYRAMIDS) > _PYRAMIDS_MAX:
-        _PYRAMIDS.popitem(last=False)
+    with _LOCK:
+        _PYRAMIDS[key] = pyr
+        _PYRAMIDS.move_to_end(key)
+        while len(_PYRAMIDS) > 1 and sum(map(_nbytes, _PYRAMIDS.values())) > _PYRAMIDS_BYTES:
+            _PYRAMIDS.popitem(last=False)
     return pyr
+
+
+def _nbytes(pyr: MipPyramid) -> int:
+    return sum(level.nbytes for level in pyr.levels)
 
 
 def albedo_grid(ctx: Any) -> np.ndarray | None:

@@ -7,6 +7,7 @@ without textures never interpolates uv.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import inspect
 from collections.abc import Callable, Mapping
@@ -166,13 +167,13 @@ class ShadeContext:
             a = a.astype(np.float32)
         self.intermediates[name] = a
 
-    def scatter(self, values: np.ndarray, mask: np.ndarray, fill: float = 0.0) -> np.ndarray:
-        """(nH, nW) array of ``values`` (K,) at the samples where ``mask`` (nH, nW) is true (in
-        row-major order), ``fill`` elsewhere; the dtype of ``values``."""
-        values = np.asarray(values)
-        out = np.full(mask.shape, fill, dtype=values.dtype)
-        out[mask] = values
-        return out
+    def under(self, prefix: str = "base") -> ShadeContext:
+        """This context for a style drawn under another one (the strokes' ``base``): the same
+        frame, scene and buffers, the intermediates it keeps named ``prefix.name`` beside the
+        top style's (``base.tone`` under ``darkness``)."""
+        if self.intermediates is None:
+            return self
+        return dataclasses.replace(self, intermediates=_Prefixed(self.intermediates, prefix))
 
     def rgba_out(self, shape: tuple[int, int]) -> np.ndarray:
         """A C-contiguous ``shape + (4,)`` float32 array for a style's samples (``shape``: the
@@ -217,6 +218,17 @@ class ShadeContext:
         out = values[np.maximum(mesh_id, 0)]
         out[mesh_id < 0] = 0.0
         return out
+
+
+class _Prefixed(dict):
+    """A view of an intermediates dict that stores each name as ``prefix.name``."""
+
+    def __init__(self, target: dict, prefix: str) -> None:
+        super().__init__()
+        self.target, self.prefix = target, prefix
+
+    def __setitem__(self, name: str, value: Any) -> None:
+        self.target[f"{self.prefix}.{name}"] = value
 
 
 _REGISTRY: dict[str, Callable[..., Style]] = {}

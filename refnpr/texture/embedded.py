@@ -29,10 +29,11 @@ __all__ = [
 
 #: The encodings an embedded image may have (the glTF 2.0 core image types).
 IMAGE_MIME_TYPES = ("image/png", "image/jpeg")
-#: The largest width or height of an embedded image (pixels).
-MAX_IMAGE_SIDE = 16384
-#: The most pixels (width x height) of an embedded image: 64 Mi, e.g. 8192 x 8192.
-MAX_IMAGE_PIXELS = 1 << 26
+#: The largest width or height of an image a glTF file names (pixels).
+MAX_IMAGE_SIDE = 8192
+#: The most pixels (width x height) of an image a glTF file names: 16 Mi, e.g. 4096 x 4096 (its
+#: mip pyramid as a colour map takes about 1 s and 0.7 GB to build).
+MAX_IMAGE_PIXELS = 1 << 24
 
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _JPEG_SOI = b"\xff\xd8"
@@ -164,9 +165,9 @@ def probe_image(data: bytes, mime_type: str | None = None) -> tuple[str, int, in
 class EmbeddedImage(str):
     """An encoded PNG or JPEG image in memory, usable as a texture name.
 
-    The string value is ``"<name>@sha256:<first 16 hex digits of the SHA-256 of the bytes>"``,
-    so that equal strings mean the same name and (up to a 64-bit prefix) the same content, and
-    every cache keyed by the texture's text tells different images apart. Immutable; pickles
+    The string value is ``"<name>@sha256:<the 64 hex digits of the SHA-256 of the bytes>"``,
+    so that equal strings mean the same name and the same content, and every cache keyed by
+    the texture's text tells different images apart. Immutable; pickles
     with its bytes.
 
     Parameters
@@ -217,7 +218,7 @@ class EmbeddedImage(str):
         except ValueError as exc:
             raise ValueError(f"{name}: {exc}") from None
         digest = hashlib.sha256(data).hexdigest()
-        self = super().__new__(cls, f"{name}@sha256:{digest[:16]}")
+        self = super().__new__(cls, f"{name}@sha256:{digest}")
         values = {"name": name, "data": data, "mime_type": kind, "width": width, "height": height}
         self.__dict__.update(values, sha256=digest)
         return self
@@ -248,17 +249,19 @@ class EmbeddedImage(str):
         Returns
         -------
         (height, width) or (height, width, C) uint8 or uint16
-            As the file's decoder gives them (C = 2, 3 or 4: gray + alpha, RGB, RGBA).
+            As the file's decoder gives them (C = 2, 3 or 4: gray + alpha, RGB, RGBA; a CMYK
+            JPEG as RGB). Pillow gives 16-bit grey PNGs as uint16 and 16-bit colour PNGs as
+            uint8: the same values as the image read from a file.
 
         Raises
         ------
         ValueError
             Data that does not decode, or decodes to another size than its header gives.
         """
-        import imageio.v3 as iio
+        from ..image import decode_image
 
         try:
-            pixels = np.asarray(iio.imread(self.data, extension=_EXTENSIONS[self.mime_type]))
+            pixels = decode_image(self.data, extension=_EXTENSIONS[self.mime_type])
         except Exception as exc:  # decoders raise many types; report them as a bad image
             reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             raise ValueError(

@@ -40,23 +40,39 @@ def as_texture(image, *, name: str = "image") -> np.ndarray:
     return a.astype(np.float32)
 
 
-def _box_weights(n: int, m: int) -> np.ndarray:
-    """(m, n) weights of the exact box filter from n texels to m: output texel i averages the
-    input interval [i n/m, (i+1) n/m) (2x2 boxes when n = 2 m)."""
+def _box_taps(n: int, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """The exact box filter from n texels to m (output texel i averages the input interval
+    [i n/m, (i+1) n/m); 2x2 boxes when n = 2 m) as taps: ``(index, weight)``, both (m, K), K
+    <= 3 input texels per output texel in increasing order (weight 0 past the interval), so
+    a level costs O(texels), not O(n m)."""
     r = n / m
-    lo = np.arange(m)[:, None] * r
-    j = np.arange(n)[None, :]
+    lo = np.arange(m, dtype=np.float64)[:, None] * r
+    first = np.floor(lo).astype(np.int64)
+    k = int(np.ceil(r)) + 1
+    j = first + np.arange(k)[None, :]
     overlap = np.clip(np.minimum(j + 1, lo + r) - np.maximum(j, lo), 0.0, None)
-    return overlap / r
+    used = np.any(overlap > 0.0, axis=0)  # drop taps no output texel uses (n = 2 m: the third)
+    return np.minimum(j, n - 1)[:, used], overlap[:, used] / r
+
+
+def _filter_axis(a: np.ndarray, axis: int, m: int) -> np.ndarray:
+    """``a`` box-filtered to ``m`` texels along ``axis``, in float64: each output texel the sum
+    of its taps' weighted inputs, taps in increasing order."""
+    index, weight = _box_taps(a.shape[axis], m)
+    a = np.moveaxis(a, axis, 0)
+    shape = (m,) + (1,) * (a.ndim - 1)
+    out = weight[:, 0].reshape(shape) * a[index[:, 0]]
+    for t in range(1, index.shape[1]):
+        out = out + weight[:, t].reshape(shape) * a[index[:, t]]
+    return np.moveaxis(out, 0, axis)
 
 
 def _downsample(level: np.ndarray) -> np.ndarray:
-    """Next mip level, GL size rule max(1, floor(n / 2)) per axis, exact box filter."""
+    """Next mip level, GL size rule max(1, floor(n / 2)) per axis, exact box filter (rows,
+    then columns, in float64)."""
     h, w = level.shape[:2]
-    wr = _box_weights(h, max(1, h // 2))
-    wc = _box_weights(w, max(1, w // 2))
-    a = np.tensordot(wr, level.astype(np.float64), axes=(1, 0))
-    a = np.moveaxis(np.tensordot(wc, a, axes=(1, 1)), 0, 1)
+    a = _filter_axis(level, 0, max(1, h // 2))  # float64 from the float64 weights on
+    a = _filter_axis(a, 1, max(1, w // 2))
     return a.astype(np.float32)
 
 

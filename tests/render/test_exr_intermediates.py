@@ -148,7 +148,25 @@ def test_toon_tone_is_the_step_of_the_tone():
 
 def test_a_base_style_under_strokes_keeps_its_own_intermediates_beside_theirs():
     scene, st, image, gb = _render("tam", base="xtoon")
-    assert {"darkness", "tone", "detail"} <= set(image.passes)
+    assert {"darkness", "base.tone", "base.detail"} <= set(image.passes)
+    assert "tone" not in image.passes
+    # the same name in both is two channels, not one overwriting the other
+    scene, st, image, gb = _render("tam", base={"name": "tam", "density_mode": "fade"})
+    assert {"darkness", "base.darkness"} <= set(image.passes)
+
+
+@pytest.mark.parametrize("gather_scale", [1, 3])
+def test_tamiss_darkness_on_a_gather_grid_of_another_size(gather_scale):
+    scene = load_scene("sphere")
+    style = get_style("tamiss", gather_scale=gather_scale)
+    image, gb = render(scene, style, 16, 12, 4, passes=True, return_gbuffer=True)
+    d = image.passes["darkness"]
+    assert d.shape == (12, 16)
+    # each covered sample takes the gather sample holding its centre; the pass is sample (0, 0)
+    # of each pixel's 2 x 2
+    covered = (gb["mesh_id"] >= 0)[0::2, 0::2]
+    inner = (gb["mesh_id"] >= 0).reshape(12, 2, 16, 2).all(axis=(1, 3))
+    assert np.all(d[~covered] == 0) and (d[inner] > 0).mean() > 0.9 and inner.sum() > 50
 
 
 def test_refnpr_styles_lists_a_styles_intermediates(capsys):

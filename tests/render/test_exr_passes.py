@@ -150,3 +150,15 @@ def test_animate_exr_frames_carry_the_passes(tmp_path):
     np.testing.assert_array_equal(got["depth.Z"], gb["depth"])
     np.testing.assert_array_equal(got["mesh_id"].view(np.int32), gb["mesh_id"])
     np.testing.assert_array_equal(got["R"], image.rgba[..., 0] * image.rgba[..., 3])
+
+
+def test_integer_passes_beyond_32_bits_are_split_or_refused(tmp_path):
+    rgba = np.zeros((2, 3, 4), np.float32)
+    ids = np.array([[-1, 5, 1 << 40], [7, (1 << 62) + 3, 0]], dtype=np.int64)
+    Image(rgba, passes={"stroke_id": ids}).save(tmp_path / "s.exr")
+    got = read_exr(tmp_path / "s.exr")
+    back = (got["stroke_id.hi"].astype(np.uint64) << np.uint64(32)) | got["stroke_id.lo"]
+    np.testing.assert_array_equal(back.view(np.int64), ids)
+    with pytest.raises(ValueError, match=r"channel 'ids\.X' holds integers beyond 32 bits"):
+        Image(rgba, passes={"ids": np.full((2, 3, 2), 1 << 40, np.int64)}).save(tmp_path / "t.exr")
+    assert not (tmp_path / "t.exr").exists()

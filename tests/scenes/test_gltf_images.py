@@ -145,7 +145,7 @@ def test_embedded_image_is_a_string_named_by_content():
     import hashlib
 
     digest = hashlib.sha256(a_bytes).hexdigest()
-    assert isinstance(a, str) and str(a) == f"m.glb#images[0]@sha256:{digest[:16]}"
+    assert isinstance(a, str) and str(a) == f"m.glb#images[0]@sha256:{digest}"
     assert a.sha256 == digest and a.data == a_bytes
     assert a == EmbeddedImage("m.glb#images[0]", bytearray(a_bytes))
     assert a != EmbeddedImage("m.glb#images[0]", b_bytes)  # same name, other content
@@ -413,3 +413,34 @@ def test_base_colour_texture_is_the_colour_map_and_uv_less_primitives_beside_it(
     _rewrite_glb(path, doc)
     with pytest.raises(ValueError, match=r"meshes\[0\]\.primitives\[1\]\.attributes: the "):
         quiet(load_gltf, path)
+
+
+def test_image_files_beside_the_gltf_are_sized_from_their_header(tmp_path):
+    (tmp_path / "big.png").write_bytes(png_header(9000, 9000))  # no pixels to decode
+    path = textured_quad({"uri": "big.png"}, None, "gltf", tmp_path / "m.gltf")
+    with pytest.raises(ValueError, match=r"images\[0\]\.uri: 'big\.png': .*9000 x 9000 pixels"):
+        quiet(load_gltf, path)
+    (tmp_path / "t.bmp").write_bytes(b"BM" + bytes(64))
+    path = textured_quad({"uri": "t.bmp"}, None, "gltf", tmp_path / "n.gltf")
+    with pytest.raises(ValueError, match=r"'t\.bmp' is not a PNG or JPEG image"):
+        quiet(load_gltf, path)
+    (tmp_path / "ok.png").write_bytes(png_bytes(stripes()))
+    path = textured_quad({"uri": "ok.png"}, None, "gltf", tmp_path / "o.gltf")
+    assert quiet(load_gltf, path).objects[0].material.color_texture == str(tmp_path / "ok.png")
+
+
+def test_sampler_modes_and_texture_transforms_are_named_as_ignored(tmp_path):
+    path = textured_quad(IN_VIEW, png_bytes(stripes()), "glb", tmp_path / "m.glb")
+    raw = path.read_bytes()
+    (n,) = struct.unpack_from("<I", raw, 12)
+    doc = json.loads(raw[20 : 20 + n])
+    doc["samplers"] = [{"wrapS": 33071, "magFilter": 9728}]  # clamp, nearest
+    doc["textures"][0]["sampler"] = 0
+    info = doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]
+    info["extensions"] = {"KHR_texture_transform": {"scale": [2, 2]}}
+    _rewrite_glb(path, doc)
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        load_gltf(path)
+    text = " ".join(str(w.message) for w in record)
+    assert "texture sampler wrap and filter modes" in text and "KHR_texture_transform" in text

@@ -16,6 +16,7 @@ from refnpr.raster import Camera, Mesh
 from refnpr.render import render
 from refnpr.scenes import Light, Material, Scene, SceneObject
 from refnpr.styles import get_style
+from refnpr.styles.albedo import color_pyramid
 
 RNG = np.random.default_rng(7)
 TEXTURE = RNG.integers(0, 256, size=(8, 8, 3), dtype=np.uint8)  # sRGB-encoded, as glTF's
@@ -187,3 +188,18 @@ def test_bad_colour_maps_are_named_errors(tmp_path):
     no_uv = dataclasses.replace(no_uv, objects=(dataclasses.replace(obj, mesh=bare),))
     with pytest.raises(ValueError, match="uv"):
         render(no_uv, "smooth", 16, 16, 1)
+    # a map on one object, a mesh without uv beside it: the cause is named
+    beside = _quad_scene(1.0, "brick")
+    plain = dataclasses.replace(no_uv.objects[0], material=Material(), name="plain")
+    beside = dataclasses.replace(beside, objects=(*beside.objects, plain))
+    with pytest.raises(ValueError, match=r"object 'quad' has a colour map.*\['plain'\] have none"):
+        render(beside, "toon", 16, 16, 1)
+
+
+def test_a_cmyk_jpeg_map_is_read_as_rgb(tmp_path):
+    from PIL import Image as PILImage
+
+    path = tmp_path / "red.jpg"
+    PILImage.new("CMYK", (8, 8), (0, 255, 255, 0)).save(path)  # red, as CMYK
+    a = color_pyramid(str(path)).levels[0]
+    np.testing.assert_allclose(a[0, 0], [1.0, 0.0, 0.0], atol=0.02)

@@ -65,8 +65,11 @@ def main(argv: list[str] | None = None) -> int:
         except Exception as exc:  # noqa: BLE001 -- one broken case must not stop the others
             failed += 1
             print(f"{case.name}: ERROR {type(exc).__name__}: {exc}", file=sys.stderr)
-            if not isinstance(exc, (ValueError, TypeError)):  # bad input says what it is
-                traceback.print_exc(file=sys.stderr)  # a bug of the backend: where it is
+            if isinstance(exc, (ValueError, TypeError)):  # bad input (or a bug): where, briefly
+                last = traceback.extract_tb(exc.__traceback__)[-1]
+                print(f"  raised at {last.filename}:{last.lineno} ({last.name})", file=sys.stderr)
+            else:  # a bug of the backend: the whole traceback
+                traceback.print_exc(file=sys.stderr)
             report["cases"][case.name] = {"status": "error", "error": f"{exc}"}
             continue
         write_result(result, args.out_dir)

@@ -33,7 +33,8 @@ class HalftoneStyle(Style):
     PARAMS = PARAMS
     INTERMEDIATES = {
         "intensity": "the target intensity I after the indication map (show='intensity')",
-        "threshold": "the filtered screen value the intensity is compared with (show='screen')",
+        "threshold": "the trilinear screen value (show='screen'): what mip='trilinear' compares "
+        "the intensity with (per_level and tone_correct compare two levels' values apart)",
     }
 
     def __init__(self, **params: Any) -> None:

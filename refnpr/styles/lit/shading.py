@@ -12,7 +12,7 @@ from refnpr.formulas.threshold import step_n
 
 from .._common import keep_all, kept_out, needs_position, rgba_out
 from .._frame import frame_record
-from ..albedo import ALBEDO_CHANNELS, albedo_grid, uses_color_textures
+from ..albedo import albedo_channels, albedo_grid
 from ..base import ShadeContext, Style
 from . import _kernels as K
 
@@ -176,8 +176,7 @@ class LitStyle(Style):
         req = {"normal", "mesh_id"}
         if needs_position(scene, self.p.specular):
             req.add("position")
-        if uses_color_textures(scene):  # the colour maps multiplying m_a and m_d
-            req |= ALBEDO_CHANNELS
+        req |= albedo_channels(scene)  # the colour maps multiplying m_a and m_d
         return frozenset(req)
 
     def shade(self, ctx: ShadeContext, out: np.ndarray | None = None) -> np.ndarray:

@@ -59,15 +59,18 @@ def field_channels(
 def keep_darkness(ctx: ShadeContext, inputs: Any) -> None:
     """Keep the stroke field's darkness rho of each sample (``inputs``: the ``FieldInputs`` the
     strokes were made from) as the intermediate ``darkness`` when ``ctx`` asks for intermediates;
-    0 where nothing is covered. A finer gather grid (``gather_scale`` s) gives each sample the
-    value of gather sample ``(s - 1) // 2`` of its s x s (the centre for odd s)."""
+    0 where nothing is covered. Where the strokes were gathered on another grid
+    (``gather_scale``), each covered sample takes the gather sample that holds its centre: row
+    ``floor((j + 0.5) G / nH)`` of the G gather rows, and likewise for columns."""
     if not ctx.wants_intermediates:
         return
     full = np.zeros(inputs.shape)
     full.reshape(-1)[inputs.sample] = inputs.darkness
-    s = inputs.shape[0] // ctx.gb.sample_shape[0]
-    if s > 1:
-        full = full[(s - 1) // 2 :: s, (s - 1) // 2 :: s]
+    nh, nw = ctx.gb.sample_shape
+    if full.shape != (nh, nw):
+        rows = ((np.arange(nh) + 0.5) * full.shape[0] / nh).astype(np.int64)
+        cols = ((np.arange(nw) + 0.5) * full.shape[1] / nw).astype(np.int64)
+        full = np.where(ctx.mask, full[np.ix_(rows, cols)], 0.0)
     ctx.keep("darkness", full)
 
 
@@ -97,7 +100,8 @@ def composite_ink(
     shape = ink.shape
     no_rgba, no_mask, no_rgb = np.zeros((1, 1, 4), np.float32), np.zeros((1, 1), bool), np.zeros(3)
     if base is not None:
-        under = np.broadcast_to(np.asarray(base.shade(ctx), dtype=np.float32), shape + (4,))
+        under = base.shade(ctx.under())  # its intermediates named base.*
+        under = np.broadcast_to(np.asarray(under, dtype=np.float32), shape + (4,))
         base_of = Under(UNDER_RGBA, np.ascontiguousarray(under), no_mask, no_rgb)
     elif paper is not None:
         # as rgba_from stores it: clipped, rounded to float32
