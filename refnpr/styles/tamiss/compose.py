@@ -100,8 +100,8 @@ def composite_ink(
     shape = ink.shape
     no_rgba, no_mask, no_rgb = np.zeros((1, 1, 4), np.float32), np.zeros((1, 1), bool), np.zeros(3)
     if base is not None:
-        under = base.shade(ctx.under())  # its intermediates named base.*
-        under = np.broadcast_to(np.asarray(under, dtype=np.float32), shape + (4,))
+        nested = ctx.under() if hasattr(ctx, "under") else ctx  # its intermediates: base.*
+        under = np.broadcast_to(np.asarray(base.shade(nested), dtype=np.float32), shape + (4,))
         base_of = Under(UNDER_RGBA, np.ascontiguousarray(under), no_mask, no_rgb)
     elif paper is not None:
         # as rgba_from stores it: clipped, rounded to float32
