@@ -8,7 +8,6 @@ test_gltf_images.py.
 
 from __future__ import annotations
 
-import base64
 import json
 import math
 import struct
@@ -20,6 +19,8 @@ import trimesh
 
 from refnpr.scenes import load_scene
 from refnpr.scenes.gltf import GltfError, GltfWarning, load_gltf
+
+from ._gltf_write import write_gltf
 
 
 class Doc:
@@ -91,25 +92,7 @@ class Doc:
         return i
 
     def write(self, path, form="glb"):
-        doc = json.loads(json.dumps(self.doc))
-        blob = bytes(self.blob)
-        if form == "glb":
-            doc["buffers"] = [{"byteLength": len(blob)}]
-            js = json.dumps(doc).encode()
-            js += b" " * (-len(js) % 4)
-            out = struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(js) + 8 + len(blob))
-            out += struct.pack("<I4s", len(js), b"JSON") + js
-            out += struct.pack("<I4s", len(blob), b"BIN\0") + blob
-            path.write_bytes(out)
-        elif form == "data":
-            uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode()
-            doc["buffers"] = [{"byteLength": len(blob), "uri": uri}]
-            path.write_text(json.dumps(doc))
-        else:
-            (path.parent / "model.bin").write_bytes(blob)
-            doc["buffers"] = [{"byteLength": len(blob), "uri": "model.bin"}]
-            path.write_text(json.dumps(doc))
-        return path
+        return write_gltf(self.doc, bytes(self.blob), path, form)
 
 
 def quat(axis, deg):

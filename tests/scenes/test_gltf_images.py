@@ -24,6 +24,8 @@ from refnpr.scenes.gltf import GltfError, GltfWarning, load_gltf
 from refnpr.texture import EmbeddedImage, load_texture
 from refnpr.texture.embedded import MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, probe_image
 
+from ._gltf_write import write_gltf
+
 
 def stripes(h=16, w=16, channels=3) -> np.ndarray:
     """A seeded random (h, w, channels) uint8 image (no two rows alike)."""
@@ -101,20 +103,7 @@ def textured_quad(image: dict, blob_image: bytes | None, form="glb", path=None):
         ],
         "bufferViews": views,
     }
-    blob = bytes(blob)
-    if form == "glb":
-        doc["buffers"] = [{"byteLength": len(blob)}]
-        js = json.dumps(doc).encode()
-        js += b" " * (-len(js) % 4)
-        out = struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(js) + 8 + len(blob))
-        out += struct.pack("<I4s", len(js), b"JSON") + js
-        out += struct.pack("<I4s", len(blob), b"BIN\0") + blob
-        path.write_bytes(out)
-    else:
-        uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode()
-        doc["buffers"] = [{"byteLength": len(blob), "uri": uri}]
-        path.write_text(json.dumps(doc))
-    return path
+    return write_gltf(doc, bytes(blob), path, "glb" if form == "glb" else "data")
 
 
 def quiet(fn, *a, **k):
