@@ -673,15 +673,21 @@ def test_a_huge_render_is_refused_before_any_big_allocation(setup, monkeypatch):
         return real(data, what)
 
     monkeypatch.setattr(verdict, "_decode_png", decode)
-    tracemalloc.start()
-    try:
-        results = {r.name: r for r in check_kit(setup.kit, setup.renders)}
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    results, peak = _checked_with_peak(setup)
     assert results["disc"].status == "size"
     assert "render 'disc.png'" not in calls and "render 'good.png'" in calls
     assert peak < 16 << 20, peak
+
+
+def _checked_with_peak(setup) -> tuple[dict, int]:
+    """``check_kit`` of the setup's kit and renders, by case name, and its peak of traced
+    allocations (bytes)."""
+    tracemalloc.start()
+    try:
+        results = {r.name: r for r in check_kit(setup.kit, setup.renders)}
+        return results, tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
 
 
 def test_position_deviation_is_capped_so_the_compare_is_bounded(setup):
@@ -817,11 +823,6 @@ def test_an_animated_png_render_decodes_its_first_frame_only(setup):
     frames[1:, 0, 0, 0] ^= 1  # distinct frames, so the encoder keeps them all
     iio.imwrite(setup.renders / "disc.png", frames, extension=".png")
     assert iio.imread(setup.renders / "disc.png", extension=".png").shape[0] == 400
-    tracemalloc.start()
-    try:
-        results = {r.name: r for r in check_kit(setup.kit, setup.renders)}
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    results, peak = _checked_with_peak(setup)
     assert results["disc"].passed, results["disc"].message
     assert peak < 400 * first.nbytes  # the 400 frames alone, undecoded to float
