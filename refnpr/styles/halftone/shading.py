@@ -101,30 +101,31 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
     rows = np.empty((shape[0], max(len(scene.objects), 1)), dtype=np.int64)
     K.prepare(frame, np.asarray(one, dtype=np.float64), rows, out)
     present = rows.sum(axis=0)[: len(scene.objects)] > 0
-    objects = (style, specs, present, frame, record)
-    _shade_objects(objects, scene, p.show, out, raw)
-    if getattr(
-        ctx, "wants_intermediates", False
-    ):  # the raw views of the same kernels, as show draws them
+    # each object in view: its screen and tables, built once for every pass below
+    screens = [
+        (i, obj, style.screen_for(specs[i], obj.material.texture))
+        for i, obj in enumerate(scene.objects)
+        if present[i]
+    ]
+    objects = [(sc, object_tables(style, i, obj, sc)) for i, obj, sc in screens]
+    _shade_objects(objects, frame, record, p.show, out, raw)
+    if getattr(ctx, "wants_intermediates", False):  # the raw views, as show draws them
         covered = frame.cover >= 0
         for name, show in (("intensity", "intensity"), ("threshold", "screen")):
             values = np.ones(shape + (3,))
-            _shade_objects(objects, scene, show, np.empty((0, 0, 4), np.float32), values)
+            _shade_objects(objects, frame, record, show, np.empty((0, 0, 4), np.float32), values)
             ctx.keep(name, np.where(covered, values[..., 0], 0.0))
     if not color:  # an 8-bit file of the image stores the raw values
         return rgba_from(srgb_to_linear(raw), frame.cover >= 0)
     return out
 
 
-def _shade_objects(objects: tuple, scene: Any, show: str, out: np.ndarray, raw: np.ndarray):
-    """Run the object kernel for ``show`` over every object in view: ``objects = (style,
-    specs, present, frame, record)``, into ``out`` (``show`` color) or ``raw``."""
-    style, specs, present, frame, record = objects
-    for i, obj in enumerate(scene.objects):
-        if not present[i]:
-            continue
-        screen = style.screen_for(specs[i], obj.material.texture)
-        tables = object_tables(style, i, obj, screen)
+def _shade_objects(
+    objects: list, frame: Any, record: Any, show: str, out: np.ndarray, raw: np.ndarray
+) -> None:
+    """Run the object kernel for ``show`` over ``objects`` (``(screen, Tables)`` of each object
+    in view), into ``out`` (``show`` color) or ``raw``."""
+    for screen, tables in objects:
         kernel = K.shade_object_for(
             PARAMS.code("show", show),
             screen.normals is not None,
