@@ -107,6 +107,26 @@ def test_the_cases_carry_a_colour_map_that_is_minified_in_part(kit: Path) -> Non
     assert (rho < 1.0).sum() > 10 and (rho > 1.5).sum() > 50  # magnified and minified
 
 
+def test_derived_texts_without_textures_match_the_export(kit: Path) -> None:
+    """``derived_texts`` (no texture built) gives the colour-map text the export wrote."""
+    from refnpr.kit.styles import derived_texts
+    from refnpr.scenes import load_scene
+    from refnpr.styles import get_style
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_scene(kit.parent / "quad.glb")
+    size = {"width": SIZE[0], "height": SIZE[1], "spp": 1}
+    for name, style in (
+        ("quad-smooth", get_style("smooth")),
+        ("quad-toon", get_style("toon", n=3)),
+    ):
+        case = json.loads((kit / name / "case.json").read_text())
+        texts = derived_texts(style, scene, **size)
+        assert "color_texture" in texts
+        assert all(case["derived"][k] == v for k, v in texts.items())
+
+
 def test_the_backend_renders_colour_maps_as_refnpr(kit: Path, tmp_path: Path) -> None:
     from refnpr.kit.check import check_kit
 

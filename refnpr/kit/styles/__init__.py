@@ -3,8 +3,9 @@
 A style ``NAME`` is exported by ``refnpr.kit.styles.NAME.export(style, scene, case_dir, *,
 width, height, spp) -> StyleExport`` when that module exists, else by :mod:`._generic`
 (``params()`` as they are). The module's ``derived(style, scene, *, width, height, spp)`` gives
-the case's derived texts without building any texture (``export`` returns the same texts);
-:func:`derived_texts` dispatches to it. A module may also define ``unresolved(params) ->
+the case's derived texts without building any texture (``export`` returns the same texts), or,
+where they are the same for every case, its constant ``DERIVED``; :func:`derived_texts`
+dispatches to either. A module may also define ``unresolved(params) ->
 list[str]``: the key paths of exported params that still hold something only refnpr could
 resolve (the kit tests call it; the generic check looks for "auto" strings).
 
@@ -116,10 +117,11 @@ def derived_texts(style: Any, scene: Any, *, width: int, height: int, spp: int) 
     size = {"width": width, "height": height, "spp": spp}
     if style.name == "contoured":
         out = derived_texts(style.base, scene, **size)
-        out.update(contours.derived(style.layer, scene, **size))
+        out.update(contours.DERIVED)
         return out
-    make = getattr(exporter_module(style.name), "derived", None)
-    return {} if make is None else dict(make(style, scene, **size))
+    mod = exporter_module(style.name)
+    make = getattr(mod, "derived", None)
+    return dict(getattr(mod, "DERIVED", {})) if make is None else dict(make(style, scene, **size))
 
 
 def unresolved(name: str, params: dict[str, Any]) -> list[str]:

@@ -12,7 +12,7 @@ from refnpr.styles.albedo import color_pyramid, uses_color_textures
 
 from ..textures import write_pyramid
 
-__all__ = ["COLOR_TEXTURE", "export_color_maps"]
+__all__ = ["COLOR_TEXTURE", "color_derived", "export_color_maps"]
 
 #: How a backend takes a sample's colour map factor a (the derived text ``color_texture``).
 COLOR_TEXTURE = (
@@ -33,6 +33,11 @@ COLOR_TEXTURE = (
     "ambient) * a and adds (m.diffuse * a) * tone * lights[i].color for the diffuse term, "
     "channel by channel (the specular term is not scaled); a = 1 gives the texts above exactly."
 )
+
+
+def color_derived(scene: Any) -> dict[str, str]:
+    """The derived text ``color_texture`` where ``scene`` has colour maps, else nothing."""
+    return {"color_texture": COLOR_TEXTURE} if uses_color_textures(scene) else {}
 
 
 def export_color_maps(scene: Any, case_dir: Path) -> tuple[list[str | None], dict[str, Any]]:

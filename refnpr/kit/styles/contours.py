@@ -20,7 +20,7 @@ from refnpr.styles.contours import CONTOURS
 from .._json import jsonable
 from ._export import StyleExport
 
-__all__ = ["export_contours", "derived", "unresolved", "DERIVED", "PIECE_SAMPLES"]
+__all__ = ["export_contours", "unresolved", "DERIVED", "PIECE_SAMPLES"]
 
 #: Length of the pieces an edge is drawn in, in samples (the contour layer's piece length).
 PIECE_SAMPLES = 0.5
@@ -68,11 +68,6 @@ DERIVED = {
 }
 
 
-def derived(layer: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
-    """The derived texts of a contour layer (the same for every case)."""
-    return dict(DERIVED)
-
-
 def export_contours(
     layer: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int
 ) -> StyleExport:
@@ -81,10 +76,7 @@ def export_contours(
     params = CONTOURS.resolved(layer.p)
     params["radius_samples"] = 0.5 * float(layer.width) * math.isqrt(int(spp))
     params["piece_samples"] = PIECE_SAMPLES
-    size = {"width": width, "height": height, "spp": spp}
-    return StyleExport(
-        params=jsonable(params, where="contours params"), derived=derived(layer, scene, **size)
-    )
+    return StyleExport(params=jsonable(params, where="contours params"), derived=dict(DERIVED))
 
 
 def unresolved(params: dict[str, Any]) -> list[str]:

@@ -37,7 +37,7 @@ from .._json import jsonable
 from ..textures import ORIENTATION_ROW0_V0, write_pyramid, write_table
 from ._export import StyleExport
 
-__all__ = ["export", "derived", "DERIVED"]
+__all__ = ["export", "DERIVED"]
 
 _BILINEAR = (
     "B_k(s) = the GL_LINEAR / GL_REPEAT sample of level k (cols_k x rows_k): x = (s_u - "
@@ -122,11 +122,6 @@ DERIVED = {
         "x), alpha 1 on covered samples, (0, 0, 0, 0) elsewhere."
     ),
 }
-
-
-def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
-    """The derived texts of a ``halftone`` case (the same for every case)."""
-    return dict(DERIVED)
 
 
 def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, spp: int):
@@ -230,5 +225,4 @@ def export(style: Any, scene: Any, case_dir: Path, *, width: int, height: int, s
         "objects": objects,
     }
     params = jsonable(params, where="style 'halftone' params")
-    size = {"width": width, "height": height, "spp": spp}
-    return StyleExport(params=params, textures=textures, derived=derived(style, scene, **size))
+    return StyleExport(params=params, textures=textures, derived=dict(DERIVED))

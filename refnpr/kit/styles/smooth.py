@@ -13,7 +13,7 @@ from typing import Any
 from refnpr.styles.lit.params import SMOOTH
 
 from .._json import jsonable
-from ._albedo import COLOR_TEXTURE, export_color_maps
+from ._albedo import color_derived, export_color_maps
 from ._export import StyleExport
 
 __all__ = ["export", "derived", "unresolved", "DERIVED"]
@@ -37,8 +37,9 @@ DERIVED = {
 
 
 def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
-    """The derived texts of a ``smooth`` case (the same for every case)."""
-    return dict(DERIVED)
+    """The derived texts of a ``smooth`` case: the shading, and the colour maps where the scene
+    has any."""
+    return {**DERIVED, **color_derived(scene)}
 
 
 def export(
@@ -47,12 +48,14 @@ def export(
     """Every parameter of the declaration as used (``specular``, ``model``); the colour maps
     of the scene's materials (``params.color_texture``, roles ``color_<k>``) where it has any."""
     params = jsonable(SMOOTH.resolved(style.p), where="smooth params")
-    derived_texts = derived(style, scene, width=width, height=height, spp=spp)
     roles, textures = export_color_maps(scene, case_dir)
     if roles:  # the material colour maps
         params["color_texture"] = roles
-        derived_texts["color_texture"] = COLOR_TEXTURE
-    return StyleExport(params=params, textures=textures, derived=derived_texts)
+    return StyleExport(
+        params=params,
+        textures=textures,
+        derived=derived(style, scene, width=width, height=height, spp=spp),
+    )
 
 
 def unresolved(params: dict[str, Any]) -> list[str]:

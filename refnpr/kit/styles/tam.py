@@ -33,7 +33,7 @@ import numpy as np
 from .._json import jsonable
 from ._export import StyleExport
 
-__all__ = ["export", "derived", "DERIVED"]
+__all__ = ["export", "DERIVED"]
 
 #: splitmix64 and hash01 as the TAM and TAMISS texts define them.
 HASH01 = (
@@ -126,11 +126,6 @@ DERIVED = {
 }
 
 
-def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
-    """The derived texts of a ``tam`` case (the same for every case)."""
-    return dict(DERIVED)
-
-
 def _unwrap(style: Any) -> Any:
     if style.name == "contoured":
         style = style.base
@@ -205,6 +200,6 @@ def export(
     )
     return StyleExport(
         params=jsonable(params, where="style 'tam' params"),
-        derived=derived(style, scene, width=width, height=height, spp=spp),
+        derived=dict(DERIVED),
         vertex_attributes=_vertex_attributes(scene, style.values.orient_charts),
     )

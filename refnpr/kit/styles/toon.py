@@ -17,10 +17,10 @@ from refnpr.styles.lit.shading import lake_ramp
 
 from .._json import jsonable
 from ..textures import write_table
-from ._albedo import COLOR_TEXTURE, export_color_maps
+from ._albedo import color_derived, export_color_maps
 from ._export import StyleExport
 
-__all__ = ["export", "derived", "unresolved", "DERIVED"]
+__all__ = ["export", "unresolved", "DERIVED"]
 
 #: What every toon case computes (the step or the Lake text follows).
 COMMON = (
@@ -51,8 +51,12 @@ DERIVED = {"toon_shading": COMMON + STEP}
 
 
 def derived(style: Any, scene: Any, *, width: int, height: int, spp: int) -> dict[str, str]:
-    """The derived text of a ``toon`` case: the step mode's or the Lake ramp's."""
-    return {"toon_shading": COMMON + (LAKE if style.mode == "lake" else STEP)}
+    """The derived texts of a ``toon`` case: the step mode's or the Lake ramp's, and the colour
+    maps where the scene has any."""
+    return {
+        "toon_shading": COMMON + (LAKE if style.mode == "lake" else STEP),
+        **color_derived(scene),
+    }
 
 
 def export(
@@ -74,14 +78,14 @@ def export(
         )
         params["ramp"] = "ramp"
         params["ramp_size"] = ramp.shape[-1]
-    derived_texts = derived(style, scene, width=width, height=height, spp=spp)
     roles, maps = export_color_maps(scene, case_dir)
     if roles:  # the material colour maps
         params["color_texture"] = roles
         textures.update(maps)
-        derived_texts["color_texture"] = COLOR_TEXTURE
     return StyleExport(
-        params=jsonable(params, where="toon params"), textures=textures, derived=derived_texts
+        params=jsonable(params, where="toon params"),
+        textures=textures,
+        derived=derived(style, scene, width=width, height=height, spp=spp),
     )
 
 
