@@ -1,7 +1,8 @@
 """Fixtures shared by the conformance-kit tests (exporter, checker, GLSL backend).
 
-``kit_dir``: the whole golden suite exported once per session into a pytest temporary
-directory (``refnpr kit export``). Cases are exported one by one so that one failing style
+``kit_dir``: the whole golden suite exported once per test run into a pytest temporary
+directory (``refnpr kit export``), shared by the pytest-xdist workers of the run (the first
+worker to ask exports it under a lock; the kit is only read). Cases are exported one by one so that one failing style
 exporter does not take every kit test down: the failures are in ``kit_export_errors`` (a test in
 test_export.py asserts there are none) and those cases are absent from the kit.
 
@@ -11,6 +12,7 @@ machine: the tests then test that kit, not the current code; CI never sets it).
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 from pathlib import Path
@@ -61,8 +63,16 @@ def _kit_export(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[st
         if not (d / "index.json").is_file():
             raise RuntimeError(f"REFNPR_TEST_KIT_DIR={given!r} holds no index.json")
         return d, {}
-    d = tmp_path_factory.mktemp("kit")
-    return d, export_cases(d)
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # the run's directory, above each worker's own
+    d, done = base / "kit-suite", base / "kit-suite.errors.json"
+    with open(base / "kit-suite.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not done.is_file():
+            d.mkdir(exist_ok=True)
+            done.write_text(json.dumps(export_cases(d)))
+    return d, json.loads(done.read_text())
 
 
 @pytest.fixture(scope="session")
