@@ -121,6 +121,22 @@ def test_everyday_names_resolve_and_are_documented(site):
         ), f"the page of refnpr does not link {name}"
 
 
+def test_every_module_page_is_reached_from_the_root_page(site):
+    """The module pages are outside the site's toctree: each package page's table of modules
+    links them, so every page must be reached by following those links from ``refnpr``."""
+    api = site / "_generated" / "api"
+    pages = {p.name for p in api.glob("refnpr*.html")}
+    seen, todo = set(), ["refnpr.html"]
+    while todo:
+        page = todo.pop()
+        if page in seen:
+            continue
+        seen.add(page)
+        html = (api / page).read_text(encoding="utf-8")
+        todo += [h for h in re.findall(r'href="(refnpr[\w.]*\.html)[#"]', html) if h in pages]
+    assert len(pages) > 100 and seen == pages, sorted(pages - seen)
+
+
 def test_import_refnpr_stays_lazy():
     code = "import sys, refnpr; print(sorted(m for m in sys.modules if m.startswith('refnpr.')))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
