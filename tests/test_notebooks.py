@@ -116,6 +116,18 @@ def test_save_outputs_writes_small_deterministic_outputs(tmp_path):
     assert path.read_bytes() == saved
 
 
+def test_kernel_file_names_are_replaced_up_to_a_space_quote_or_parenthesis():
+    sys.path.insert(0, str(SAVE_OUTPUTS.parent))
+    try:
+        from save_outputs import _stable
+    finally:
+        sys.path.remove(str(SAVE_OUTPUTS.parent))
+    text = 'at /tmp/ipykernel_12/345.py:3 (C:\\T\\ipykernel_9\\8.py) "/a b/ipykernel_1/2.py"'
+    assert _stable(text) == 'at <cell>:3 (<cell>) "/a <cell>"'
+    long = "x" * 100_000 + " /t/ipykernel_1/2.py"
+    assert _stable(long) == "x" * 100_000 + " <cell>"
+
+
 def test_save_outputs_refuses_a_failing_or_oversized_notebook(tmp_path):
     path = tmp_path / "bad.ipynb"
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("1 / 0")])
