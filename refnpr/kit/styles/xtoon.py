@@ -30,7 +30,7 @@ from ..textures import ORIENTATION_ROW0_TOP, write_pyramid, write_table
 from . import _generic
 from ._export import StyleExport
 
-__all__ = ["export", "unresolved", "DERIVED"]
+__all__ = ["export", "derived", "unresolved", "DERIVED"]
 
 #: The name of the per-vertex abstracted normal attribute (glTF ``_ABSTRACT_NORMAL``).
 ABSTRACT_NORMAL = "abstract_normal"
