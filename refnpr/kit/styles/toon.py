@@ -20,7 +20,7 @@ from ..textures import write_table
 from ._albedo import color_derived, export_color_maps
 from ._export import StyleExport
 
-__all__ = ["export", "unresolved", "DERIVED"]
+__all__ = ["export", "derived", "unresolved", "DERIVED"]
 
 #: What every toon case computes (the step or the Lake text follows).
 COMMON = (
