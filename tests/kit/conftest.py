@@ -2,9 +2,10 @@
 
 ``kit_dir``: the whole golden suite exported once per test run into a pytest temporary
 directory (``refnpr kit export``), shared by the pytest-xdist workers of the run (the first
-worker to ask exports it under a lock; the kit is only read). Cases are exported one by one so that one failing style
-exporter does not take every kit test down: the failures are in ``kit_export_errors`` (a test in
-test_export.py asserts there are none) and those cases are absent from the kit.
+worker to ask exports it under a lock; the kit is only read). Cases are exported one by one so
+that one failing style exporter does not take every kit test down: the failures are in
+``kit_export_errors`` (a test in test_export.py asserts there are none) and those cases are
+absent from the kit.
 
 ``REFNPR_TEST_KIT_DIR=/path`` reuses a kit exported earlier (a development shortcut on a busy
 machine: the tests then test that kit, not the current code; CI never sets it).
