@@ -340,6 +340,36 @@ def _escape_bars(app, what, name, obj, options, lines: list[str]) -> None:
             previous = line
 
 
+#: What Python writes for a NamedTuple: each field's docstring and that of the generated
+#: ``__new__`` (the class's own docstring describes the fields).
+_NAMEDTUPLE_FIELD = re.compile(r"Alias for field number \d+")
+_NAMEDTUPLE_NEW = re.compile(r"Create new instance of \w+\(.*\)")
+
+
+def _drop_generated_docstrings(app, what, name, obj, options, lines: list[str]) -> None:
+    """Drop the docstrings no one wrote: a module constant without a doc comment
+    (``LIGHT_POINT = 1``) shows its value, not its built-in type's docstring (``int([x]) ->
+    integer ...``), and a NamedTuple shows its own docstring without the generated ``__new__``'s
+    "Create new instance of ..." appended (``autoclass_content = "both"``)."""
+    if what in ("data", "attribute") and type(obj).__module__ == "builtins":
+        words = [ln.strip() for ln in (type(obj).__doc__ or "").splitlines() if ln.strip()]
+        if words and [ln.strip() for ln in lines if ln.strip()] == words:
+            lines.clear()
+    if what == "class":
+        while lines and not lines[-1].strip():
+            lines.pop()
+        if lines and _NAMEDTUPLE_NEW.fullmatch(lines[-1].strip()):
+            lines.pop()
+
+
+def _skip_namedtuple_fields(app, what, name, obj, skip, options):
+    """A NamedTuple's fields are not listed again as members (the class's docstring and
+    signature give them; their own docstrings say "Alias for field number N")."""
+    if what == "class" and _NAMEDTUPLE_FIELD.fullmatch((getattr(obj, "__doc__", "") or "").strip()):
+        return True
+    return None
+
+
 def _resolve_reexport(app, env, node, contnode):
     """A reference to a name by the package that re-exports it (``refnpr.scenes.Scene``, or
     ``Scene`` inside ``refnpr.scenes``) resolves to its documentation in its own module."""
@@ -391,6 +421,8 @@ def _same_object(domain, candidate: str) -> str | None:
 
 def setup(app) -> dict:
     app.connect("source-read", _index_toctrees)
+    app.connect("autodoc-process-docstring", _drop_generated_docstrings, priority=50)
+    app.connect("autodoc-skip-member", _skip_namedtuple_fields)
     app.connect("autodoc-process-docstring", _escape_bars, priority=100)
     app.connect("missing-reference", _resolve_reexport)
     app.add_directive("refnpr-gallery", GalleryDirective)

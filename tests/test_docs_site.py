@@ -137,6 +137,30 @@ def test_every_module_page_is_reached_from_the_root_page(site):
     assert len(pages) > 100 and seen == pages, sorted(pages - seen)
 
 
+#: Docstrings nobody wrote: Python's for a NamedTuple's fields and ``__new__``, and those of the
+#: built-in types, shown for constants without a doc comment.
+GENERATED_DOCSTRINGS = [
+    "Alias for field number",
+    "Create new instance of",
+    "int([x]) -&gt; integer",
+    "str(object=&#39;&#39;)",
+    "Built-in immutable sequence",
+    "dict() -&gt; new empty dictionary",
+    "Convert a string or number to a floating point number",
+    "Build an immutable unordered collection",
+]
+
+
+def test_api_pages_hold_no_generated_docstrings(site):
+    found = [
+        f"{page.name}: {text}"
+        for page in sorted((site / "_generated" / "api").glob("*.html"))
+        for text in GENERATED_DOCSTRINGS
+        if text in page.read_text(encoding="utf-8")
+    ]
+    assert not found, found
+
+
 def test_import_refnpr_stays_lazy():
     code = "import sys, refnpr; print(sorted(m for m in sys.modules if m.startswith('refnpr.')))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
