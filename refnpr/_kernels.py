@@ -1,6 +1,8 @@
-"""numba kernels of ``refnpr.render``: compositing, box resolve and unpremultiply in one pass.
+"""numba kernels of ``refnpr.render``: compositing, box resolve and unpremultiply in one pass;
+and of ``refnpr.image``: a PNG's row filters undone (:func:`png_unfilter`).
 
-Private: :func:`refnpr.render.composite_resolve` validates the arrays and calls these. The float64
+Private: :func:`refnpr.render.composite_resolve` validates the arrays and calls the first,
+:func:`refnpr.image.decode_png16` the PNG stream and the second. The float64
 arithmetic is numpy's, operation for operation, so the result is bit-identical to it, for any
 thread count (each output row is owned by one thread; a pixel's samples are summed in one order).
 """
@@ -195,3 +197,34 @@ def composite_resolve_for(case):
                 bad_rows[y] = 1 if bad else 0
 
     return composite_resolve
+
+
+@njit
+def png_unfilter(rows, bpp):
+    """Undo a PNG image's row filters in place (PNG sec. 9: None, Sub, Up, Average, Paeth):
+    ``rows (h, 1 + n) uint8``, column 0 each row's filter type, the rest its filtered bytes
+    (``bpp`` bytes per pixel). Returns the first row whose filter type is not 0-4, else -1.
+    Private: :func:`refnpr.image.decode_png16` checks the stream and calls it."""
+    h, n = rows.shape
+    for y in range(h):
+        kind = rows[y, 0]
+        if kind > 4:
+            return y
+        if kind == 0:
+            continue
+        for x in range(1, n):
+            a = np.int64(rows[y, x - bpp]) if x > bpp else 0  # the byte to the left
+            b = np.int64(rows[y - 1, x]) if y > 0 else 0  # the byte above
+            c = np.int64(rows[y - 1, x - bpp]) if x > bpp and y > 0 else 0  # above left
+            if kind == 1:  # Sub
+                p = a
+            elif kind == 2:  # Up
+                p = b
+            elif kind == 3:  # Average
+                p = (a + b) >> 1
+            else:  # Paeth
+                q = a + b - c
+                pa, pb, pc = abs(q - a), abs(q - b), abs(q - c)
+                p = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+            rows[y, x] = np.uint8((np.int64(rows[y, x]) + p) & 0xFF)
+    return -1

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import struct
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -16,6 +18,8 @@ __all__ = [
     "Image",
     "atomic_file",
     "decode_image",
+    "decode_png16",
+    "is_png16_colour",
     "check_png_path",
     "linear_to_srgb",
     "read_image_file",
@@ -83,16 +87,154 @@ _CONVERTED_MODES = ("CMYK", "YCbCr", "LAB", "HSV")
 
 def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     """Decode an image (a path or the encoded bytes, ``extension`` naming the format of bytes)
-    as the array imageio gives, except that an image in a colour model other than grey or RGB
-    (a CMYK JPEG) is converted to RGB. Decoder errors propagate."""
+    as the array imageio gives, with two exceptions:
+
+    - an image in a colour model other than grey or RGB (a CMYK JPEG) is converted to RGB;
+    - a 16-bit RGB, RGBA or grey + alpha PNG is decoded at 16 bits by :func:`decode_png16`
+      (``uint16``, grey + alpha as two channels), where imageio (Pillow) gives 8 bits.
+
+    Decoder errors propagate."""
     import imageio.v3 as iio
 
+    if isinstance(source, (bytes, bytearray)):
+        head = bytes(source[:26])
+    else:
+        with open(source, "rb") as f:
+            head = f.read(26)
+    if is_png16_colour(head):
+        from PIL import Image
+
+        data = (
+            bytes(source) if isinstance(source, (bytes, bytearray)) else Path(source).read_bytes()
+        )
+        limit = Image.MAX_IMAGE_PIXELS  # Pillow's decompression-bomb bound, as for other files
+        return decode_png16(data, max_pixels=2 * limit if limit else 1 << 62)
     pixels = np.asarray(iio.imread(source, extension=extension))
     if pixels.ndim == 3 and pixels.shape[2] in (3, 4):
         mode = iio.immeta(source, extension=extension).get("mode")
         if mode in _CONVERTED_MODES:
             pixels = np.asarray(iio.imread(source, extension=extension, mode="RGB"))
     return pixels
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: Channels of the colour types decoded here: RGB, grey + alpha, RGBA.
+_PNG16_CHANNELS = {2: 3, 4: 2, 6: 4}
+#: Adam7 passes (sec. 8.2): (x0, y0, dx, dy).
+_ADAM7 = (
+    (0, 0, 8, 8),
+    (4, 0, 8, 8),
+    (0, 4, 4, 8),
+    (2, 0, 4, 4),
+    (0, 2, 2, 4),
+    (1, 0, 2, 2),
+    (0, 1, 1, 2),
+)
+
+
+def is_png16_colour(head: bytes) -> bool:
+    """Whether ``head`` (the first 26 bytes or more of a file) is the start of a 16-bit RGB,
+    RGBA or grey + alpha PNG: the types :func:`decode_png16` reads."""
+    if len(head) < 26 or head[:8] != _PNG_SIGNATURE or head[12:16] != b"IHDR":
+        return False
+    return head[24] == 16 and head[25] in _PNG16_CHANNELS
+
+
+def decode_png16(data: bytes, *, max_pixels: int) -> np.ndarray:
+    """The pixels of a 16-bit RGB, RGBA or grey + alpha PNG, at 16 bits.
+
+    Pillow, and so imageio, reads those types as 8-bit (grey + alpha even as RGBA): a threshold
+    texture, a colour map or a backend's render written at 16 bits would lose its low byte
+    without a word. Here (the PNG specification, 3rd ed.) the IDAT chunks are joined, each
+    chunk's CRC checked; the stream is inflated, bounded by the size the header implies; each
+    row is unfiltered (sec. 7.3 and 9); and the seven Adam7 passes of an interlaced image are
+    scattered to their pixels (sec. 8.2).
+
+    Parameters
+    ----------
+    data : bytes
+        The whole file.
+    max_pixels : int
+        Largest width x height decoded (a larger header is refused before anything is inflated).
+
+    Returns
+    -------
+    (H, W, C) uint16, C = 3 (RGB), 2 (grey, alpha) or 4 (RGBA).
+
+    Raises
+    ------
+    ValueError
+        Saying what is wrong: not such a PNG, a chunk that runs past the end or fails its CRC, no
+        IDAT or IEND, an unknown compression, filter or interlace method, an image over
+        ``max_pixels``, a stream that does not inflate to the size the header implies, or an
+        unknown row filter.
+    """
+    if not is_png16_colour(data[:26]):
+        raise ValueError("not a 16-bit RGB, RGBA or grey + alpha PNG")
+    idat, header, pos, ended = [], None, 8, False
+    while pos + 12 <= len(data):
+        (length,) = struct.unpack(">I", data[pos : pos + 4])
+        kind = data[pos + 4 : pos + 8]
+        end = pos + 12 + length
+        if end > len(data):
+            raise ValueError(f"chunk {kind!r} runs past the end of the file (truncated)")
+        body = data[pos + 8 : end - 4]
+        (crc,) = struct.unpack(">I", data[end - 4 : end])
+        if zlib.crc32(kind + body) & 0xFFFFFFFF != crc:
+            raise ValueError(f"chunk {kind!r} fails its CRC (corrupt)")
+        if header is None:
+            if kind != b"IHDR" or length != 13:
+                raise ValueError("no IHDR chunk first")
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat.append(body)
+        elif kind == b"IEND":
+            ended = True
+            break
+        pos = end
+    if not ended or not idat:
+        raise ValueError("no IDAT or no IEND chunk (truncated)")
+    width, height, _, colour, compression, filtering, interlace = header
+    if compression != 0 or filtering != 0 or interlace not in (0, 1):
+        raise ValueError(
+            f"unknown compression, filter or interlace method ({compression}, {filtering}, "
+            f"{interlace})"
+        )
+    if width == 0 or height == 0 or width * height > max_pixels:
+        raise ValueError(
+            f"the header gives {width}x{height} pixels; at most {max_pixels} are decoded"
+        )
+    from ._kernels import png_unfilter  # numba is imported for a 16-bit PNG only
+
+    channels = _PNG16_CHANNELS[colour]
+    bpp = 2 * channels  # bytes per pixel
+    passes = []
+    for x0, y0, dx, dy in _ADAM7 if interlace else ((0, 0, 1, 1),):
+        pw, ph = -(-(width - x0) // dx), -(-(height - y0) // dy)
+        if pw > 0 and ph > 0:  # an empty pass has no rows, not even filter bytes
+            passes.append((x0, y0, dx, dy, pw, ph))
+    size = sum(ph * (1 + pw * bpp) for *_, pw, ph in passes)
+    inflater = zlib.decompressobj()
+    try:
+        raw = inflater.decompress(b"".join(idat), size + 1)
+    except zlib.error as exc:
+        raise ValueError(f"the image data does not inflate ({exc})") from None
+    if len(raw) != size:
+        raise ValueError(
+            f"the image data inflates to {'more' if len(raw) > size else len(raw)} bytes where "
+            f"the header implies {size}"
+        )
+    out = np.empty((height, width, channels), dtype=np.uint16)
+    at = 0
+    for x0, y0, dx, dy, pw, ph in passes:
+        rows = np.frombuffer(raw, dtype=np.uint8, count=ph * (1 + pw * bpp), offset=at)
+        rows = rows.reshape(ph, 1 + pw * bpp).copy()
+        at += rows.size
+        bad = png_unfilter(rows, bpp)
+        if bad >= 0:
+            raise ValueError(f"row {bad} of the image data has unknown filter type {rows[bad, 0]}")
+        out[y0::dy, x0::dx] = rows[:, 1:].view(">u2").reshape(ph, pw, channels)
+    return out
 
 
 def _decode_reason(exc: BaseException) -> str:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..compare import LEVEL_SLACK, compare_images
-from ..image import linear_to_srgb
+from ..image import decode_png16, is_png16_colour, linear_to_srgb
 from . import limits
 from ._json import jsonable
 from ._untrusted import exr_header, inside, npy_array, npy_header, png_size, printable, read_regular
@@ -299,9 +299,12 @@ def _decode_png(data: bytes, what: str) -> np.ndarray:
     import imageio.v3 as iio
 
     try:
-        # index 0: the first frame only, whose size the header check bounded (an animated PNG
-        # would otherwise decode every frame before any shape check)
-        a = np.asarray(iio.imread(data, extension=".png", index=0))
+        if is_png16_colour(data[:26]):  # 16-bit RGB(A), grey + alpha: imageio gives 8 bits
+            a = decode_png16(data, max_pixels=limits.MAX_IMAGE_PIXELS)
+        else:
+            # index 0: the first frame only, whose size the header check bounded (an animated
+            # PNG would otherwise decode every frame before any shape check)
+            a = np.asarray(iio.imread(data, extension=".png", index=0))
     except Exception as exc:  # noqa: BLE001 -- the decoder raises many types on corrupt data
         first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         raise ValueError(f"{what}: cannot read: {_q(first, 120)}; expected a PNG file") from None
