@@ -27,14 +27,19 @@ from refnpr.compare import load_image
 from refnpr.image import decode_image, decode_png16, read_image_file
 
 COLOUR_TYPES = {3: 2, 2: 4, 4: 6}  # channels -> PNG colour type
-ADAM7 = (
-    (0, 0, 8, 8),
-    (4, 0, 8, 8),
-    (0, 4, 4, 8),
-    (2, 0, 4, 4),
-    (0, 2, 2, 4),
-    (1, 0, 2, 2),
-    (0, 1, 1, 2),
+#: Adam7 as the PNG specification draws it (sec. 8.2): the pass (1-7) of each pixel of an 8 x 8
+#: tile; a form of its own, not the decoder's table of pass origins and steps.
+ADAM7_TILE = np.array(
+    [
+        [1, 6, 4, 6, 2, 6, 4, 6],
+        [7, 7, 7, 7, 7, 7, 7, 7],
+        [5, 6, 5, 6, 5, 6, 5, 6],
+        [7, 7, 7, 7, 7, 7, 7, 7],
+        [3, 6, 4, 6, 3, 6, 4, 6],
+        [7, 7, 7, 7, 7, 7, 7, 7],
+        [5, 6, 5, 6, 5, 6, 5, 6],
+        [7, 7, 7, 7, 7, 7, 7, 7],
+    ]
 )
 
 
@@ -68,8 +73,12 @@ def _chunk(kind: bytes, body: bytes) -> bytes:
 def encode_png16(img: np.ndarray, kinds: list[int], *, interlace: bool = False) -> bytes:
     """A 16-bit PNG of ``img (h, w, C)`` uint16, C in 2-4, rows filtered with ``kinds`` in turn."""
     h, w, c = img.shape
-    if interlace:
-        passes = [img[y0::dy, x0::dx] for x0, y0, dx, dy in ADAM7]
+    if interlace:  # each pass: the rows and columns holding its pixels, an image of its own
+        tile = ADAM7_TILE[np.arange(h)[:, None] % 8, np.arange(w)[None, :] % 8]
+        passes = []
+        for k in range(1, 8):
+            mine = tile == k
+            passes.append(img[np.ix_(mine.any(axis=1), mine.any(axis=0))])
         raw = b"".join(_filtered(p, kinds) for p in passes if p.size)
     else:
         raw = _filtered(img, kinds)
