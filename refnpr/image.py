@@ -20,6 +20,8 @@ __all__ = [
     "decode_image",
     "decode_png16",
     "is_png16_colour",
+    "png_size",
+    "PNG_SIGNATURE",
     "check_png_path",
     "linear_to_srgb",
     "read_image_file",
@@ -117,9 +119,13 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     return pixels
 
 
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-#: Channels of the colour types decoded here: RGB, grey + alpha, RGBA.
-_PNG16_CHANNELS = {2: 3, 4: 2, 6: 4}
+#: The eight bytes every PNG file starts with.
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: Valid (colour type: bit depths) pairs of the PNG specification, and the channels they give.
+_PNG_TYPES = {0: ((1, 2, 4, 8, 16), 1), 2: ((8, 16), 3), 3: ((1, 2, 4, 8), 3), 4: ((8, 16), 2),
+              6: ((8, 16), 4)}  # fmt: skip
+#: Channels of the colour types :func:`decode_png16` reads: RGB, grey + alpha, RGBA.
+_PNG16_CHANNELS = {colour: _PNG_TYPES[colour][1] for colour in (2, 4, 6)}
 #: Adam7 passes (sec. 8.2): (x0, y0, dx, dy).
 _ADAM7 = (
     (0, 0, 8, 8),
@@ -132,10 +138,36 @@ _ADAM7 = (
 )
 
 
+def png_size(data: bytes, *, what: str) -> tuple[int, int]:
+    """``(width, height)`` from a PNG's IHDR chunk (nothing is decoded); ``what`` starts the
+    messages.
+
+    Raises
+    ------
+    ValueError
+        No PNG signature, no IHDR chunk first, a zero size, or an invalid colour type / bit
+        depth pair.
+    """
+    if data[:8] != PNG_SIGNATURE:
+        raise ValueError(f"{what}: cannot read: not a PNG file (no PNG signature); expected a PNG")
+    if len(data) < 33 or data[12:16] != b"IHDR" or struct.unpack(">I", data[8:12])[0] != 13:
+        raise ValueError(f"{what}: cannot read: no IHDR chunk first (truncated or corrupt PNG)")
+    width, height, depth, colour = struct.unpack(">IIBB", data[16:26])
+    if width == 0 or height == 0:
+        raise ValueError(f"{what}: the PNG header gives a size of {width}x{height}")
+    depths = _PNG_TYPES.get(colour, ((), 0))[0]
+    if depth not in depths:
+        raise ValueError(
+            f"{what}: the PNG header gives colour type {colour} with bit depth {depth}, which "
+            "PNG does not define"
+        )
+    return width, height
+
+
 def is_png16_colour(head: bytes) -> bool:
     """Whether ``head`` (the first 26 bytes or more of a file) is the start of a 16-bit RGB,
     RGBA or grey + alpha PNG: the types :func:`decode_png16` reads."""
-    if len(head) < 26 or head[:8] != _PNG_SIGNATURE or head[12:16] != b"IHDR":
+    if len(head) < 26 or head[:8] != PNG_SIGNATURE or head[12:16] != b"IHDR":
         return False
     return head[24] == 16 and head[25] in _PNG16_CHANNELS
 

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..texture.embedded import png_size
+from ..image import png_size
 
 __all__ = [
     "ExrHeader",

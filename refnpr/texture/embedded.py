@@ -18,12 +18,13 @@ from typing import Any
 
 import numpy as np
 
+from ..image import PNG_SIGNATURE, png_size
+
 __all__ = [
     "EmbeddedImage",
     "IMAGE_MIME_TYPES",
     "MAX_IMAGE_PIXELS",
     "MAX_IMAGE_SIDE",
-    "png_size",
     "probe_image",
 ]
 
@@ -35,43 +36,11 @@ MAX_IMAGE_SIDE = 8192
 #: mip pyramid as a colour map takes about 1 s and 0.7 GB to build).
 MAX_IMAGE_PIXELS = 1 << 24
 
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _JPEG_SOI = b"\xff\xd8"
 #: JPEG start-of-frame markers (SOF0-SOF15 but DHT, JPG and DAC, which share the range).
 _JPEG_SOF = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
 _JPEG_STANDALONE = frozenset({0x01, *range(0xD0, 0xD8)})  # TEM, RST0-7: no length field
 _EXTENSIONS = {"image/png": ".png", "image/jpeg": ".jpg"}
-
-
-#: Valid (colour type: bit depths) pairs of the PNG specification, and the channels they give.
-_PNG_TYPES = {0: ((1, 2, 4, 8, 16), 1), 2: ((8, 16), 3), 3: ((1, 2, 4, 8), 3), 4: ((8, 16), 2),
-              6: ((8, 16), 4)}  # fmt: skip
-
-
-def png_size(data: bytes, *, what: str) -> tuple[int, int]:
-    """``(width, height)`` from a PNG's IHDR chunk (nothing is decoded); ``what`` starts the
-    messages.
-
-    Raises
-    ------
-    ValueError
-        No PNG signature, no IHDR chunk first, a zero size, or an invalid colour type / bit
-        depth pair.
-    """
-    if data[:8] != _PNG_SIGNATURE:
-        raise ValueError(f"{what}: cannot read: not a PNG file (no PNG signature); expected a PNG")
-    if len(data) < 33 or data[12:16] != b"IHDR" or struct.unpack(">I", data[8:12])[0] != 13:
-        raise ValueError(f"{what}: cannot read: no IHDR chunk first (truncated or corrupt PNG)")
-    width, height, depth, colour = struct.unpack(">IIBB", data[16:26])
-    if width == 0 or height == 0:
-        raise ValueError(f"{what}: the PNG header gives a size of {width}x{height}")
-    depths = _PNG_TYPES.get(colour, ((), 0))[0]
-    if depth not in depths:
-        raise ValueError(
-            f"{what}: the PNG header gives colour type {colour} with bit depth {depth}, which "
-            "PNG does not define"
-        )
-    return width, height
 
 
 def _jpeg_size(data: bytes) -> tuple[int, int]:
@@ -135,7 +104,7 @@ def probe_image(data: bytes, mime_type: str | None = None) -> tuple[str, int, in
             f"mimeType {mime_type!r} is not an image type refnpr reads; expected one of "
             f"{list(IMAGE_MIME_TYPES)} (re-encode the image as PNG or JPEG)"
         )
-    if data[:8] == _PNG_SIGNATURE:
+    if data[:8] == PNG_SIGNATURE:
         kind = "image/png"
     elif data[:2] == _JPEG_SOI:
         kind = "image/jpeg"
