@@ -2,7 +2,7 @@
 and of ``refnpr.image``: a PNG's row filters undone (:func:`png_unfilter`).
 
 Private: :func:`refnpr.render.composite_resolve` validates the arrays and calls the first,
-:func:`refnpr.image.decode_png16` the PNG stream and the second. The float64
+:func:`refnpr.image.decode_png16` the PNG stream and the second. The compositing's float64
 arithmetic is numpy's, operation for operation, so the result is bit-identical to it, for any
 thread count (each output row is owned by one thread; a pixel's samples are summed in one order).
 """
