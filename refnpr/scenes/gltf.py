@@ -66,6 +66,7 @@ __all__ = [
     "MAX_ANIMATION_WORK",
     "MAX_ZERO_ACCESSOR_BYTES",
     "MAX_FILE_BYTES",
+    "camera_headlight",
     "load_gltf",
 ]
 
@@ -999,12 +1000,19 @@ def _light_from(world: np.ndarray, info: dict) -> dict:
     return {"position": tuple(world[:3, 3])}
 
 
+def camera_headlight(camera: Camera) -> Light:
+    """The light of a scene whose file has none: white, directional, from the camera (towards
+    ``camera.eye - camera.target``)."""
+    return Light(direction=tuple(np.asarray(camera.eye) - np.asarray(camera.target)))
+
+
 def load_gltf(
     path: str | os.PathLike,
     *,
     camera: str | int | None = None,
     animation: str | int | None = None,
     fps: float = 24.0,
+    headlight: bool = True,
 ) -> Scene:
     """Read a glTF 2.0 file (``.gltf`` or ``.glb``) as a :class:`Scene`.
 
@@ -1024,6 +1032,10 @@ def load_gltf(
         between frames the tracks interpolate linearly (slerp for rotations).
     fps : float
         Frames per second of the animation (> 0).
+    headlight : bool
+        Whether a file without lights gets a headlight (:func:`camera_headlight` of the camera,
+        following its animation), with a :class:`GltfWarning`. False: the scene has no lights
+        then (a TOML scene over the file adds the headlight of its own camera).
 
     Returns
     -------
@@ -1182,9 +1194,11 @@ def load_gltf(
             _warn(f"{given}: spot light {info['name']!r} is read as a point light (no cone)")
         kind = "directional" if info["kind"] == "directional" else "point"
         lights.append(Light(kind=kind, color=info["color"], **_light_from(world[pl.node], info)))
-    headlight = not lights
+    if not isinstance(headlight, bool):
+        raise TypeError(f"headlight: expected True or False, got {headlight!r}")
+    headlight = headlight and not lights
     if headlight:
-        lights.append(Light(direction=tuple(cam.eye - cam.target)))
+        lights.append(camera_headlight(cam))
         _warn(
             f"{given}: no KHR_lights_punctual lights; refnpr adds a headlight (a white "
             "directional light from the camera)"

@@ -72,6 +72,7 @@ from __future__ import annotations
 
 import dataclasses
 import tomllib
+import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import fields
@@ -219,8 +220,19 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
         spec = _table(src, where, spec, _LIGHT_KEYS)
         with _where(src, where):
             lights.append(Light(**spec))
+    headlight = content is not None and "light" not in top and not content.lights
     if content is not None and "light" not in top:
         lights = list(content.lights)
+    if headlight:  # the file has no lights: the headlight of the camera this scene renders from
+        from .gltf import GltfWarning, camera_headlight
+
+        lights = [camera_headlight(camera)]
+        warnings.warn(
+            f"{src}: gltf: the file has no KHR_lights_punctual lights; refnpr adds a headlight (a "
+            "white directional light from the scene's camera)",
+            GltfWarning,
+            stacklevel=3,
+        )
     objects = [] if content is None else _override_materials(src, top, content, base)
     for i, spec in enumerate(_array_of_tables(src, "object", top.get("object", []))):
         where = f"[[object]] #{i + 1}"
@@ -269,6 +281,8 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
             if not (t.target.startswith("camera.") and "camera" in top)
             and not (t.target.startswith("light[") and "light" in top)
         )
+        if headlight:  # it follows the file's camera where that camera moves the scene's
+            kept += _headlight_track(kept)
         animation = dataclasses.replace(content.animation, tracks=kept)
         return dataclasses.replace(scene, animation=animation)
     if "animation" not in top:
@@ -280,6 +294,20 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
     except ValueError as exc:
         raise SceneFileError(str(exc)) from exc
     return dataclasses.replace(scene, animation=animation)
+
+
+def _headlight_track(tracks: tuple[Track, ...]) -> tuple[Track, ...]:
+    """``light[0].direction`` = eye - target at every key of the camera's ``eye`` and ``target``
+    tracks (one key per frame, as a glTF animation gives them); nothing when they are absent."""
+    by_target = {t.target: t for t in tracks}
+    eye, target = by_target.get("camera.eye"), by_target.get("camera.target")
+    if eye is None or target is None:
+        return ()
+    keys = tuple(
+        Keyframe(e.frame, tuple(a - b for a, b in zip(e.value, t.value, strict=True)))
+        for e, t in zip(eye.keys, target.keys, strict=True)
+    )
+    return (Track("light[0].direction", keys, "linear"),)
 
 
 def _gltf_content(src: str, top: dict, base: Path) -> Scene:
@@ -301,7 +329,7 @@ def _gltf_content(src: str, top: dict, base: Path) -> Scene:
     if not full.is_file():
         raise SceneFileError(f"{src}: gltf: file {str(full)!r} not found")
     with _where(src, "gltf"):
-        return load_gltf(full, fps=fps, **spec)
+        return load_gltf(full, fps=fps, headlight=False, **spec)
 
 
 def _override_materials(src: str, top: dict, content: Scene, base: Path) -> list:

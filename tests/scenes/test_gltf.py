@@ -363,6 +363,56 @@ def test_toml_with_gltf_overrides(tmp_path):
         quiet(load_scene, tmp_path / "bad.toml")
 
 
+def _box_and_moving_camera():
+    """A box, a camera node that slides along +x over 1 s, and no lights."""
+    d = Doc()
+    d.node(name="box", mesh=d.mesh(trimesh.creation.box()))
+    d.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}]
+    d.node(name="cam", camera=0, translation=[0.0, 1.0, 6.0])
+    tin = d.accessor(np.array([0.0, 1.0]))
+    tout = d.accessor(np.array([[0.0, 1.0, 6.0], [3.0, 1.0, 6.0]]))
+    d.doc["animations"] = [
+        {
+            "samplers": [{"input": tin, "output": tout, "interpolation": "LINEAR"}],
+            "channels": [{"sampler": 0, "target": {"node": 1, "path": "translation"}}],
+        }
+    ]
+    return d
+
+
+def test_a_toml_scene_lights_a_lightless_file_from_its_own_camera(tmp_path):
+    """The headlight of a file without lights is the camera the scene renders from: the file's
+    (following its animation, as load_gltf gives it), or the one a [camera] table sets."""
+    from refnpr.scenes.gltf import camera_headlight
+
+    _box_and_moving_camera().write(tmp_path / "model.glb")
+    direct = quiet(load_gltf, tmp_path / "model.glb")
+    (tmp_path / "plain.toml").write_text('gltf = "model.glb"\n')
+    with pytest.warns(GltfWarning, match="headlight .*from the scene's camera"):
+        plain = load_scene(tmp_path / "plain.toml")
+    assert plain.lights == direct.lights == (camera_headlight(direct.camera),)
+    assert at_frames(plain, "light[0].direction").tolist() == (
+        at_frames(direct, "light[0].direction").tolist()
+    )
+    eye, target = at_frames(direct, "camera.eye"), at_frames(direct, "camera.target")
+    assert eye[-1].tolist() == [3.0, 1.0, 6.0]  # the camera moved
+    assert at_frames(plain, "light[0].direction").tolist() == (eye - target).tolist()
+
+    (tmp_path / "moved.toml").write_text(
+        'gltf = "model.glb"\n[camera]\neye = [-5.0, 2.0, 1.0]\ntarget = [0.0, 0.0, 0.0]\n'
+    )
+    moved = quiet(load_scene, tmp_path / "moved.toml")
+    assert moved.lights == (camera_headlight(moved.camera),)
+    np.testing.assert_allclose(moved.lights[0].direction, np.array([-5, 2, 1]) / np.sqrt(30))
+    assert not any(t.target.startswith(("camera.", "light[")) for t in moved.animation.tracks)
+
+    (tmp_path / "lit.toml").write_text('gltf = "model.glb"\n[[light]]\ndirection = [0, 1, 0]\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", GltfWarning)  # no headlight, no warning about one
+        lit = load_scene(tmp_path / "lit.toml")
+    assert [lt.direction for lt in lit.lights] == [(0.0, 1.0, 0.0)]
+
+
 # -- animation ---------------------------------------------------------------------------------------
 
 
