@@ -44,6 +44,7 @@ import struct
 import sys
 import urllib.parse
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -67,6 +68,7 @@ __all__ = [
     "MAX_ZERO_ACCESSOR_BYTES",
     "MAX_FILE_BYTES",
     "camera_headlight",
+    "headlight_track",
     "load_gltf",
 ]
 
@@ -1053,6 +1055,8 @@ def load_gltf(
     given = os.fsdecode(path) if isinstance(path, (str, bytes, os.PathLike)) else None
     if given is None:
         raise TypeError(f"path: expected a file path (str or Path), got {type(path).__name__}")
+    if not isinstance(headlight, bool):
+        raise TypeError(f"headlight: expected True or False, got {headlight!r}")
     p = Path(given)
     if not p.exists():
         raise FileNotFoundError(f"scene: glTF file {given!r} does not exist")
@@ -1194,8 +1198,6 @@ def load_gltf(
             _warn(f"{given}: spot light {info['name']!r} is read as a point light (no cone)")
         kind = "directional" if info["kind"] == "directional" else "point"
         lights.append(Light(kind=kind, color=info["color"], **_light_from(world[pl.node], info)))
-    if not isinstance(headlight, bool):
-        raise TypeError(f"headlight: expected True or False, got {headlight!r}")
     headlight = headlight and not lights
     if headlight:
         lights.append(camera_headlight(cam))
@@ -1552,8 +1554,6 @@ def _animation(
             add("camera.eye", f, cam.eye)
             add("camera.target", f, cam.target)
             add("camera.up", f, cam.up)
-            if headlight:
-                add("light[0].direction", f, cam.eye - cam.target)
         for j, pl in lts:
             for attr, value in _light_from(world[pl.node], light_infos[pl.index]).items():
                 add(f"light[{j}].{attr}", f, value)
@@ -1561,7 +1561,25 @@ def _animation(
     for target, ks in keys.items():
         interp = "slerp" if target.endswith(".rotation") else "linear"
         tracks.append(Track(target, tuple(ks), interp))
+    if headlight:
+        tracks += headlight_track(tracks)
     return Animation(frames, fps, tuple(tracks))
+
+
+def headlight_track(tracks: Sequence[Track]) -> tuple[Track, ...]:
+    """The track of the headlight (:func:`camera_headlight`) of a moving camera:
+    ``light[0].direction`` = eye - target at every key of the ``camera.eye`` and
+    ``camera.target`` tracks (one key per frame, as a glTF animation gives them); nothing
+    where the camera does not move."""
+    by_target = {t.target: t for t in tracks}
+    eye, target = by_target.get("camera.eye"), by_target.get("camera.target")
+    if eye is None or target is None:
+        return ()
+    keys = tuple(
+        Keyframe(e.frame, tuple(a - b for a, b in zip(e.value, t.value, strict=True)))
+        for e, t in zip(eye.keys, target.keys, strict=True)
+    )
+    return (Track("light[0].direction", keys, "linear"),)
 
 
 def _decompose(r: _Reader, m: np.ndarray, ai: int, name: str, t: float):

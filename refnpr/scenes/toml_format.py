@@ -282,7 +282,9 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
             and not (t.target.startswith("light[") and "light" in top)
         )
         if headlight:  # it follows the file's camera where that camera moves the scene's
-            kept += _headlight_track(kept)
+            from .gltf import headlight_track
+
+            kept += headlight_track(kept)
         animation = dataclasses.replace(content.animation, tracks=kept)
         return dataclasses.replace(scene, animation=animation)
     if "animation" not in top:
@@ -294,20 +296,6 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
     except ValueError as exc:
         raise SceneFileError(str(exc)) from exc
     return dataclasses.replace(scene, animation=animation)
-
-
-def _headlight_track(tracks: tuple[Track, ...]) -> tuple[Track, ...]:
-    """``light[0].direction`` = eye - target at every key of the camera's ``eye`` and ``target``
-    tracks (one key per frame, as a glTF animation gives them); nothing when they are absent."""
-    by_target = {t.target: t for t in tracks}
-    eye, target = by_target.get("camera.eye"), by_target.get("camera.target")
-    if eye is None or target is None:
-        return ()
-    keys = tuple(
-        Keyframe(e.frame, tuple(a - b for a, b in zip(e.value, t.value, strict=True)))
-        for e, t in zip(eye.keys, target.keys, strict=True)
-    )
-    return (Track("light[0].direction", keys, "linear"),)
 
 
 def _gltf_content(src: str, top: dict, base: Path) -> Scene:
