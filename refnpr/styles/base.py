@@ -131,12 +131,16 @@ class ShadeContext:
         (:meth:`keep`): a dict to fill when the caller asks for them (``render(...,
         passes=True)``), None (the default) when nobody reads them, and then a style computes
         none of them.
+    prefix : str
+        What :meth:`keep` puts before a name: ``""``, or ``"base."`` in the context of a style
+        drawn under another (:meth:`under`).
     """
 
     gb: Any
     scene: Any
     spare: list = field(default_factory=list, repr=False)
     intermediates: dict | None = field(default=None, repr=False)
+    prefix: str = field(default="", repr=False)
 
     @property
     def wants_intermediates(self) -> bool:
@@ -165,7 +169,7 @@ class ShadeContext:
             )
         if a.dtype not in (np.int32, np.int64):
             a = a.astype(np.float32)
-        self.intermediates[name] = a
+        self.intermediates[self.prefix + name] = a
 
     def under(self, prefix: str = "base") -> ShadeContext:
         """This context for a style drawn under another one (the strokes' ``base``): the same
@@ -173,7 +177,7 @@ class ShadeContext:
         top style's (``base.tone`` under ``darkness``)."""
         if self.intermediates is None:
             return self
-        return dataclasses.replace(self, intermediates=_Prefixed(self.intermediates, prefix))
+        return dataclasses.replace(self, prefix=f"{self.prefix}{prefix}.")
 
     def rgba_out(self, shape: tuple[int, int]) -> np.ndarray:
         """A C-contiguous ``shape + (4,)`` float32 array for a style's samples (``shape``: the
@@ -218,17 +222,6 @@ class ShadeContext:
         out = values[np.maximum(mesh_id, 0)]
         out[mesh_id < 0] = 0.0
         return out
-
-
-class _Prefixed(dict):
-    """A view of an intermediates dict that stores each name as ``prefix.name``."""
-
-    def __init__(self, target: dict, prefix: str) -> None:
-        super().__init__()
-        self.target, self.prefix = target, prefix
-
-    def __setitem__(self, name: str, value: Any) -> None:
-        self.target[f"{self.prefix}.{name}"] = value
 
 
 _REGISTRY: dict[str, Callable[..., Style]] = {}
