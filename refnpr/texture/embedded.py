@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..image import PNG_SIGNATURE, png_size
+from ..image import PNG_SIGNATURE, decode_image, png_size
 
 __all__ = [
     "EmbeddedImage",
@@ -218,17 +218,15 @@ class EmbeddedImage(str):
         Returns
         -------
         (height, width) or (height, width, C) uint8 or uint16
-            As the file's decoder gives them (C = 2, 3 or 4: gray + alpha, RGB, RGBA; a CMYK
-            JPEG as RGB). Pillow gives 16-bit grey PNGs as uint16 and 16-bit colour PNGs as
-            uint8: the same values as the image read from a file.
+            As :func:`refnpr.image.decode_image` gives them (C = 2, 3 or 4: gray + alpha, RGB,
+            RGBA; a CMYK JPEG as RGB; a 16-bit PNG as uint16): the same values as the image read
+            from a file.
 
         Raises
         ------
         ValueError
             Data that does not decode, or decodes to another size than its header gives.
         """
-        from ..image import decode_image
-
         try:
             pixels = decode_image(self.data, extension=_EXTENSIONS[self.mime_type])
         except Exception as exc:  # decoders raise many types; report them as a bad image
