@@ -386,6 +386,7 @@ PUBLIC_API = {
         "sample_trilinear",
         "stroke_map_pyramid",
         "stroke_set_from_layers",
+        "texture_lod",
     ),
     "refnpr.texture.builtin": (
         "BUILTIN_TEXTURES",
@@ -402,6 +403,7 @@ PUBLIC_API = {
         "level_weights",
         "sample_level",
         "sample_trilinear",
+        "texture_lod",
     ),
     "refnpr.texture.screens": (
         "StrokeSet",

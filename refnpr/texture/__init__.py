@@ -8,7 +8,7 @@ from .clahe import periodic_clahe
 from .embedded import EmbeddedImage
 from .periodic import TILINGS, check_tiling, periodic_component, smooth_component
 from .pyramid import MipPyramid, as_texture, build_pyramid, clahe_pyramid, rank_equalize
-from .sample import level_weights, sample_level, sample_trilinear
+from .sample import level_weights, sample_level, sample_trilinear, texture_lod
 from .screens import (
     StrokeSet,
     brick_set,
@@ -47,4 +47,5 @@ __all__ = [
     "sample_level",
     "sample_trilinear",
     "smooth_component",
+    "texture_lod",
 ]

@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from refnpr.device import sampling
+from refnpr.formulas._face import elementwise
+
 from . import _kernels as K
 from .pyramid import MipPyramid
 
-__all__ = ["sample_trilinear", "sample_level", "level_weights"]
+__all__ = ["sample_trilinear", "sample_level", "level_weights", "texture_lod"]
 
 
 def _uv_and_shape(uv, name: str = "uv") -> tuple[np.ndarray, tuple[int, ...]]:
@@ -81,10 +84,46 @@ def sample_level(pyramid: MipPyramid, uv, level, *, dtype=np.float32) -> np.ndar
 
 
 def level_weights(pyramid: MipPyramid, lod) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The two levels trilinear filtering blends and their weights: (k0, k1, w1) with
-    lambda clamped to [0, L - 1], k0 = floor, k1 = min(k0 + 1, L - 1), w1 = frac."""
+    """The two levels trilinear filtering blends and their weights, per sample:
+    (k0, k1, w1), (...) int64, int64, float64, with lambda clamped to [0, L - 1], k0 = floor,
+    k1 = min(k0 + 1, L - 1), w1 = frac (:func:`refnpr.device.sampling.level_weights`, the
+    function the kernels run)."""
     _check_pyramid(pyramid)
-    lam = np.clip(np.asarray(lod, dtype=np.float64), 0.0, pyramid.n_levels - 1)
-    k0 = np.floor(lam).astype(np.int64)
-    k1 = np.minimum(k0 + 1, pyramid.n_levels - 1)
-    return k0, k1, lam - k0
+    lam = np.asarray(lod, dtype=np.float64)
+    if not np.all(np.isfinite(lam)):
+        raise ValueError("lod: contains NaN or inf")
+    kkw = elementwise(sampling.level_weights, np.float64, pyramid.n_levels, lam)
+    return kkw[..., 0].astype(np.int64), kkw[..., 1].astype(np.int64), kkw[..., 2]
+
+
+def texture_lod(pyramid: MipPyramid, dx, dy) -> np.ndarray:
+    """The GL isotropic LOD lambda of per-sample uv derivatives in ``pyramid``'s texels
+    (OpenGL 4.x sec. 8.14; :func:`refnpr.device.sampling.gl_lod`, the function the kernels
+    run): log2(max(rho, 2^-64)), rho = max(|d(u,v)/dx|, |d(u,v)/dy|) in texels.
+
+    Parameters
+    ----------
+    pyramid : MipPyramid
+        Its base level's size gives the texel scale.
+    dx, dy : (..., 2) float
+        ``(du/dx, dv/dx)`` and ``(du/dy, dv/dy)`` per sample.
+
+    Returns
+    -------
+    (...) float64
+    """
+    _check_pyramid(pyramid)
+    gx, shape = _uv_and_shape(dx, "dx")
+    gy, shape_y = _uv_and_shape(dy, "dy")
+    if shape_y != shape:
+        raise ValueError(f"dy: expected shape {shape + (2,)} (dx's shape), got {shape_y + (2,)}")
+    cols, rows = pyramid.size
+    lod = elementwise(
+        sampling.gl_lod,
+        np.float64,
+        (gx[:, 0], gx[:, 1]),
+        (gy[:, 0], gy[:, 1]),
+        float(cols),
+        float(rows),
+    )
+    return lod.reshape(shape)

@@ -15,6 +15,7 @@ from refnpr.texture import (
     rank_equalize,
     sample_level,
     sample_trilinear,
+    texture_lod,
 )
 
 
@@ -68,6 +69,57 @@ def test_trilinear_blends_two_levels_and_clamps():
     b = np.array([naive_bilinear(p.levels[k], *t) for k, t in zip(k1, uv, strict=True)])
     np.testing.assert_allclose(got, (1 - f) * a + f * b, atol=1e-6)
     assert np.all(k0 >= 0) and np.all(k1 <= p.n_levels - 1)
+
+
+@given(
+    st.lists(st.floats(-1e3, 1e3, allow_nan=False), min_size=1, max_size=40),
+    st.integers(0, 5),
+)
+def test_level_weights_are_floor_clamp_and_frac(lods, log_size):
+    """The levels trilinear filtering blends, by the book: lambda clamped to [0, L - 1]."""
+    p = build_pyramid(np.zeros((2**log_size, 2**log_size), dtype=np.float32))
+    lam = np.clip(np.array(lods), 0.0, p.n_levels - 1)
+    k0, k1, f = level_weights(p, np.array(lods))
+    assert k0.dtype == k1.dtype == np.int64 and f.dtype == np.float64
+    np.testing.assert_array_equal(k0, [math.floor(x) for x in lam])
+    np.testing.assert_array_equal(k1, np.minimum(k0 + 1, p.n_levels - 1))
+    np.testing.assert_array_equal(f, lam - k0)
+
+
+def test_texture_lod_counts_texels_per_pixel():
+    """GL sec. 8.14: one texel per pixel is LOD 0, two texels 1, half a texel -1; the larger of
+    the two derivatives' lengths, each in the texture's own (cols, rows) texels."""
+    p = build_pyramid(np.zeros((32, 64), dtype=np.float32))  # 64 columns (u), 32 rows (v)
+    dx = np.array(
+        [[1 / 64, 0.0], [2 / 64, 0.0], [0.5 / 64, 0.0], [0.0, 4 / 32], [3 / 640, 4 / 320]]
+    )
+    dy = np.array([[0.0, 1 / 32], [0.0, 1 / 32], [0.0, 0.25 / 32], [1 / 64, 0.0], [0.0, 0.0]])
+    np.testing.assert_allclose(
+        texture_lod(p, dx, dy), [0.0, 1.0, -1.0, 2.0, math.log2(0.5)], atol=1e-15
+    )
+    assert texture_lod(p, np.zeros((1, 2)), np.zeros((1, 2)))[0] == -64.0  # the 2^-64 floor
+    assert texture_lod(p, dx.reshape(5, 1, 2), dy.reshape(5, 1, 2)).shape == (5, 1)
+
+
+@given(st.lists(st.tuples(*[st.floats(-10, 10, allow_nan=False)] * 4), min_size=1, max_size=30))
+def test_texture_lod_matches_a_float64_numpy_oracle(rows):
+    p = build_pyramid(np.zeros((16, 8), dtype=np.float32))
+    d = np.array(rows)
+    rho = np.maximum(np.hypot(d[:, 0] * 8, d[:, 1] * 16), np.hypot(d[:, 2] * 8, d[:, 3] * 16))
+    want = np.log2(np.maximum(rho, 2.0**-64))
+    np.testing.assert_allclose(texture_lod(p, d[:, :2], d[:, 2:]), want, rtol=1e-14, atol=1e-14)
+
+
+def test_texture_lod_names_bad_arguments():
+    p = build_pyramid(np.zeros((8, 8), dtype=np.float32))
+    with pytest.raises(ValueError, match="dy: expected shape"):
+        texture_lod(p, np.zeros((3, 2)), np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="dx: contains NaN"):
+        texture_lod(p, np.full((1, 2), np.nan), np.zeros((1, 2)))
+    with pytest.raises(TypeError, match="pyramid: expected"):
+        texture_lod(np.zeros((8, 8)), np.zeros((1, 2)), np.zeros((1, 2)))
+    with pytest.raises(ValueError, match="lod: contains NaN"):
+        level_weights(p, [np.inf])
 
 
 def test_texel_centre_returns_the_texel():

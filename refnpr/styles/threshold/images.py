@@ -24,6 +24,7 @@ from refnpr.texture import (
     load_texture,
     sample_level,
     sample_trilinear,
+    texture_lod,
 )
 
 __all__ = [
@@ -32,7 +33,6 @@ __all__ = [
     "PyramidCache",
     "ToneMaps",
     "interpolation_quantiles",
-    "texture_lod",
     "image_thresholds",
 ]
 
@@ -171,17 +171,6 @@ class PyramidCache:
         return self._pyramids[key]
 
 
-def texture_lod(pyr: MipPyramid, gx: np.ndarray, gy: np.ndarray, bias: float = 0.0) -> np.ndarray:
-    """GL isotropic LOD lambda = log2(max(|duv/dx|, |duv/dy|) in texels) + bias, (M,) float64.
-
-    ``gx``, ``gy`` (M, 2) are per-pixel uv derivatives (OpenGL 4.x sec. 8.14).
-    """
-    cols, rows = pyr.size
-    size = np.array([cols, rows], dtype=np.float64)
-    rho = np.maximum(np.hypot(*(gx * size).T), np.hypot(*(gy * size).T))
-    return np.log2(np.maximum(rho, 1e-30)) + bias
-
-
 def image_thresholds(
     fp: Footprint,
     pyramids: list[MipPyramid | None],
@@ -223,7 +212,7 @@ def image_thresholds(
         sel = np.flatnonzero(group == gi)
         if pyr is None or sel.size == 0:
             continue
-        lod = texture_lod(pyr, fp.gx[sel], fp.gy[sel], p.lod_bias)
+        lod = texture_lod(pyr, fp.gx[sel], fp.gy[sel]) + p.lod_bias
         tm = None if tone_maps is None else tone_maps[gi]
         sub = Footprint(fp.uv[sel], fp.gx[sel], fp.gy[sel], fp.n)
         uvk = sub.offsets_uv(k) if pcf else sub.uv[:, None, :]  # (S, kk, 2)
