@@ -27,8 +27,11 @@ from typing import Any
 
 import numpy as np
 
+from ..device.sampling import gl_lod as _gl_lod
+from ..formulas._face import elementwise
 from ..image import linear_to_srgb
 from ..raster import Camera, Mesh
+from ..raster._kernels import dyadic_scale_of
 
 __all__ = [
     "Bug",
@@ -386,24 +389,19 @@ def world_geometry(meshes: list[Mesh]) -> tuple[np.ndarray, np.ndarray]:
     return positions, faces
 
 
-_LOD_FLOOR = 2.0**-64
-
-
 def gl_lod(dx: np.ndarray, dy: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     """(S,) float64: the OpenGL isotropic LOD (sec. 8.14) of per-pixel uv derivatives ``dx``,
-    ``dy`` (S, 2) for a ``size = (W, H)`` texel texture, as the rasterizer's ``lod`` channel:
-    log2(max(rho, 2^-64)), rho = max(|dx size|, |dy size|)."""
+    ``dy`` (S, 2) for a ``size = (W, H)`` texel texture, as the rasterizer's ``lod`` channel
+    (the rasterizer's own :func:`refnpr.device.sampling.gl_lod`)."""
     tw, th = float(size[0]), float(size[1])
-    rho = np.maximum(np.hypot(dx[:, 0] * tw, dx[:, 1] * th), np.hypot(dy[:, 0] * tw, dy[:, 1] * th))
-    return np.log2(np.maximum(rho, _LOD_FLOOR))
+    return elementwise(_gl_lod, np.float64, (dx[:, 0], dx[:, 1]), (dy[:, 0], dy[:, 1]), tw, th)
 
 
 def dyadic_of(gx: np.ndarray, gy: np.ndarray, line_period: float) -> np.ndarray:
     """(S,) float64: Veryovka eq. 5 as the rasterizer's ``dyadic_scale`` channel, from the line
-    coordinate's per-pixel gradient ``(gx, gy)`` (S,) each: -log2 max(|grad|, 2^-64) - log2 w
-    with w = ``line_period``, clipped to [-64, 64]."""
-    s = -np.log2(np.maximum(np.hypot(gx, gy), _LOD_FLOOR)) - math.log2(line_period)
-    return np.clip(s, -64.0, 64.0)
+    coordinate's per-pixel gradient ``(gx, gy)`` (S,) each, with w = ``line_period`` (the
+    rasterizer's own per-sample function)."""
+    return elementwise(dyadic_scale_of, np.float64, gx, gy, math.log2(line_period))
 
 
 def is_derivative(name: str) -> bool:
