@@ -200,8 +200,15 @@ def elementwise(scalar: Any, dtype: Any, *args: Any, compute: Any = np.float64) 
         if a.dtype.kind == "f":
             a = a.astype(fdt, copy=False)
         if size == 0:  # an empty result is typed from one element of zeros
-            return np.zeros(1, dtype=a.dtype)
-        return np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(size)
+            a = np.zeros(1, dtype=a.dtype)
+        else:
+            a = np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(size)
+        # read-only whether or not broadcasting copied it: numba types an array's
+        # writability, and one loop signature serves both
+        if a.flags.writeable:
+            a = a.view()
+            a.flags.writeable = False
+        return a
 
     packed = tuple(
         flat(a) if isinstance(a, np.ndarray) else tuple(flat(c) for c in a) if _is_vector(a) else a
