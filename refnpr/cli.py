@@ -4,6 +4,7 @@ gallery, kit, warmup."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -11,6 +12,7 @@ import threading
 import time
 import warnings
 from pathlib import Path
+from typing import Any
 
 __all__ = ["main"]
 
@@ -171,12 +173,37 @@ def _with_params(style: dict | None, params: dict, scene: str) -> dict:
     return {**style, **params}
 
 
+def _params_over_tracks(scene: Any, params: dict) -> Any:
+    """``scene`` without the style tracks of the parameters --param sets, with a warning for
+    each: the command line's value holds on every frame, as it does for a still."""
+    anim = getattr(scene, "animation", None)
+    if anim is None or not params:
+        return scene
+    kept = []
+    for track in anim.tracks:
+        part, _, name = track.parts
+        if part == "style" and name in params:
+            warnings.warn(
+                f"--param {name}={params[name]!r} replaces the scene's track {track.target!r}: "
+                "every frame uses that value",
+                UserWarning,
+                stacklevel=2,
+            )
+        else:
+            kept.append(track)
+    if len(kept) == len(anim.tracks):
+        return scene
+    return dataclasses.replace(scene, animation=dataclasses.replace(anim, tracks=tuple(kept)))
+
+
 def _scene_and_style(args: argparse.Namespace) -> tuple[object, dict | None]:
     """The scene of --scene and the style of --style/--param (None: the scene's own)."""
     from .scenes import load_scene
 
     params = _style_params(args)
-    scene = load_scene(args.scene, camera=getattr(args, "camera", None))
+    scene = _params_over_tracks(
+        load_scene(args.scene, camera=getattr(args, "camera", None)), params
+    )
     if args.style:
         return scene, {"name": args.style, **params}
     return scene, _with_params(scene.style, params, args.scene) if params else None
@@ -820,13 +847,11 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     show = warnings.showwarning
 
-    def note(message, category, *rest, **kw):  # what a glTF file gives differently: one line
+    def note(message, category, *rest, **kw):  # one line, without the source location
         from .scenes.gltf import GltfWarning
 
-        if issubclass(category, GltfWarning):
-            print(f"refnpr {_command(args)}: note: {message}", file=sys.stderr)
-        else:
-            show(message, category, *rest, **kw)
+        kind = "note" if issubclass(category, GltfWarning) else "warning"
+        print(f"refnpr {_command(args)}: {kind}: {message}", file=sys.stderr)
 
     warnings.showwarning = note
     try:

@@ -234,7 +234,7 @@ def render_sequence(
     bound = inspect.signature(_sequence.render_sequence).bind(*args, **kwargs)
     bound.apply_defaults()
     plan = _sequence._plan(**bound.arguments)
-    with _sequence.claim(plan.out):
+    with _sequence.claim(plan.out, plan.created):
         result = _run_sequence(
             plan, bound.arguments["progress"], (client, workers, scheduler), chunk, warmup
         )

@@ -260,6 +260,7 @@ class _Plan:
     height: int
     spp: int
     exr: bool
+    created: tuple[Path, ...] = ()  # the directories this run made for out_dir, deepest first
 
     def result(self) -> SequenceResult:
         paths = [self.out / f"{FRAME_NAME.format(f)}.png" for f in self.todo]
@@ -331,6 +332,7 @@ def _plan(
     animated_style = bool(_check_style_tracks(scene, spec, base_style, user_style))
     if isinstance(spec, str):
         spec = {"name": spec}
+    created = tuple(p for p in (out, *out.parents) if not p.exists())
     out.mkdir(parents=True, exist_ok=True)
     return _Plan(
         scene=scene,
@@ -346,35 +348,46 @@ def _plan(
         height=height,
         spp=spp,
         exr=bool(exr),
+        created=created,
     )
 
 
 @contextlib.contextmanager
-def claim(out: Path) -> Iterator[None]:
-    """Hold ``out``'s run lock for the block and remove the temporaries a killed run left.
+def claim(out: Path, created: tuple[Path, ...] = ()) -> Iterator[None]:
+    """Hold ``out``'s run lock for the block and remove the temporaries a killed run left; if
+    the block raises, remove the directories of ``created`` (:attr:`_Plan.created`) that are
+    still empty, so that a run that wrote no frame leaves no directory behind.
 
     Raises
     ------
     ValueError
         Another run (of this or another process) holds the lock.
     """
-    if fcntl is None:
-        _remove_temporaries(out)
-        yield
-        return
-    fd = os.open(out, os.O_RDONLY)
     try:
+        if fcntl is None:
+            _remove_temporaries(out)
+            yield
+            return
+        fd = os.open(out, os.O_RDONLY)
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            raise ValueError(
-                f"out_dir: {str(out)!r} is being written by another `refnpr animate` run; wait "
-                "for it to end, or give another directory"
-            ) from None
-        _remove_temporaries(out)
-        yield
-    finally:
-        os.close(fd)  # releases the lock
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                raise ValueError(
+                    f"out_dir: {str(out)!r} is being written by another `refnpr animate` run; "
+                    "wait for it to end, or give another directory"
+                ) from None
+            _remove_temporaries(out)
+            yield
+        finally:
+            os.close(fd)  # releases the lock
+    except BaseException:
+        for d in created:  # deepest first; a directory with anything in it stays
+            try:
+                d.rmdir()
+            except OSError:
+                break
+        raise
 
 
 def _remove_temporaries(out: Path) -> None:
@@ -484,7 +497,7 @@ def render_sequence(
     """
     t_start = time.perf_counter()
     plan = _plan(scene, style, width, height, spp, out_dir, frames, exr, progress)
-    with claim(plan.out):
+    with claim(plan.out, plan.created):
         result = _run(plan, progress)
     result.seconds = time.perf_counter() - t_start
     return result

@@ -123,3 +123,66 @@ def test_scenes_marks_animated_scenes(capsys):
     assert "[49 frames]" in lines["veryovka_dolly"]
     assert "[36 frames]" in lines["xtoon_flow"]
     assert "frames]" not in lines["teapot"]
+
+
+def test_animate_param_replaces_the_scenes_track_of_that_parameter(tmp_path, capsys):
+    path = tmp_path / "n.toml"
+    path.write_text(
+        SCENE
+        + '[[animation.track]]\ntarget = "style.n"\n'
+        + "keys = [{ frame = 0, value = 2 }, { frame = 3, value = 6 }]\n"
+    )
+    out = tmp_path / "o"
+    assert animate(path, "--size", "16x12", "--spp", "1", "-o", out, "--param", "n=4") == 0
+    err = capsys.readouterr().err
+    assert err == (
+        "refnpr animate: warning: --param n=4 replaces the scene's track 'style.n': every "
+        "frame uses that value\n"
+    )
+    scene = load_scene(path)
+    for f in (0, 3):
+        want = render(scene.at(f), {"name": "toon", "n": 4}, 16, 12, 1).to_srgb8()
+        np.testing.assert_array_equal(iio.imread(out / f"frame_{f:05d}.png"), want)
+        assert '"n": 4' in (out / f"frame_{f:05d}.json").read_text()
+    # the track still animates n where --param does not set it
+    assert animate(path, "--size", "16x12", "--spp", "1", "-o", tmp_path / "t", "-q") == 0
+    want = render(scene.at(3), {"name": "toon", "n": 6}, 16, 12, 1).to_srgb8()
+    np.testing.assert_array_equal(iio.imread(tmp_path / "t" / "frame_00003.png"), want)
+
+
+def test_a_failed_run_removes_only_the_empty_directories_it_made(tmp_path, scene_file, monkeypatch):
+    from refnpr import sequence
+
+    calls = []
+
+    def shade(self, f):
+        calls.append(f)
+        if f == 1:
+            raise ValueError("shading failed")
+        return shade.original(self, f)
+
+    shade.original = sequence._Shader.shade
+    monkeypatch.setattr(sequence._Shader, "shade", shade)
+    out = tmp_path / "a" / "b" / "frames"
+    with pytest.raises(ValueError, match="shading failed"):
+        sequence.render_sequence(scene_file, None, 8, 8, 1, out_dir=out, frames="1:3")
+    assert not (tmp_path / "a").exists()  # nothing written: every directory it made is gone
+    existing = tmp_path / "kept"
+    existing.mkdir()
+    with pytest.raises(ValueError, match="shading failed"):
+        sequence.render_sequence(scene_file, None, 8, 8, 1, out_dir=existing / "f", frames="1:3")
+    assert existing.is_dir() and not (existing / "f").exists()
+    with pytest.raises(ValueError, match="shading failed"):  # frame 0 written, then a failure
+        sequence.render_sequence(scene_file, None, 8, 8, 1, out_dir=out, frames="0:3")
+    assert sorted(p.name for p in out.iterdir()) == ["frame_00000.json", "frame_00000.png"]
+
+
+def test_warnings_are_one_line_without_a_source_location(tmp_path, capsys):
+    args = ["--scene", "sphere", "--size", "8x8", "--spp", "1", "-o", tmp_path / "x.png", "-q"]
+    rc = main(["render", "--style", "toon", "--param", "mode=lake", "--param", "specular=false"]
+              + list(map(str, args)))  # fmt: skip
+    assert rc == 0
+    assert capsys.readouterr().err == (
+        "refnpr render: warning: specular: False is ignored with mode='lake'; remove specular "
+        "or use mode='step'\n"
+    )
