@@ -292,6 +292,19 @@ def njit(func=None, **overrides):
     return kernel
 
 
+def readonly(a):
+    """A read-only view of the array ``a`` (``a`` itself if it is read-only already).
+
+    numba types an array argument's writability, so a kernel called with a writable array in
+    one call and a read-only one (a ``np.broadcast_to`` view, a cached array) in another is
+    compiled twice. An input that the kernel only reads is passed through this, so that every
+    call has one signature."""
+    if a.flags.writeable:
+        a = a.view()
+        a.flags.writeable = False
+    return a
+
+
 # -- Banded kernels: a serial nogil kernel run over contiguous bands of its loop on Python threads.
 
 #: Worker threads shared by every banded kernel (created on first use, dropped in a forked child).

@@ -40,7 +40,7 @@ import numpy as np
 from numba import types as nbtypes
 from numba.extending import overload
 
-from refnpr._jit import njit
+from refnpr._jit import njit, readonly
 
 __all__ = ["face", "elementwise", "Whole"]
 
@@ -203,12 +203,7 @@ def elementwise(scalar: Any, dtype: Any, *args: Any, compute: Any = np.float64) 
             a = np.zeros(1, dtype=a.dtype)
         else:
             a = np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(size)
-        # read-only whether or not broadcasting copied it: numba types an array's
-        # writability, and one loop signature serves both
-        if a.flags.writeable:
-            a = a.view()
-            a.flags.writeable = False
-        return a
+        return readonly(a)  # whether or not broadcasting copied it: one loop signature
 
     packed = tuple(
         flat(a) if isinstance(a, np.ndarray) else tuple(flat(c) for c in a) if _is_vector(a) else a

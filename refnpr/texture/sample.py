@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from refnpr._jit import readonly
 from refnpr.device import sampling
 from refnpr.formulas._face import elementwise
 
@@ -23,7 +24,7 @@ def _uv_and_shape(uv, name: str = "uv") -> tuple[np.ndarray, tuple[int, ...]]:
         raise TypeError(f"{name}: expected a float array, got dtype {a.dtype}")
     if a.ndim < 1 or a.shape[-1] != 2:
         raise ValueError(f"{name}: expected shape (..., 2), got {a.shape}")
-    flat = np.ascontiguousarray(a.reshape(-1, 2), dtype=np.float64)
+    flat = readonly(np.ascontiguousarray(a.reshape(-1, 2), dtype=np.float64))
     if not np.all(np.isfinite(flat)):
         raise ValueError(f"{name}: contains NaN or inf; mask empty samples before sampling")
     return flat, a.shape[:-1]
@@ -68,7 +69,8 @@ def sample_trilinear(pyramid: MipPyramid, uv, lod, *, dtype=np.float32) -> np.nd
         raise ValueError(f"lod: expected shape {shape} (uv's leading shape), got {lam.shape}")
     if not np.all(np.isfinite(lam)):
         raise ValueError("lod: contains NaN or inf")
-    return _run(K.sample_trilinear, pyramid, flat, shape, np.ascontiguousarray(lam.ravel()), dtype)
+    lam = readonly(np.ascontiguousarray(lam.ravel()))
+    return _run(K.sample_trilinear, pyramid, flat, shape, lam, dtype)
 
 
 def sample_level(pyramid: MipPyramid, uv, level, *, dtype=np.float32) -> np.ndarray:
@@ -79,7 +81,7 @@ def sample_level(pyramid: MipPyramid, uv, level, *, dtype=np.float32) -> np.ndar
     lv = np.asarray(level)
     if lv.dtype.kind not in "iu":
         raise TypeError(f"level: expected integer level indices, got dtype {lv.dtype}")
-    lv = np.ascontiguousarray(np.broadcast_to(lv, shape).ravel(), dtype=np.int64)
+    lv = readonly(np.ascontiguousarray(np.broadcast_to(lv, shape).ravel(), dtype=np.int64))
     return _run(K.sample_level, pyramid, flat, shape, lv, dtype)
 
 

@@ -234,3 +234,19 @@ def test_anisotropic_probes_match_naive_loop():
         assert probes(pyr, uv[0], uv[1], lod, n, axis, 0) == pytest.approx(want, abs=1e-9)
         want0 = np.mean([naive_bilinear(p.levels[int(k0)], *q) for q in pts])
         assert level_probes(pyr, int(k0), uv[0], uv[1], n, axis) == pytest.approx(want0, abs=1e-9)
+
+
+def test_writable_and_read_only_inputs_share_one_compiled_sampler():
+    """numba types an array's writability: the samplers pass their inputs read-only, so a
+    broadcast (read-only) uv or lod does not compile the kernel a second time."""
+    from refnpr.texture import _kernels as K
+
+    p = build_pyramid(np.random.default_rng(0).random((8, 8)).astype(np.float32))
+    uv = np.full((4, 2), 0.3)
+    sample_trilinear(p, uv, np.zeros(4))
+    sample_level(p, uv, np.zeros(4, dtype=np.int64))
+    before = (len(K.sample_trilinear.body.signatures), len(K.sample_level.body.signatures))
+    got = sample_trilinear(p, np.broadcast_to([0.3, 0.3], (4, 2)), np.broadcast_to(0.0, (4,)))
+    sample_level(p, np.broadcast_to([0.3, 0.3], (4, 2)), np.broadcast_to(np.int64(0), (4,)))
+    assert (len(K.sample_trilinear.body.signatures), len(K.sample_level.body.signatures)) == before
+    np.testing.assert_array_equal(got, sample_trilinear(p, uv, np.zeros(4)))

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from refnpr._jit import readonly
 from refnpr.formulas.tamiss import StrokeFit, StrokeStrip, fit_strokes, hash01, width_factor
 
 from . import _kernels as kernels
@@ -114,8 +115,8 @@ def _fit_arrays(fit: StrokeFit) -> tuple[np.ndarray, ...]:
             f"monomial bases), got basis {fit.basis!r} with batch shape {fit.batch_shape}"
         )
     shapes = (fit.c_x.shape, fit.c_x.shape, fit.batch_shape, fit.batch_shape)
-    out = tuple(
-        np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=dt), shape))
+    out = tuple(  # read-only, whether or not broadcasting copied them: one kernel signature
+        readonly(np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=dt), shape)))
         for a, shape in zip((fit.c_x, fit.c_y, fit.t_min, fit.t_max), shapes, strict=True)
     )
     if not (np.all(np.isfinite(out[2])) and np.all(np.isfinite(out[3]))):
@@ -202,7 +203,7 @@ def centreline(fit: StrokeFit, t, *, speed: np.ndarray | None = None) -> tuple[n
     dt = arrays[0].dtype
     consts = np.array([0.5, 2.0, 3.0, 0.0], dtype=dt)
     ext = (
-        np.ascontiguousarray(np.broadcast_to(speed, lo.shape[:1])),
+        readonly(np.ascontiguousarray(np.broadcast_to(speed, lo.shape[:1]))),
         bool(np.any((t < lo) | (t > hi))),
     )
     out = tuple(np.empty(t.shape) for _ in range(4))
