@@ -84,7 +84,7 @@ IMAGE = (
     "levels 0 .. M - 1 as exported (level 0 W0 x H0 texels; do not regenerate them). LOD from "
     "the PER-PIXEL derivatives (not divided by n_s, whatever the filter): rho = "
     "max(hypot(du'/dx W0, dv'/dx H0), hypot(du'/dy W0, dv'/dy H0)), lambda = log2(max(rho, "
-    "1e-30)) + params.lod_bias, clamped to [0, M - 1]; k0 = floor(lambda), k1 = min(k0 + 1, M "
+    "2^-64)) + params.lod_bias, clamped to [0, M - 1]; k0 = floor(lambda), k1 = min(k0 + 1, M "
     "- 1), f = lambda - k0. B_k(u, v) = GL_LINEAR / GL_REPEAT sample of level k (cols x rows): "
     "x = (u - floor(u)) cols - 0.5, y = (v - floor(v)) rows - 0.5, i = floor(x), j = "
     "floor(y), f_x = x - i, f_y = y - j, columns i, i + 1 and rows j, j + 1 taken modulo "

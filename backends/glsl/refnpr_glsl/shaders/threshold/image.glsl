@@ -42,7 +42,7 @@ float texture_lod(int g, vec2 gx, vec2 gy, float bias) {
     int lv = LV0[g];
     vec2 size = vec2(float(LV_COLS[lv]), float(LV_ROWS[lv]));
     float rho = max(length(gx * size), length(gy * size));
-    return log2(max(rho, 1e-30)) + bias;
+    return log2(max(rho, exp2(-64.0))) + bias;
 }
 
 #if TONE_CORRECT
