@@ -111,6 +111,29 @@ CASES = [
         _warns("focus_point: 0 is ignored with detail='depth'", "detail='focus'"),
     ),
     Case(
+        "threshold-period-constant",
+        M,
+        "threshold source='constant' period=4 (no lines or dots to space)",
+        _warned("sphere", "threshold", source="constant", period=4.0),
+        _warns(
+            "period: 4.0 is ignored with source='constant'", "source='lines' or source='stipple'"
+        ),
+    ),
+    Case(
+        "threshold-clahe-window-lines",
+        M,
+        "threshold source='lines' window=8 (CLAHE of an image texture only)",
+        _warned("sphere", "threshold", source="lines", window=8),
+        _warns("window: 8 is ignored with source='lines'", "use source='image'"),
+    ),
+    Case(
+        "threshold-mip-unfiltered-image",
+        M,
+        "threshold source='image' mip='trilinear' (the mip mode of pcf only)",
+        _warned("sphere", "threshold", source="image", mip="trilinear"),
+        _warns("mip: 'trilinear' is ignored with filter='none'", "use filter='pcf'"),
+    ),
+    Case(
         "xtoon-focus-point-0-focus",
         M,
         "xtoon detail='focus' focus_point=0",
@@ -206,7 +229,7 @@ CASES = [
         M,
         "refnpr render --style xtoon --param focus_point=0",
         _cli("sphere", "xtoon", "focus_point=0"),
-        Exits(0, r"UserWarning: focus_point: 0 is ignored with detail='depth'"),
+        Exits(0, r"refnpr render: warning: focus_point: 0 is ignored with detail='depth'"),
     ),
     Case(
         "cli-threshold-noise-scale-1e20",
@@ -320,7 +343,7 @@ CASES = [
         N,
         "refnpr render --style xtoon --param detail_map=nan",
         _cli("sphere", "xtoon", "detail_map=nan"),
-        Exits(0, r"UserWarning: detail_map: nan is ignored with detail='depth'"),
+        Exits(0, r"refnpr render: warning: detail_map: nan is ignored with detail='depth'"),
     ),
 ]
 

@@ -58,10 +58,10 @@ def _shade(scene, style, w=64, h=48, spp=1):
             r"directions\[1\]: expected a value in \[-360, 360\]",
         ),
         (dict(uv_scale=0), ValueError, r"uv_scale: expected a positive number or two"),
-        (dict(mip="bilinear"), ValueError, r"mip: expected one of"),
+        (dict(source="image", filter="pcf", mip="bilinear"), ValueError, r"mip: expected one of"),
         (dict(specular_threshold="lines"), ValueError, r"specular_threshold: expected 'texture'"),
         (dict(colour=1), TypeError, r"unknown parameter\(s\) \['colour'\]"),
-        (dict(clahe_levels="some"), ValueError, r"clahe_levels: expected one of"),
+        (dict(source="image", clahe_levels="some"), ValueError, r"clahe_levels: expected one of"),
     ],
 )
 def test_bad_parameters_name_the_parameter(params, exc, match):

@@ -114,6 +114,7 @@ def _pyramid(name: str, value: Any) -> Any:
 
 _IMAGE = {"source": ("image",)}
 _LINES = {"source": ("lines",)}
+_SCREENS = {"source": ("lines", "stipple")}  # the procedural sources: eq. 5's scale
 
 PARAMS = Params(
     "threshold",
@@ -200,14 +201,16 @@ PARAMS = Params(
         kind="int",
         lo=2,
         hi=4096,
+        used_when=_IMAGE,
     ),
-    Param("clip_limit", 0.01, "CLAHE clip limit", lo=0.0, lo_open=True, hi=1.0),
-    Param("nbins", 256, "CLAHE histogram bins", kind="int", lo=2, hi=65536),
+    Param("clip_limit", 0.01, "CLAHE clip limit", lo=0.0, lo_open=True, hi=1.0, used_when=_IMAGE),
+    Param("nbins", 256, "CLAHE histogram bins", kind="int", lo=2, hi=65536, used_when=_IMAGE),
     Param(
         "rank_equalize",
         True,
         "make each CLAHE level exactly uniform (clahe_pyramid(uniform=True))",
         kind="bool",
+        used_when=_IMAGE,
     ),
     Param(
         "clahe_levels",
@@ -216,6 +219,7 @@ PARAMS = Params(
         "wall) or not at all (raw image, Fig. 2 top right)",
         kind="choice",
         choices=CLAHE_LEVELS,
+        used_when=_IMAGE,
     ),
     Param(
         "tiling",
@@ -232,6 +236,7 @@ PARAMS = Params(
         "map each level's bilinear threshold samples through that level's interpolant CDF "
         "(exact tone per level; refnpr's addition, see below)",
         kind="bool",
+        used_when=_IMAGE,
     ),
     Param(
         "mip",
@@ -240,8 +245,9 @@ PARAMS = Params(
         "or against one trilinear threshold; deprecated: pcf_levels = 2 | 1",
         kind="choice",
         choices=MIPS,
+        used_when={"source": ("image",), "filter": ("pcf",)},
     ),
-    Param("lod_bias", 0.0, "added to the mip LOD", lo=-16.0, hi=16.0),
+    Param("lod_bias", 0.0, "added to the mip LOD", lo=-16.0, hi=16.0, used_when=_IMAGE),
     Param(
         "period",
         8.0,
@@ -249,6 +255,7 @@ PARAMS = Params(
         lo=0.0,
         lo_open=True,
         unit="px",
+        used_when=_SCREENS,
     ),
     Param(
         "directions",
@@ -259,6 +266,7 @@ PARAMS = Params(
         parse=_directions,
         unit="degrees",
         accepts="u, v, float or a list",
+        used_when=_LINES,
     ),
     Param(
         "onsets",
@@ -275,6 +283,7 @@ PARAMS = Params(
         "tone-preserving multi-scale blend (lines: multiscale_line(uniform=True); dots: the "
         "tone table) instead of eq. 8, which drifts in tone between integer scales",
         kind="bool",
+        used_when=_SCREENS,
     ),
     Param(
         "multiscale",
@@ -282,6 +291,7 @@ PARAMS = Params(
         "eqs. 7-8's transition between dyadic scales; false floors the scale (eq. 6 alone: "
         "lines pop where the scale crosses an integer)",
         kind="bool",
+        used_when=_SCREENS,
     ),
     Param(
         "noise",
@@ -290,6 +300,7 @@ PARAMS = Params(
         lo=0.0,
         hi=1.0,
         unit="periods",
+        used_when=_LINES,
     ),
     Param(
         "noise_scale",
@@ -298,6 +309,7 @@ PARAMS = Params(
         lo=0.0,
         lo_open=True,
         hi=MAX_NOISE_SCALE,
+        used_when=_LINES,
     ),
     Param(
         "noise_seed",
@@ -305,6 +317,7 @@ PARAMS = Params(
         "seed of the line noise and of the stipple's dot placement",
         kind="int",
         record=False,
+        used_when=_SCREENS,
     ),
     Param(
         "jitter",
