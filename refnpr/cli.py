@@ -311,6 +311,11 @@ def _cmd_styles(args: argparse.Namespace) -> int:
     from .styles import get_style_class, list_styles
 
     if not args.name:
+        if args.markdown:
+            raise ValueError(
+                "--markdown: prints one style's parameter table; name the style, e.g. "
+                "`refnpr styles threshold --markdown` (`refnpr styles` lists them)"
+            )
         for name, desc in list_styles().items():
             print(f"{name:16s} {desc}")
         return 0

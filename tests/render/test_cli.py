@@ -58,6 +58,12 @@ def test_scenes_styles_info(capsys):
     assert "toon" in capsys.readouterr().out
     assert main(["info"]) == 0
     assert "numba threads" in capsys.readouterr().out
+    assert main(["styles", "threshold", "--markdown"]) == 0
+    assert capsys.readouterr().out.startswith("| parameter |")
+    assert main(["styles", "--markdown"]) == 2  # one style's table: which one?
+    assert (
+        "--markdown: prints one style's parameter table; name the style" in capsys.readouterr().err
+    )
 
 
 def test_compare_command(tmp_path, capsys):
