@@ -52,7 +52,9 @@ from typing import Any
 import numpy as np
 
 from ..raster import Camera, Mesh
+from ..raster.mesh import MAX_COORDINATE, coordinate_limit_message
 from ..texture.embedded import EmbeddedImage, probe_image
+from ._mesh_files import zero_area_message
 from .animation import MAX_FRAMES, Animation, Track
 from .scene import Light, Material, Scene, SceneObject
 from .toml_format import SceneFileError
@@ -718,13 +720,115 @@ def _traverse(r: _Reader, nodes: list[_Node], roots: list[int]) -> list[int]:
 
 
 def _world(nodes: list[_Node], order: list[int], local=None) -> dict[int, np.ndarray]:
+    """World matrices by node; an overflow leaves non-finite entries, which the objects, the
+    camera and the lights that use them report (:func:`_placement_error`, :func:`_axis`)."""
     local = local or {}
     world: dict[int, np.ndarray] = {}
-    for i in order:  # parents come before children in depth-first order
-        m = local.get(i, nodes[i].local)
-        p = nodes[i].parent
-        world[i] = m if p is None else world[p] @ m
+    with np.errstate(over="ignore", invalid="ignore"):
+        for i in order:  # parents come before children in depth-first order
+            m = local.get(i, nodes[i].local)
+            p = nodes[i].parent
+            world[i] = m if p is None else world[p] @ m
     return world
+
+
+def _chain(nodes: list[_Node], i: int) -> list[int]:
+    """Node ``i`` and its ancestors, nearest first."""
+    out = [i]
+    while nodes[out[-1]].parent is not None:
+        out.append(nodes[out[-1]].parent)
+    return out
+
+
+def _field(nodes: list[_Node], j: int, trs_key: str) -> str:
+    """The glTF path of node ``j``'s ``trs_key`` (``matrix`` for a node given as a matrix)."""
+    return f"nodes[{j}].{trs_key if nodes[j].trs is not None else 'matrix'}"
+
+
+def _zero_scale_field(nodes: list[_Node], i: int, local=None) -> str:
+    """The glTF path of the scale (or matrix) that makes node ``i``'s world matrix singular: the
+    nearest node on its path to the root whose own linear part is singular."""
+    local = local or {}
+    for j in _chain(nodes, i):
+        a = local.get(j, nodes[j].local)[:3, :3]
+        if np.any(np.linalg.norm(a, axis=0) == 0) or _singular(a):
+            return _field(nodes, j, "scale")
+    return f"nodes[{i}]"
+
+
+def _large_field(nodes: list[_Node], i: int) -> str:
+    """The glTF path that most likely carries node ``i``'s geometry beyond the coordinate
+    limit: a translation beyond it, else the largest scale on the node's path to the root."""
+    chain = _chain(nodes, i)
+    for j in chain:
+        if np.abs(nodes[j].local[:3, 3]).max() > MAX_COORDINATE:
+            return _field(nodes, j, "translation")
+    j = max(chain, key=lambda k: float(np.abs(nodes[k].local[:3, :3]).max()))
+    if np.abs(nodes[j].local[:3, :3]).max() > 1.0:
+        return _field(nodes, j, "scale")
+    return f"nodes[{i}]"
+
+
+def _nonzero_fix(field: str) -> str:
+    """How to repair the zero scale at ``field`` (a node's ``scale`` or ``matrix``)."""
+    if field.endswith(".scale"):
+        return f"make every component of {field} non-zero"
+    if field.endswith(".matrix"):
+        return f"make {field} invertible (a non-zero scale on every axis)"
+    return "give the node and its parents non-zero scales"
+
+
+def _singular(a: np.ndarray) -> bool:
+    """Whether a 3x3 linear part has a zero (or underflowing) determinant: a zero scale."""
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        return bool(abs(np.linalg.det(a)) < 1e-300)
+
+
+def _axis(r: _Reader, nodes: list[_Node], i: int, world: np.ndarray, k: int, what: str, **at):
+    """Column ``k`` of node ``i``'s world matrix, unit length: the axis that gives ``what``
+    (a camera's view or up direction, a light's direction); an error naming the node's zero
+    scale (or its overflowing transform) where it has no length. ``at``: ``local`` (the node
+    matrices of an animation frame) and ``t`` (its time)."""
+    col = world[:3, k]
+    with np.errstate(over="ignore", invalid="ignore"):
+        n = float(np.linalg.norm(col))
+    if n > 0 and math.isfinite(n) and np.all(np.isfinite(col)):
+        return col / n
+    when = "" if at.get("t") is None else f" at time {at['t']:g} s"
+    if n == 0:
+        field = _zero_scale_field(nodes, i, at.get("local"))
+        raise r.fail(
+            field,
+            f"{what} of nodes[{i}] {nodes[i].name!r} has a zero scale{when}: the node's world "
+            f"matrix maps its {'XYZ'[k]} axis to zero, so it has no direction; "
+            + _nonzero_fix(field)
+            + " (a camera's or light's scale does not change what it does)",
+        )
+    raise r.fail(
+        _large_field(nodes, i),
+        f"{what} of nodes[{i}] {nodes[i].name!r}{when}: its world matrix (the node's transform "
+        "composed with its parents') is not finite (it overflows float64); give the nodes "
+        "scales and translations of a reasonable size",
+    )
+
+
+def _placement_error(
+    r: _Reader, nodes: list[_Node], i: int, mesh: Mesh, m: np.ndarray, what: str
+) -> GltfError | None:
+    """The error for an object whose node's world matrix ``m`` places ``mesh`` beyond the
+    coordinate limit (or overflows), naming the field that carries it there; None if it fits."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        pos = mesh.positions @ m[:3, :3].T + m[:3, 3]
+    subject = f"{what}, placed by the world transform of nodes[{i}] {nodes[i].name!r},"
+    if not np.all(np.isfinite(pos)):
+        msg = (
+            f"{subject} has vertex coordinates beyond float64 (the node's transform composed "
+            "with its parents' overflows); rescale the model (e.g. to metres or kilometres) "
+            f"so that every |coordinate| is <= {MAX_COORDINATE:.0e}"
+        )
+    else:
+        msg = coordinate_limit_message(subject, pos)
+    return None if msg is None else r.fail(_large_field(nodes, i), msg)
 
 
 def _triangles(r: _Reader, mode: int, idx: np.ndarray, where: str) -> np.ndarray:
@@ -812,9 +916,15 @@ def _primitive_mesh(r: _Reader, mi: int, pi: int, prim: Any, name: str, node_w: 
     if normals is None:
         pos, faces, normals, uv = _flat(pos, faces, uv)
     try:
-        return Mesh(pos, faces, normals, uv, name=name)
+        mesh = Mesh(pos, faces, normals, uv, name=name)
     except (TypeError, ValueError) as exc:
         raise r.fail(w, str(exc)) from None
+    flat = zero_area_message(f"{w} (the mesh of {node_w} {name!r})", mesh.positions, mesh.faces)
+    if flat is not None:
+        raise GltfError(
+            f"{r.label}: {flat}; remove the primitive, or re-export the file from its source"
+        )
+    return mesh
 
 
 def _material(r: _Reader, index: Any, where: str, cache: dict) -> Material:
@@ -985,21 +1095,36 @@ class _Placed:
     index: int  # camera / light index; primitive index for objects
 
 
-def _camera_from(world: np.ndarray, params: dict, distance: float) -> Camera:
-    m = world[:3, :3]
+def _camera_from(
+    r: _Reader, nodes: list[_Node], i: int, world: np.ndarray, params: dict, distance: float, **at
+) -> Camera:
+    """The camera of node ``i`` (world matrix ``world``); ``at`` as :func:`_axis` takes it."""
     eye = world[:3, 3]
-    forward = -m[:, 2] / np.linalg.norm(m[:, 2])
-    up = m[:, 1]
-    return Camera.look_at(
-        eye, eye + distance * forward, up, params["fov_y"], params["near"], params["far"]
-    )
+    forward = -_axis(r, nodes, i, world, 2, "the camera", **at)
+    up = _axis(r, nodes, i, world, 1, "the camera", **at)
+    try:
+        return Camera.look_at(
+            eye, eye + distance * forward, up, params["fov_y"], params["near"], params["far"]
+        )
+    except ValueError as exc:
+        when = "" if at.get("t") is None else f" at time {at['t']:g} s"
+        raise r.fail(f"nodes[{i}]", f"camera{when}: {exc}") from None
 
 
-def _light_from(world: np.ndarray, info: dict) -> dict:
-    if info["kind"] == "directional":  # the light shines along its node's -Z
-        z = world[:3, 2]
-        return {"direction": tuple(z / np.linalg.norm(z))}
-    return {"position": tuple(world[:3, 3])}
+def _light_from(r: _Reader, nodes: list[_Node], pl: _Placed, world: np.ndarray, info, **at):
+    """The direction (directional: the node's +Z, the light shining along -Z) or position of
+    the light ``pl`` places; ``at`` as :func:`_axis` takes it."""
+    if info["kind"] == "directional":
+        what = f"directional light {info['name']!r}"
+        return {"direction": tuple(_axis(r, nodes, pl.node, world, 2, what, **at))}
+    position = world[:3, 3]
+    if not np.all(np.isfinite(position)):
+        raise r.fail(
+            _large_field(nodes, pl.node),
+            f"{info['kind']} light {info['name']!r} of nodes[{pl.node}]: its world position is "
+            "not finite (the node's transform composed with its parents' overflows float64)",
+        )
+    return {"position": tuple(position)}
 
 
 def camera_headlight(camera: Camera) -> Light:
@@ -1152,11 +1277,15 @@ def load_gltf(
         if mesh.name != name or uv is not mesh.uv:
             mesh = Mesh(mesh.positions, mesh.faces, mesh.normals, uv, mesh.attributes, name)
         try:
-            return SceneObject(mesh, m, material, name)
+            obj = SceneObject(mesh, m, material, name)
+            obj.world_mesh()  # memoized: the bounds below use it
+            return obj
         except (TypeError, ValueError) as exc:
-            raise r.fail(f"nodes[{pl.node}]", f"object {name!r}: {exc}") from None
+            what = f"object {name!r} (meshes[{mi}].primitives[{pl.index}])"
+            placement = _placement_error(r, nodes, pl.node, mesh, m, what)
+            raise placement or r.fail(f"nodes[{pl.node}]", f"object {name!r}: {exc}") from None
 
-    hidden = [pl for pl in objects_at if abs(np.linalg.det(world[pl.node][:3, :3])) < 1e-300]
+    hidden = [pl for pl in objects_at if _singular(world[pl.node][:3, :3])]
     objects_at = [pl for pl in objects_at if pl not in hidden]
     if hidden:
         _warn(f"{given}: {len(hidden)} object(s) with a zero scale are not drawn")
@@ -1172,8 +1301,7 @@ def load_gltf(
         cam_params = _perspective(r, cam_at.index, nodes[cam_at.node].name)
         eye = world[cam_at.node][:3, 3]
         centre = (bounds_lo + bounds_hi) / 2
-        fwd = -world[cam_at.node][:3, 2]
-        fwd = fwd / np.linalg.norm(fwd)
+        fwd = -_axis(r, nodes, cam_at.node, world[cam_at.node], 2, "the camera")
         along = float((centre - eye) @ fwd)
         cam_distance = along if along > cam_params["near"] else 1.0
         if cam_params["far"] is None:
@@ -1182,10 +1310,7 @@ def load_gltf(
             )
             reach = float(np.max(np.linalg.norm(corners - eye, axis=1)))
             cam_params["far"] = max(2.0 * reach, 100.0 * cam_params["near"])
-        try:
-            cam = _camera_from(world[cam_at.node], cam_params, cam_distance)
-        except ValueError as exc:
-            raise r.fail(f"nodes[{cam_at.node}]", f"camera: {exc}") from None
+        cam = _camera_from(r, nodes, cam_at.node, world[cam_at.node], cam_params, cam_distance)
     else:
         cam = _framing_camera(bounds_lo, bounds_hi)
         _warn(f"{given}: the file has no camera; refnpr frames the scene's bounds from +Z")
@@ -1197,13 +1322,23 @@ def load_gltf(
         if info["kind"] == "spot":
             _warn(f"{given}: spot light {info['name']!r} is read as a point light (no cone)")
         kind = "directional" if info["kind"] == "directional" else "point"
-        lights.append(Light(kind=kind, color=info["color"], **_light_from(world[pl.node], info)))
+        placed_at = _light_from(r, nodes, pl, world[pl.node], info)
+        lights.append(Light(kind=kind, color=info["color"], **placed_at))
     headlight = headlight and not lights
     if headlight:
         lights.append(camera_headlight(cam))
+        defined = (
+            f"KHR_lights_punctual defines {len(light_infos)} light(s) ("
+            + ", ".join(repr(info["name"]) for info in light_infos[:5])
+            + (", ..." if len(light_infos) > 5 else "")
+            + ") but no node of the scene places one (a node's extensions.KHR_lights_punctual"
+            ".light)"
+            if light_infos
+            else "no KHR_lights_punctual lights"
+        )
         _warn(
-            f"{given}: no KHR_lights_punctual lights; refnpr adds a headlight (a white "
-            "directional light from the camera)"
+            f"{given}: {defined}; refnpr adds a headlight (a white directional light from the "
+            "camera)"
         )
     scene = Scene(
         objects=tuple(objects),
@@ -1545,17 +1680,29 @@ def _animation(
             local[ni] = _trs_matrix(tr, q, s)
         world = _world(nodes, order, local)
         for j, pl in objs:
-            tr, q, s = _decompose(r, world[pl.node], ai, nodes[pl.node].name, t)
+            tr, q, s = _decompose(r, nodes, pl.node, world[pl.node], ai, t, f, local)
             add(f'object "{names[j]}".translation', f, tr)
             add(f'object "{names[j]}".rotation', f, q)
             add(f'object "{names[j]}".scale', f, s)
         if cam_moves:
-            cam = _camera_from(world[cam_at.node], cam_params, cam_distance)
+            cam = _camera_from(
+                r,
+                nodes,
+                cam_at.node,
+                world[cam_at.node],
+                cam_params,
+                cam_distance,
+                local=local,
+                t=t,
+            )
             add("camera.eye", f, cam.eye)
             add("camera.target", f, cam.target)
             add("camera.up", f, cam.up)
         for j, pl in lts:
-            for attr, value in _light_from(world[pl.node], light_infos[pl.index]).items():
+            placed_at = _light_from(
+                r, nodes, pl, world[pl.node], light_infos[pl.index], local=local, t=t
+            )
+            for attr, value in placed_at.items():
                 add(f"light[{j}].{attr}", f, value)
     tracks = []
     for target, ks in keys.items():
@@ -1582,11 +1729,31 @@ def headlight_track(tracks: Sequence[Track]) -> tuple[Track, ...]:
     return (Track("light[0].direction", keys, "linear"),)
 
 
-def _decompose(r: _Reader, m: np.ndarray, ai: int, name: str, t: float):
+def _decompose(
+    r: _Reader, nodes: list[_Node], i: int, m: np.ndarray, ai: int, t: float, frame: int, local
+):
+    """Translation, rotation and scale of node ``i``'s world matrix ``m`` at animation time
+    ``t`` (frame ``frame``; ``local``: the frame's node matrices)."""
+    name = nodes[i].name
+    if not np.all(np.isfinite(m)):
+        raise r.fail(
+            f"animations[{ai}]",
+            f"node {name!r} has a world transform that is not finite at time {t:g} s (frame "
+            f"{frame}): its translation or scale, composed with its parents', overflows float64; "
+            "give the nodes scales and translations of a reasonable size",
+        )
     a = m[:3, :3]
     s = np.linalg.norm(a, axis=0)
-    if np.any(s == 0):
-        raise r.fail(f"animations[{ai}]", f"node {name!r} has a zero scale at time {t:g} s")
+    if np.any(s == 0) or _singular(a):
+        field = _zero_scale_field(nodes, i, local)
+        raise r.fail(
+            f"animations[{ai}]",
+            f"{field} of node {name!r} reaches zero at time {t:g} s (frame {frame}); refnpr "
+            "cannot hide an object on some frames only (a scene has the same objects in every "
+            "frame, which styles match from frame to frame): animate the scale to a tiny "
+            "non-zero value instead (e.g. 1e-6, far below a pixel), or end the animation "
+            "before that key",
+        )
     rot = a / s
     if np.linalg.det(rot) < 0:
         s[0], rot[:, 0] = -s[0], -rot[:, 0]

@@ -167,7 +167,9 @@ def _as_transform(value) -> np.ndarray:
         raise ValueError(f"transform: expected a finite (4, 4) matrix, got shape {m.shape}")
     if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
         raise ValueError(f"transform: the last row must be (0, 0, 0, 1), got {m[3].tolist()}")
-    if abs(np.linalg.det(m[:3, :3])) < 1e-300:
+    with np.errstate(over="ignore", under="ignore"):  # a huge scale: its coordinates are checked
+        det = np.linalg.det(m[:3, :3])
+    if abs(det) < 1e-300:
         raise ValueError("transform: the 3x3 part is singular; use a non-zero scale")
     m.setflags(write=False)
     return m

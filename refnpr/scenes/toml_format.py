@@ -71,6 +71,7 @@ table, and names the key: ``teapot.toml: [[object]] #1 'teapot': level: expected
 from __future__ import annotations
 
 import dataclasses
+import json
 import tomllib
 import warnings
 from collections.abc import Iterator, Mapping
@@ -80,6 +81,7 @@ from importlib import resources
 from pathlib import Path
 
 from ..raster import Camera
+from ..texture.builtin import BUILTIN_TEXTURES
 from .animation import MAX_FRAMES, Animation, Track, check_keys_in_range
 from .registry import mesh_from_spec
 from .scene import Light, Material, Scene, SceneObject, transform_matrix
@@ -154,8 +156,15 @@ def _material(source: str, where: str, value, base_dir: Path) -> Material:
     spec = _table(source, where, value, _MATERIAL_KEYS)
     for key in ("texture", "color_texture"):
         texture = spec.get(key)
-        if not (isinstance(texture, str) and _is_path(texture)):
+        if not isinstance(texture, str) or texture in BUILTIN_TEXTURES:
             continue
+        if not _is_path(texture):
+            raise SceneFileError(
+                f"{source}: {where}: {key}: {texture!r} is not a built-in texture (they are "
+                f"{', '.join(BUILTIN_TEXTURES)}) nor a file path (a path has a suffix or a "
+                "slash and is relative to the scene file); use one of those names or give the "
+                "image's path (e.g. 'textures/paper.png')"
+            )
         path = base_dir / texture
         if path.is_dir():
             raise SceneFileError(
@@ -228,12 +237,13 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
 
         lights = [camera_headlight(camera)]
         warnings.warn(
-            f"{src}: gltf: the file has no KHR_lights_punctual lights; refnpr adds a headlight (a "
-            "white directional light from the scene's camera)",
+            f"{src}: gltf: no node of the file's scene places a KHR_lights_punctual light; "
+            "refnpr adds a headlight (a white directional light from the scene's camera)",
             GltfWarning,
             stacklevel=3,
         )
     objects = [] if content is None else _override_materials(src, top, content, base)
+    tables = {}  # object name -> the [[object]] table that made it
     for i, spec in enumerate(_array_of_tables(src, "object", top.get("object", []))):
         where = f"[[object]] #{i + 1}"
         spec = _table(src, where, spec, None)
@@ -252,6 +262,7 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
             obj_name = (name or mesh.name) if single else f"{name or 'object'}[{j}]"
             with _where(src, where):
                 objects.append(SceneObject(mesh, transform, material, obj_name))
+            tables.setdefault(obj_name, where)
     if not objects:
         raise SceneFileError(f"{src}: no [[object]] tables; a scene needs at least one object")
     style = _table(src, "[style]", top.get("style", {}), None)
@@ -275,18 +286,31 @@ def parse_scene(data: Mapping, base_dir: str | Path = ".", *, source: str | None
             style=style,
         )
     if content is not None and "animation" not in top and content.animation is not None:
+        # a [camera] table that sets the pose (eye, target or up) replaces the file's moving
+        # pose; one that sets only the lens (fov_y, near, far) keeps it
+        posed = any(key in top.get("camera", {}) for key in ("eye", "target", "up"))
         kept = tuple(
             t
             for t in content.animation.tracks
-            if not (t.target.startswith("camera.") and "camera" in top)
+            if not (t.target.startswith("camera.") and posed)
             and not (t.target.startswith("light[") and "light" in top)
         )
+        gltf = top["gltf"] if isinstance(top["gltf"], str) else top["gltf"]["path"]
+        for t in kept:
+            part, which, _ = t.parts
+            if part == "object" and which in tables:
+                raise SceneFileError(
+                    f"{src}: {tables[which]}: name: {which!r} is also the name of an object of "
+                    f"{gltf!r} that its animation moves (track {t.target!r}); an animated "
+                    "object needs a unique name: give this [[object]] another name"
+                )
         if headlight:  # it follows the file's camera where that camera moves the scene's
             from .gltf import headlight_track
 
             kept += headlight_track(kept)
         animation = dataclasses.replace(content.animation, tracks=kept)
-        return dataclasses.replace(scene, animation=animation)
+        with _where(src, "gltf: animations"):
+            return dataclasses.replace(scene, animation=animation)
     if "animation" not in top:
         return scene
     animation = _animation(src, top["animation"])
@@ -325,26 +349,27 @@ def _override_materials(src: str, top: dict, content: Scene, base: Path) -> list
     all objects) replacing its material's."""
     table = _table(src, "[materials]", top.get("materials", {}), None)
     names = [o.name for o in content.objects]
-    for key in table:
+    given = {}  # key -> its fields, checked (texture names, paths resolved) in its own table
+    for key, value in table.items():
         if key != "*" and key not in names:
             raise SceneFileError(
                 f"{src}: [materials]: no glTF object named {key!r}; objects: "
                 + ", ".join(map(repr, names))
                 + " (or '*' for all)"
             )
+        where = f"[materials.{json.dumps(key, ensure_ascii=False)}]"
+        checked = _material(src, where, value, base)  # a table of Material fields
+        given[key] = {k: getattr(checked, k) for k in value}
     objects = []
     for obj in content.objects:
-        fields_ = {**table.get("*", {}), **table.get(obj.name, {})}
+        fields_ = {**given.get("*", {}), **given.get(obj.name, {})}
         if not fields_:
             objects.append(obj)
             continue
-        where = f"[materials] {obj.name!r}"
-        given = _table(src, where, fields_, _MATERIAL_KEYS)
         current = {f.name: getattr(obj.material, f.name) for f in fields(Material)}
-        material = _material(src, where, given, base)
-        merged = current | {k: getattr(material, k) for k in given}
+        where = f"[materials.{json.dumps(obj.name, ensure_ascii=False)}]"
         with _where(src, where):
-            objects.append(dataclasses.replace(obj, material=Material(**merged)))
+            objects.append(dataclasses.replace(obj, material=Material(**(current | fields_))))
     return objects
 
 
@@ -522,8 +547,8 @@ def builtin_scene_path(name: str) -> Path:
 
 def load_scene(name_or_path: str | Path, *, camera: str | int | None = None) -> Scene:
     """Load a built-in scene by name (see :func:`list_scenes`) or a scene file by path: a
-    ``Path``, or a string that ends in ``.toml`` or contains a slash. A path ending in ``.gltf``
-    or ``.glb`` is read by :func:`refnpr.scenes.gltf.load_gltf` (docs/scenes.md).
+    ``Path``, or a string that ends in ``.toml`` (any case) or contains a slash. A path ending
+    in ``.gltf`` or ``.glb`` is read by :func:`refnpr.scenes.gltf.load_gltf` (docs/scenes.md).
 
     Parameters
     ----------
@@ -556,7 +581,7 @@ def load_scene(name_or_path: str | Path, *, camera: str | int | None = None) -> 
         return load_gltf(name_or_path, camera=camera)
     if isinstance(name_or_path, Path) or (
         isinstance(name_or_path, str)
-        and (name_or_path.endswith(".toml") or "/" in name_or_path or "\\" in name_or_path)
+        and (name_or_path.lower().endswith(".toml") or "/" in name_or_path or "\\" in name_or_path)
     ):
         path = Path(name_or_path)
         if path.is_dir():
@@ -576,7 +601,8 @@ def load_scene(name_or_path: str | Path, *, camera: str | int | None = None) -> 
         if name_or_path and Path(name_or_path).is_file():
             raise SceneFileError(
                 f"scene: {name_or_path!r} is a file but not a built-in scene, and scene file "
-                "names end in .toml: rename it to .toml (built-in scenes: "
+                "names end in .toml (a TOML scene), .gltf or .glb (glTF 2.0), in any case: "
+                "rename it to the suffix of its format (built-in scenes: "
                 f"{', '.join(list_scenes())})"
             ) from None
         raise

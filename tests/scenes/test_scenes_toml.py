@@ -236,6 +236,17 @@ def test_minimal_scene_defaults(tmp_path):
             r"#1 'pot': material: texture: file .*missing.png",
         ),
         (
+            'texture = "brick"',
+            'texture = "hatch"',
+            r"trip\.toml: \[\[object\]\] #2 'ball\.obj': material: texture: 'hatch' is not a "
+            r"built-in texture \(they are brick, grass, .*\) nor a file path",
+        ),
+        (
+            'texture = "brick"',
+            'color_texture = "paper"',
+            r"#2 'ball\.obj': material: color_texture: 'paper' is not a built-in texture",
+        ),
+        (
             'path = "ball.obj"',
             'path = "nope.obj"',
             r"#2 'nope.obj': path: mesh file .*nope.obj' does not exist",
@@ -280,6 +291,40 @@ def test_missing_tables(scene_dir):
         load_scene(path)
     with pytest.raises(FileNotFoundError, match="scene: file .*absent.toml' does not exist"):
         load_scene(scene_dir / "absent.toml")
+
+
+def test_scene_file_suffixes_in_any_case(scene_dir, monkeypatch):
+    monkeypatch.chdir(scene_dir)
+    (scene_dir / "TRIP.TOML").write_text(FULL)
+    assert load_scene("TRIP.TOML").name == "trip"  # its name = "trip"
+    (scene_dir / "notes.txt").write_text(FULL)
+    with pytest.raises(
+        SceneFileError,
+        match=r"^scene: 'notes\.txt' is a file but not a built-in scene, and scene file names end "
+        r"in \.toml \(a TOML scene\), \.gltf or \.glb \(glTF 2\.0\), in any case: rename it",
+    ):
+        load_scene("notes.txt")
+
+
+def test_material_texture_names_of_a_gltf_scene_are_checked_in_their_table(tmp_path):
+    from .test_gltf_degenerate import Tri, quiet
+
+    Tri().write(tmp_path / "model.gltf")
+    path = tmp_path / "s.toml"
+    path.write_text('gltf = "model.gltf"\n[materials."tri"]\ntexture = "hatch"\n')
+    with pytest.raises(
+        SceneFileError,
+        match=r"s\.toml: \[materials\.\"tri\"\]: texture: 'hatch' is not a built-in texture",
+    ):
+        quiet(load_scene, path)
+    path.write_text('gltf = "model.gltf"\n[materials."*"]\ncolor_texture = "hatch"\n')
+    with pytest.raises(SceneFileError, match=r"\[materials\.\"\*\"\]: color_texture: 'hatch'"):
+        quiet(load_scene, path)
+    path.write_text(
+        'gltf = "model.gltf"\n[materials."*"]\ntexture = "grass"\n[materials.tri]\ndiffuse = 0.5\n'
+    )
+    material = quiet(load_scene, path).objects[0].material
+    assert (material.texture, material.diffuse) == ("grass", (0.5, 0.5, 0.5))
 
 
 def test_unknown_builtin_name_lists_valid_names():

@@ -7,14 +7,14 @@ or face), so checking costs about as much as trimesh's own read. A check returns
 
 from __future__ import annotations
 
-from .common import FIX, BadMeshFile, check_geometry
+from .common import FIX, BadMeshFile, check_geometry, zero_area_message
 from .glb import _check_glb
 from .obj import _check_obj
 from .off import _check_off
 from .ply import _check_ply
 from .stl import _check_stl
 
-__all__ = ["BadMeshFile", "CHECKS", "FIX", "check_geometry"]
+__all__ = ["BadMeshFile", "CHECKS", "FIX", "check_geometry", "zero_area_message"]
 
 #: Extension -> raw check of that format.
 CHECKS = {

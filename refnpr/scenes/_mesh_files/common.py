@@ -145,11 +145,17 @@ def check_geometry(g, what: str) -> None:
         raise BadMeshFile(
             f"{what}: face indices span {int(f.min())}..{int(f.max())} for {v.shape[0]} vertices"
         )
-    msg = coordinate_limit_message(what, v)
+    msg = coordinate_limit_message(what, v) or zero_area_message(what, v, f)
     if msg is not None:
         raise BadMeshFile(msg)
-    for s in range(0, f.shape[0], 1 << 14):  # stop at the first chunk that draws something
-        tri = v[f[s : s + (1 << 14)]]
+
+
+def zero_area_message(what: str, positions: np.ndarray, faces: np.ndarray) -> str | None:
+    """The refusal of a mesh whose triangles all have zero area (nothing to draw), in the one
+    wording the mesh-file checks and the glTF reader share; ``None`` when some triangle has an
+    area. ``positions`` (N, 3) finite, ``faces`` (F, 3) valid indices into them."""
+    for s in range(0, faces.shape[0], 1 << 14):  # stop at the first chunk that draws something
+        tri = positions[faces[s : s + (1 << 14)]]
         if np.any(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]) != 0):
-            return
-    raise BadMeshFile(f"{what}: all {f.shape[0]} triangles have zero area (nothing to draw)")
+            return None
+    return f"{what}: all {faces.shape[0]} triangles have zero area (nothing to draw)"
