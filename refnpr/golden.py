@@ -258,7 +258,7 @@ def load_suite(path: str | Path) -> list[GoldenCase]:
             raise ValueError(
                 f"{path}: case {name!r}: kind must be 'image' or 'gbuffer', got {params['kind']!r}"
             )
-        if scene.endswith((".toml", ".gltf", ".glb")):
+        if scene.lower().endswith((".toml", ".gltf", ".glb")):
             scene = str((path.parent / scene).resolve())
         cases.append(GoldenCase(name, scene, params))
     if not cases:
@@ -301,7 +301,7 @@ def scene_case(
     params = {**_DEFAULTS, "style": style, "width": width, "height": height, "spp": spp}
     _check_case(Path(str(scene)), name, params)
     scene = str(scene)
-    if scene.endswith((".toml", ".gltf", ".glb")):
+    if scene.lower().endswith((".toml", ".gltf", ".glb")):
         scene = str(Path(scene).resolve())
     return GoldenCase(name, scene, params)
 

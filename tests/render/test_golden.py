@@ -131,3 +131,20 @@ def test_a_broken_case_does_not_stop_the_others(tmp_path):
     res = {r.name: r for r in check_suite(suite)}
     assert not res["bad"].passed and "render failed" in res["bad"].message
     assert res["good"].passed
+
+
+def test_scene_file_paths_are_relative_to_the_suite_in_any_case(tmp_path, monkeypatch):
+    from refnpr.golden import scene_case
+
+    suite = tmp_path / "s" / "suite.toml"
+    suite.parent.mkdir()
+    suite.write_text(
+        '[[case]]\nname = "a"\nscene = "Room.TOML"\n[[case]]\nname = "b"\nscene = "m.GLB"\n'
+    )
+    assert [c.scene for c in load_suite(suite)] == [
+        str(tmp_path / "s" / "Room.TOML"),
+        str(tmp_path / "s" / "m.GLB"),
+    ]
+    monkeypatch.chdir(tmp_path)
+    assert scene_case("c", "x/Up.Gltf").scene == str(tmp_path / "x" / "Up.Gltf")
+    assert scene_case("d", "teapot").scene == "teapot"  # a built-in name stays a name
