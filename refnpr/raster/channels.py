@@ -65,8 +65,11 @@ def _concat(meshes: Sequence[Mesh], key: str, what: str) -> np.ndarray:
         a = m.attributes.get(key) if key not in ("uv", "normals") else getattr(m, key)
         if a is None:
             remedy = {
-                "uv": "give the mesh uv, or project them (refnpr.scenes.project_uv(mesh, 'planar'|"
-                "'box'|'spherical'|'cylindrical'))",
+                "uv": "give the mesh uv, or project them: in a TOML scene, uv_projection = "
+                "'planar'|'box'|'spherical'|'cylindrical' in the object's [[object]] table (a "
+                "glTF file without TEXCOORD_0: [[object]] path = 'model.glb' with "
+                "uv_projection, docs/scenes.md); in Python, refnpr.scenes.project_uv(mesh, "
+                "'box')",
                 "normals": "give the mesh vertex normals (e.g. trimesh's vertex_normals)",
             }.get(key, f"add attributes={{{key!r}: ...}} to the mesh")
             raise ValueError(
