@@ -17,8 +17,14 @@ __all__ = [
     "check_finite",
     "check_scalar",
     "check_int",
+    "as_ints",
+    "INT64_MIN",
+    "INT64_MAX",
     "describe",
 ]
+
+#: The range of int64, the integer type the faces and the kernels compute in.
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 
 
 def describe(value) -> str:
@@ -115,14 +121,69 @@ def check_scalar(
     return v
 
 
-def check_int(name: str, value, *, lo: int | None = None, hi: int | None = None) -> int:
-    """Validate an integer parameter (bools rejected) in [lo, hi] and return it."""
+def _int_range(lo: int | None, hi: int | None) -> tuple[int, int, str]:
+    """The bounds to check (a None bound: int64's) and the interval to name in a message (a None
+    bound: -inf / inf)."""
+    text = f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
+    return (INT64_MIN if lo is None else lo), (INT64_MAX if hi is None else hi), text
+
+
+def _int_hint(v: int, lo: int | None, hi: int | None, hint: str) -> str:
+    if (lo is None and v < INT64_MIN) or (hi is None and v > INT64_MAX):
+        hint = (
+            "the formulas compute in int64, where an integer outside [-2**63, 2**63 - 1] overflows"
+        )
+    return f"; {hint}" if hint else ""
+
+
+def check_int(
+    name: str, value, *, lo: int | None = None, hi: int | None = None, hint: str = ""
+) -> int:
+    """Validate an integer parameter (bools rejected) in [lo, hi] and return it.
+
+    A bound left None is int64's on that side (:data:`INT64_MIN`, :data:`INT64_MAX`): the
+    faces pass integers to numba and numpy as int64, where a larger one would overflow.
+    """
     if isinstance(value, bool) or not isinstance(value, (numbers.Integral,)):
         raise TypeError(f"{name}: expected an integer, got {describe(value)}")
     v = int(value)
-    if (lo is not None and v < lo) or (hi is not None and v > hi):
+    lo_, hi_, interval = _int_range(lo, hi)
+    if v < lo_ or v > hi_:
         raise ValueError(
-            f"{name}: expected an integer in [{'-inf' if lo is None else lo}, "
-            f"{'inf' if hi is None else hi}], got {v}"
+            f"{name}: expected an integer in {interval}, got {v}" + _int_hint(v, lo, hi, hint)
         )
     return v
+
+
+def as_ints(
+    name: str, value, *, lo: int | None = None, hi: int | None = None, hint: str = ""
+) -> np.ndarray:
+    """``value`` as an int64 ndarray of integers in [lo, hi] (bounds as :func:`check_int`).
+
+    Raises ``TypeError`` naming ``name`` for non-integer input (floats, bools, strings, objects)
+    and ``ValueError`` for a value outside [lo, hi] (also an unsigned one past int64), naming
+    the first such value and its flat index.
+    """
+    if isinstance(value, (str, bytes)) or value is None:
+        raise TypeError(f"{name}: expected integers, got {describe(value)}")
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "iu":
+        raise TypeError(
+            f"{name}: expected integers, got {describe(value)}; "
+            "convert with numpy.asarray(..., dtype=numpy.int64)"
+        )
+    lo_, hi_, interval = _int_range(lo, hi)
+    info = np.iinfo(arr.dtype)
+    bad = np.zeros(arr.shape, dtype=bool)
+    if lo_ > info.min:  # a bound inside the dtype's range: compared in the dtype
+        bad |= arr < lo_
+    if hi_ < info.max:
+        bad |= arr > hi_
+    if np.any(bad):
+        at = int(np.flatnonzero(np.ravel(bad))[0])
+        v = int(np.ravel(arr)[at])
+        raise ValueError(
+            f"{name}: expected integers in {interval}, got {v} at flat index {at}"
+            + _int_hint(v, lo, hi, hint)
+        )
+    return arr.astype(np.int64)

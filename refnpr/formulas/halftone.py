@@ -354,6 +354,28 @@ def sample_indication(indication_map, uv) -> np.ndarray:
     return elementwise(sample_indication.scalar, np.float64, Whole(imap), uv[..., 0], uv[..., 1])
 
 
+#: How far from 1 the length of a normal given to :func:`tangent_frame` may be.
+_UNIT_TOL = 1e-5
+
+
+def _check_unit(name: str, vectors: np.ndarray) -> None:
+    """Raise ``ValueError`` unless every (..., 3) vector of ``vectors`` has length 1 within
+    :data:`_UNIT_TOL`."""
+    big = np.max(np.abs(vectors), axis=-1)  # the length scaled by the largest component: no
+    scale = np.where(big > 0.0, big, 1.0)  # overflow or underflow on the way
+    length = big * np.sqrt(np.sum((vectors / scale[..., None]) ** 2, axis=-1))
+    off = ~(np.abs(length - 1.0) <= _UNIT_TOL)
+    if np.any(off):
+        at = np.unravel_index(int(np.flatnonzero(off)[0]), off.shape)
+        where = f" at index {tuple(map(int, at))}" if off.ndim else ""
+        raise ValueError(
+            f"{name}: expected unit vectors (length 1 within {_UNIT_TOL}), got "
+            f"{vectors[at].tolist()} of length {float(length[at])!r}{where}; normalize it first "
+            f"({name} / numpy.linalg.norm({name}, axis=-1, keepdims=True)) and leave out "
+            "samples without a surface"
+        )
+
+
 _TINY_DET = 1e-20  # |det J| at or below this: no tangent frame (edge-on view, degenerate uv)
 _TINY_LEN = 1e-30  # a tangent at or below this length: none
 
@@ -418,16 +440,29 @@ def tangent_frame(normal, dp_dx, dp_dy, duv_dx, duv_dy):
     ``tangent_frame.scalar(n, dp_dx, dp_dy, duv_dx, duv_dy)`` is the device function (3- and
     2-tuples): ``(t, b, valid)``.
 
+    The Gram-Schmidt step projects along N as given (the kernels pass the G-buffer's
+    renormalized normal), which is a projection onto the tangent plane only for a unit N: the
+    face refuses a normal whose length is not 1 within 1e-5 (a float32 unit vector's rounding is
+    about 1e-7).
+
     Parameters
     ----------
-    normal, dp_dx, dp_dy : (..., 3) arrays
-        The normal N (any length: Gram-Schmidt uses it as given) and dP/dx, dP/dy.
+    normal : (..., 3) array
+        The unit normal N (length 1 within 1e-5; normalize it first).
+    dp_dx, dp_dy : (..., 3) arrays
+        dP/dx, dP/dy.
     duv_dx, duv_dy : (..., 2) arrays
         (du/dx, dv/dx) and (du/dy, dv/dy).
 
     Returns
     -------
     T, B : (..., 3) float64 unit vectors (0 where invalid); valid : (...) bool
+
+    Raises
+    ------
+    ValueError
+        For a normal that is not a unit vector (zero, or of another length), a shape that is
+        not (..., 3) / (..., 2), shapes that do not broadcast, or NaN or inf.
     """
     dt = np.dtype(np.float64)
     arrays = {
@@ -440,6 +475,7 @@ def tangent_frame(normal, dp_dx, dp_dy, duv_dx, duv_dy):
     for name, (arr, size) in arrays.items():
         trailing(name, arr, size, "a vector per sample")
     broadcast(**{name: arr[..., 0] for name, (arr, _) in arrays.items()})
+    _check_unit("normal", arrays["normal"][0])
     vectors = [tuple(arr[..., k] for k in range(size)) for arr, size in arrays.values()]
     out = elementwise(_tangent_frame_flat, dt, *vectors)
     return out[..., 0:3], out[..., 3:6], out[..., 6] > 0.0

@@ -30,7 +30,7 @@ from refnpr.device.vectors import dot, reflect, unit_scaled
 
 from ._face import elementwise, face
 from ._shading_checks import broadcast, check_range, real, trailing
-from ._validate import check_int, check_scalar, describe, result_dtype
+from ._validate import as_float, check_int, check_scalar, describe, result_dtype
 
 __all__ = [
     "ambient",
@@ -395,13 +395,21 @@ def luminance(rgb) -> np.ndarray:
     Parameters
     ----------
     rgb : (..., C) float, C >= 3
-        Linear colours; channels past the third (alpha) are ignored.
+        Finite linear colours (real numbers: integer and bool arrays are read as float64);
+        channels past the third (alpha) are ignored.
 
     Returns
     -------
     (...) float64
+
+    Raises
+    ------
+    TypeError
+        For complex, string or object input.
+    ValueError
+        For another shape, or NaN or inf in ``rgb``.
     """
-    a = np.asarray(rgb)
+    a = as_float("rgb", rgb, finite=True)
     if a.ndim < 1 or a.shape[-1] < 3:
         raise ValueError(
             f"rgb: expected an array of shape (..., C) with C >= 3 channels, got shape {a.shape}"

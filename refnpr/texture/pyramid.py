@@ -9,6 +9,7 @@ with its row 0 first. Wrapping is GL_REPEAT.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -147,7 +148,8 @@ def clahe_pyramid(
         CLAHE window w in texels (the paper's w, capped at the level size; smaller gives softer
         textures).
     clip_limit : float in (0, 1]
-        CLAHE clip limit (scikit-image's normalized units).
+        CLAHE clip limit (scikit-image's normalized units): any real number (a Python or
+        numpy integer or float; not a bool).
     nbins : int >= 2
     uniform : bool
         Follow CLAHE by :func:`rank_equalize` on each level: CLAHE only *approximates* a uniform
@@ -157,7 +159,8 @@ def clahe_pyramid(
         across levels. ``False`` keeps the paper's CLAHE output.
     """
     window, nbins = _int("window", window, 2), _int("nbins", nbins, 2)
-    if not isinstance(clip_limit, (int, float)) or not 0.0 < clip_limit <= 1.0:
+    real = isinstance(clip_limit, numbers.Real) and not isinstance(clip_limit, (bool, np.bool_))
+    if not real or not 0.0 < clip_limit <= 1.0:
         raise ValueError(f"clip_limit: expected a number in (0, 1], got {clip_limit!r}")
     if not isinstance(uniform, (bool, np.bool_)):  # 1 and 0 are not flags
         raise TypeError(f"uniform: expected a bool, got {uniform!r}")

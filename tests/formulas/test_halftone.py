@@ -269,6 +269,7 @@ def test_sample_indication_matches_naive_loop_and_its_texels():
 def test_tangent_frame_matches_the_solved_jacobian():
     rng = np.random.default_rng(9)
     n = rng.normal(size=(200, 3))
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
     dpdx, dpdy = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
     dudx, dudy = rng.normal(size=(200, 2)), rng.normal(size=(200, 2))
     t, b, valid = tangent_frame(n, dpdx, dpdy, dudx, dudy)
@@ -283,6 +284,44 @@ def test_tangent_frame_matches_the_solved_jacobian():
         np.testing.assert_allclose(b[k], bk / np.linalg.norm(bk), atol=1e-9)
     singular = tangent_frame(n[:1], dpdx[:1], dpdy[:1], [[1.0, 2.0]], [[2.0, 4.0]])
     assert not singular[2][0] and not singular[0].any() and not singular[1].any()
+
+
+def test_tangent_frame_is_orthonormal_with_the_unit_normal():
+    rng = np.random.default_rng(10)
+    n = rng.normal(size=(300, 3))
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    dpdx, dpdy = rng.normal(size=(300, 3)), rng.normal(size=(300, 3))
+    dudx, dudy = rng.normal(size=(300, 2)), rng.normal(size=(300, 2))
+    t, b, valid = tangent_frame(n, dpdx, dpdy, dudx, dudy)
+    assert valid.all()
+    for u, v in ((t, n), (b, n), (t, b)):
+        np.testing.assert_allclose(np.einsum("ij,ij->i", u, v), 0.0, atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(t, axis=-1), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(b, axis=-1), 1.0, rtol=1e-12)
+    # a G-buffer normal is a unit vector rounded to float32: accepted as it is
+    assert tangent_frame(n.astype(np.float32), dpdx, dpdy, dudx, dudy)[2].all()
+
+
+@pytest.mark.parametrize(
+    "normal, length",
+    [
+        ([0.0, 0.0, 2.0], r"2\.0"),
+        ([0.0, 0.0, 1e200], r"1e\+200"),
+        ([0.0, 0.0, 1e-200], r"1e-200"),
+        ([0.0, 0.0, 0.0], r"0\.0"),
+        ([0.6, 0.8, 1e-2], r"1\.00004999"),
+    ],
+)
+def test_tangent_frame_refuses_a_normal_that_is_not_unit(normal, length):
+    """Gram-Schmidt against N projects onto the tangent plane only for a unit N (N = (0, 0, 2)
+    would give T.N = -1.9 with a valid frame)."""
+    match = rf"^normal: expected unit vectors \(length 1 within 1e-05\), got .* of length {length}"
+    with pytest.raises(ValueError, match=match):
+        tangent_frame(normal, [1.0, 0.0, 0.5], [0.0, 1.0, 0.0], [1.0, 0.0], [0.0, 1.0])
+    with pytest.raises(ValueError, match=r"at index \(1,\)"):
+        tangent_frame(
+            [[0.0, 0.0, 1.0], normal], [1.0, 0.0, 0.5], [0.0, 1.0, 0.0], [1.0, 0.0], [0.0, 1.0]
+        )
 
 
 @pytest.mark.parametrize(

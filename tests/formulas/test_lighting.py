@@ -209,3 +209,24 @@ def test_luminance_needs_three_channels():
         ValueError, match=r"rgb: expected an array of shape \(\.\.\., C\) with C >= 3"
     ):
         luminance(np.zeros((4, 2)))
+
+
+@pytest.mark.parametrize(
+    "rgb, error, message",
+    [
+        (np.array([1 + 1j, 0.5, 0.25]), TypeError, "expected real values, got complex"),
+        (np.array(["a", "b", "c"]), TypeError, "expected a real number or numeric array"),
+        ("abc", TypeError, "expected a real number or array"),
+        ([math.nan, 0.5, 0.25], ValueError, "must be finite, got nan"),
+        ([[0.5, math.inf, 0.25, 1.0]], ValueError, "must be finite, got inf"),
+    ],
+)
+def test_luminance_refuses_non_real_or_non_finite_colours(rgb, error, message):
+    with pytest.raises(error, match=f"^rgb: {message}"):
+        luminance(rgb)
+
+
+def test_luminance_reads_integer_and_bool_colours_as_float64():
+    got = luminance(np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1]]))
+    assert got.dtype == np.float64 and got.tolist() == [0.2126, 0.7152, 0.0722]
+    assert luminance(np.array([True, True, True])) == (0.2126 + 0.7152) + 0.0722

@@ -742,3 +742,104 @@ def test_cubic_and_slope_are_horner_in_the_coefficients_type(dtype):
 def test_field_faces_name_a_bad_argument(call, name):
     with pytest.raises((ValueError, TypeError), match=f"^{name}: "):
         call()
+
+
+def test_level_rule_saturates_for_any_finite_scale():
+    """Oracle: the docstring's rule on Python's exact integer floor (no int64 to overflow)."""
+    s = np.array(
+        [1e19, 1e300, 20.0, 12.0, 11.5, -3.5, -1074.0, -1e19, -1e300, -np.finfo(float).max]
+    )
+    got = tamiss.level_rule(s, 12)
+    for (big_l, f, thin), v in zip(got, s, strict=True):
+        want_l, want_f, want_thin = math.floor(v), v - math.floor(v), 1.0
+        if want_l < 0:
+            want_l, want_f, want_thin = 0, 0.0, 2.0**v
+        if want_l >= 12:
+            want_l, want_f = 12, 0.0
+        assert (big_l, f, thin) == (want_l, want_f, want_thin)
+
+
+@pytest.mark.parametrize("max_level", [-1, 13, 2**64])
+def test_level_rule_refuses_a_max_level_past_the_field(max_level):
+    with pytest.raises(ValueError, match=r"^max_level: expected an integer in \[0, 12\]"):
+        tamiss.level_rule(1.0, max_level)
+
+
+_ID_BOUNDS = {
+    "chart": (0, 1023),
+    "layer": (0, 3),
+    "level": (0, 15),
+    "gx": (-(2**21), 2**21 - 1),
+    "gy": (-(2**21), 2**21 - 1),
+    "r": (0, 7),
+}
+
+
+@pytest.mark.parametrize("field", list(_ID_BOUNDS))
+def test_pack_id_takes_every_field_to_its_bit_limits_and_no_further(field):
+    lo, hi = _ID_BOUNDS[field]
+    base = {"chart": 5, "layer": 2, "level": 3, "gx": -7, "gy": 9, "r": 4}
+    for v in (lo, hi):  # the limits round-trip (the oracle: unpack_id's shifts and masks)
+        sid = tamiss.pack_id(**{**base, field: v})
+        got = tamiss.unpack_id(sid)
+        assert sid >= 0 and got["row" if field == "r" else field] == v
+    for v in (lo - 1, hi + 1):
+        match = rf"^{field}: expected integers in \[{lo}, {hi}\], got {v} at flat index 1"
+        with pytest.raises(ValueError, match=match):
+            tamiss.pack_id(**{**base, field: np.array([lo, v])})
+
+
+def test_pack_id_fields_no_longer_alias():
+    with pytest.raises(ValueError, match="^gx: "):  # would equal pack_id(0, 0, 1, -2**21, 0, 0)
+        tamiss.pack_id(0, 0, 0, 2**21, 0, 0)
+    with pytest.raises(ValueError, match="^r: "):  # would equal pack_id(0, 0, 0, 0, 1, 0)
+        tamiss.pack_id(0, 0, 0, 0, 0, 8)
+    with pytest.raises(ValueError, match="^chart: "):  # would be a negative id
+        tamiss.pack_id(2000, 0, 0, 0, 0, 0)
+    with pytest.raises(TypeError, match="^level: expected integers"):
+        tamiss.pack_id(0, 0, 1.0, 0, 0, 0)
+    with pytest.raises(ValueError, match="^gy: "):  # an unsigned value past int64
+        tamiss.pack_id(0, 0, 0, 0, np.uint64(2**63), 0)
+
+
+@pytest.mark.parametrize("r", [-1, 7, 9])
+def test_born_at_and_stroke_start_refuse_a_row_outside_the_cell(r):
+    with pytest.raises(ValueError, match=r"^r: expected integers in \[0, 6\], got -?\d+ at flat"):
+        tamiss.born_at(1, 0, 0, r)
+    with pytest.raises(ValueError, match=r"^r: expected integers in \[0, 6\]"):
+        tamiss.stroke_start(0, np.array([0, r]), 0, 1.0)
+
+
+def test_hash_faces_name_a_bad_salt_or_input():
+    ids = np.arange(3)
+    with pytest.raises(TypeError, match="^salt: expected an integer, got None"):
+        tamiss.hash01(ids, None)
+    with pytest.raises(TypeError, match="^salt: expected an integer, got 5.7"):
+        tamiss.hash01(ids, 5.7)
+    with pytest.raises(TypeError, match="^salt: expected an integer, got True"):
+        tamiss.salt_offset(True)
+    with pytest.raises(ValueError, match="^salt: expected an integer in"):
+        tamiss.salt_offset(2**64)
+    with pytest.raises(TypeError, match="^x: expected integers, got 'abc'"):
+        tamiss.splitmix64("abc")
+    with pytest.raises(TypeError, match="^x: expected integers"):
+        tamiss.splitmix64(np.array([1.5]))
+    with pytest.raises(TypeError, match="^ids: expected integers"):
+        tamiss.hash01(np.array([1.0]), 1)
+    # salts modulo 2^64 (oracle: Python integers), numpy integer salts as Python ones
+    assert int(tamiss.salt_offset(2**64 - 1)) == (-0x9E3779B97F4A7C15) % 2**64
+    assert int(tamiss.salt_offset(-1)) == int(tamiss.salt_offset(2**64 - 1))
+    np.testing.assert_array_equal(tamiss.hash01(ids, np.int64(5)), tamiss.hash01(ids, 5))
+    # uint64 inputs are bit patterns: the same hash as the int64 of the same bits
+    big = np.array([2**63 + 5, 2**64 - 1], dtype=np.uint64)
+    np.testing.assert_array_equal(tamiss.splitmix64(big), tamiss.splitmix64(big.view(np.int64)))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_cg_solve_of_empty_systems_is_the_empty_solution(dtype):
+    x = tamiss.cg_solve(np.zeros((0, 0), dtype), np.zeros(0, dtype))
+    assert x.shape == (0,) and x.dtype == dtype
+    assert tamiss.cg_solve(np.zeros((5, 0, 0), dtype), np.zeros(0, dtype)).shape == (5, 0)
+    assert tamiss.cg_solve(np.zeros((0, 4, 4), dtype), np.zeros(4, dtype)).shape == (0, 4)
+    with pytest.raises(ValueError, match=r"^b: expected shape \(\.\.\., 0\)"):
+        tamiss.cg_solve(np.zeros((0, 0)), np.zeros(1))

@@ -217,7 +217,9 @@ def test_threshold_illumination_strength_blends_to_eq1():
 
 
 def test_threshold_illumination_errors():
-    with pytest.raises(ValueError, match="n: expected an integer in \\[1, inf\\], got 0"):
+    with pytest.raises(
+        ValueError, match="n: expected an integer in \\[1, 9007199254740992\\], got 0"
+    ):
         threshold_illumination(0.5, None, 0.5, n=0)
     with pytest.raises(ValueError, match="strength: expected values in \\[0.0, 1.0\\]"):
         threshold_illumination(0.5, None, 0.5, strength=1.5)
@@ -724,7 +726,9 @@ def test_line_coverage_is_monotone_in_intensity(v, s, gx, gy):
 
 
 def test_bad_parameters_raise_clear_errors():
-    with pytest.raises(ValueError, match="n: expected an integer in \\[1, inf\\], got 0"):
+    with pytest.raises(
+        ValueError, match="n: expected an integer in \\[1, 9007199254740992\\], got 0"
+    ):
         step_n(0.5, 0.5, 0)
     with pytest.raises(TypeError, match="n: expected an integer, got 2.5"):
         step_n(0.5, 0.5, 2.5)
@@ -923,3 +927,131 @@ def test_float32_faces_of_unit_interval_formulas_stay_below_one():
     v = np.array([np.nextafter(1.0, 0.0), 0.9999999, -1e-9], dtype=np.float32)
     for f in (multiscale_line(v, np.float32(0.0)), dyadic_remap(v, np.float32(0.0))):
         assert f.dtype == np.float32 and np.all(f < 1.0)
+
+
+# ---------------------------------------------------------------------- edges of the faces
+
+
+def test_pcf_threshold_weights_broadcast_with_the_samples():
+    """Weights (M, K) beside samples (K,) give M pixels (oracle: the weighted mean per row)."""
+    ts = np.array([0.3, 0.6, 0.7])
+    wts = np.array([[1.0, 1.0, 1.0], [3.0, 1.0, 0.5]])
+    got = pcf_threshold(0.5, ts, weights=wts)
+    want = [
+        sum(w * step_py(0.5, t) for w, t in zip(row, ts, strict=True)) / sum(row) for row in wts
+    ]
+    assert got.shape == (2,)
+    np.testing.assert_allclose(got, want, rtol=1e-15)
+    assert pcf_threshold(0.5, ts, weights=[[2.0], [5.0]]).tolist() == [1 / 3, 1 / 3]
+
+
+@pytest.mark.parametrize("shape", [(2,), (4,), (2, 2)])
+def test_pcf_threshold_names_weights_of_another_sample_count(shape):
+    with pytest.raises(
+        ValueError, match=r"^weights: expected shape \(K,\) or \(\.\.\., K\) with K = 3"
+    ):
+        pcf_threshold(0.5, np.full(3, 0.3), weights=np.ones(shape))
+
+
+@pytest.mark.parametrize(
+    "weights",
+    [
+        [1e308, 1e308, 1e308],
+        [1.7e308, 1e308, 5e307],
+        [np.finfo(float).max, 1.0, 1e-300],
+        [1e308, 0.0, 1e308],
+        [5e307, 5e307, 5e307],  # the sum is finite, the weighted sum at x = 3 is not
+    ],
+)
+def test_pcf_threshold_with_weights_whose_sum_overflows(weights):
+    """Oracle: the weighted mean in exact rational arithmetic, rounded once."""
+    from fractions import Fraction
+
+    ts = [0.3, 0.6, 0.7]
+    for x, n in ((0.5, 1), (0.65, 1), (0.65, 2), (3.0, 2)):
+        hits = [Fraction(step_n_py(x, t, n)) for t in ts]
+        want = float(
+            sum(Fraction(w) * h for w, h in zip(weights, hits, strict=True))
+            / sum(map(Fraction, weights))
+        )
+        got = float(pcf_threshold(x, np.array(ts), weights=weights, n=n))
+        assert got == pytest.approx(want, rel=1e-15)
+
+
+def test_pcf_threshold_keeps_the_kernels_bits_for_ordinary_weights():
+    rng = np.random.default_rng(31)
+    ts, w = rng.uniform(0, 1, (50, 7)), rng.uniform(0, 1e300, (50, 7))
+    x = rng.uniform(0, 1, 50)
+    got = pcf_threshold(x, ts, weights=w, n=3)
+    want = [pcf_threshold.scalar(x[i], ts[i], w[i], 3) for i in range(50)]
+    assert got.tolist() == want
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda n: step_n(0.5, 0.5, n),
+        lambda n: pcf_threshold(0.5, np.full(3, 0.3), n=n),
+        lambda n: mip_threshold(0.5, 0.3, 0.6, 0.5, n=n),
+        lambda n: threshold_illumination(0.5, None, 0.5, n=n),
+    ],
+)
+def test_step_counts_are_bounded_by_exact_float64_integers(call):
+    for n in (2**53 + 1, 2**63, 2**64):
+        with pytest.raises(ValueError, match=r"^n: expected an integer in \[1, 9007199254740992\]"):
+            call(n)
+    with pytest.raises(TypeError, match="^n: expected an integer, got 2.0"):
+        call(2.0)
+    assert float(call(2**53)) == 0.5  # x n = 2^52 exactly: floor(x n) / n (eq. 4)
+
+
+@pytest.mark.parametrize(
+    "angles", [np.float32(0.3), np.array(0.3), 0.3, 1, np.zeros((1, 1)), "ab", [], None]
+)
+def test_hatch_threshold_names_angles_that_are_not_a_sequence(angles):
+    with pytest.raises(ValueError, match="^angles: expected a non-empty sequence of radians"):
+        hatch_threshold(np.zeros(2), np.ones(2), np.ones(2), w=4.0, angles=angles)
+
+
+def test_hatch_threshold_takes_angles_as_a_numpy_array():
+    rng = np.random.default_rng(32)
+    uv, dx, dy = rng.uniform(0, 4, (20, 2)), rng.normal(size=(20, 2)), rng.normal(size=(20, 2))
+    want = hatch_threshold(uv, dx, dy, w=5.0, angles=(0.25, 1.5))
+    got = hatch_threshold(uv, dx, dy, w=5.0, angles=np.array([0.25, 1.5]))
+    np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize(
+    "onsets, error, message",
+    [
+        (1.0, ValueError, "expected a non-empty sequence of intensities"),
+        ([], ValueError, "expected a non-empty sequence of intensities"),
+        ([[1.0, 0.5]], ValueError, "expected a non-empty sequence of intensities"),
+        ("ab", TypeError, "expected a real number or array"),
+        ([1.0, math.nan], ValueError, "must be finite"),
+    ],
+)
+def test_layer_schedule_names_onsets(onsets, error, message):
+    with pytest.raises(error, match=f"^onsets: {message}"):
+        threshold.layer_schedule(onsets)
+
+
+@pytest.mark.parametrize("limit", [np.float32(0.25), np.float64(0.25), np.int64(1), np.uint8(1)])
+def test_clahe_pyramid_takes_any_real_clip_limit(limit):
+    from refnpr.texture import clahe_pyramid
+
+    img = np.random.default_rng(33).uniform(0, 1, (16, 16))
+    got = clahe_pyramid(img, window=8, clip_limit=limit, nbins=16)
+    want = clahe_pyramid(img, window=8, clip_limit=float(limit), nbins=16)
+    for a, b in zip(got.levels, want.levels, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(
+    "limit", [True, np.bool_(True), "0.1", np.float32(0.0), np.float64(1.5), math.nan]
+)
+def test_clahe_pyramid_refuses_a_clip_limit_that_is_not_a_number_in_range(limit):
+    from refnpr.texture import clahe_pyramid
+
+    with pytest.raises(ValueError, match=r"^clip_limit: expected a number in \(0, 1\]"):
+        clahe_pyramid(np.zeros((8, 8)), clip_limit=limit)

@@ -609,3 +609,8 @@ def test_blend_normals_extreme_lengths_stay_unit():
     np.testing.assert_allclose(xtoon.blend_normals(big, big, np.float32(0.5)), [1, 0, 0], atol=1e-6)
     out = xtoon.blend_normals(tiny, up, np.float32(0.5))
     np.testing.assert_allclose(out, np.array([1, 0, 1]) / np.sqrt(2), atol=1e-6)
+
+
+def test_toon_lookup_refuses_a_texture_without_channels():
+    with pytest.raises(ValueError, match=r"^texture: expected shape \(rows, cols, C\) with C >= 1"):
+        xtoon.toon_lookup(np.zeros((2, 2, 0)), 0.5, 0.5)

@@ -25,7 +25,7 @@ import numpy as np
 from refnpr._jit import njit
 
 from .._face import elementwise, face
-from .._validate import as_float, as_vectors, check_int, check_scalar, describe
+from .._validate import INT64_MIN, as_float, as_ints, as_vectors, check_int, check_scalar, describe
 from ..lighting import luminance
 
 __all__ = [
@@ -80,11 +80,22 @@ _INV53 = 1.0 / 9007199254740992.0
 _EMPTY32 = np.uint64(0xFFFFFFFF)
 
 
-def _ints(name: str, value) -> np.ndarray:
-    arr = np.asarray(value)
-    if arr.dtype.kind not in "iu":
-        raise TypeError(f"{name}: expected integers, got {describe(value)}")
-    return arr.astype(np.int64)
+#: The fields of an id (:func:`pack_id`): name, lowest and highest value, bits.
+_ID_FIELDS = (
+    ("chart", 0, 1023, 10),
+    ("layer", 0, 3, 2),
+    ("level", 0, 15, 4),
+    ("gx", -_CELL_OFF, _CELL_OFF - 1, CELL_BITS),
+    ("gy", -_CELL_OFF, _CELL_OFF - 1, CELL_BITS),
+    ("r", 0, 7, 3),
+)
+_ROW_HINT = f"a cell has {N_ROWS} rows, 0 .. {N_ROWS - 1}"
+
+
+def _bits(name: str, value) -> np.ndarray:
+    """Integers taken as 64-bit patterns (ids, hash inputs): any int64 or uint64 value, as int64
+    of the same bits."""
+    return as_ints(name, value, lo=INT64_MIN, hi=2**64 - 1)
 
 
 def _floats(**named) -> tuple[np.ndarray, ...]:
@@ -104,14 +115,35 @@ def _splitmix64(z):
 
 @face(_splitmix64)
 def splitmix64(x) -> np.ndarray:
-    """SplitMix64 finalizer on uint64 (wrapping), elementwise; at least 1-D."""
-    z = np.atleast_1d(np.asarray(x).astype(np.uint64))
+    """SplitMix64 finalizer on uint64 (wrapping), elementwise; at least 1-D.
+
+    Parameters
+    ----------
+    x : (...) integer array
+        Values taken modulo 2^64: int64 (negative values wrap) or uint64.
+
+    Returns
+    -------
+    (...) uint64 ndarray, at least 1-D
+    """
+    z = np.atleast_1d(_bits("x", x)).astype(np.uint64)
     return elementwise(splitmix64.scalar, np.int64, z).view(np.uint64)
 
 
 def salt_offset(salt: int) -> np.uint64:
-    """salt * 0x9E3779B97F4A7C15 modulo 2^64 (added to ids before hashing)."""
-    return np.uint64((int(salt) * 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF)
+    """salt * 0x9E3779B97F4A7C15 modulo 2^64 (added to ids before hashing).
+
+    Parameters
+    ----------
+    salt : int
+        An integer in [-2^63, 2^64 - 1] (int64 or uint64); not a float or a bool.
+
+    Returns
+    -------
+    numpy.uint64
+    """
+    salt = check_int("salt", salt, hi=2**64 - 1, hint="pass an integer salt, e.g. 1")
+    return np.uint64((salt * 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF)
 
 
 @njit
@@ -122,8 +154,20 @@ def _hash01(sid, salt):
 @face(_hash01)
 def hash01(ids, salt: int) -> np.ndarray:
     """A uniform float64 in [0, 1) per id: the top 53 bits of splitmix64(id + salt * M1).
-    ``hash01.scalar(id, offset)`` takes the offset (:func:`salt_offset`). At least 1-D."""
-    z = np.atleast_1d(_ints("ids", ids))
+    ``hash01.scalar(id, offset)`` takes the offset (:func:`salt_offset`). At least 1-D.
+
+    Parameters
+    ----------
+    ids : (...) integer array
+        Stroke ids (:func:`pack_id`), int64 or uint64.
+    salt : int
+        The hash's salt (:func:`salt_offset`).
+
+    Returns
+    -------
+    (...) float64 ndarray in [0, 1), at least 1-D
+    """
+    z = np.atleast_1d(_bits("ids", ids))
     return elementwise(hash01.scalar, np.float64, z, salt_offset(salt))
 
 
@@ -140,7 +184,7 @@ def key32(ids) -> np.ndarray:
     0xFFFFFFFF marks empty slots, so that value is folded to 0xFFFFFFFE. Distinct ids may share
     a key (probability about S^2 / 2^33 for S strokes); the hashed route reports such aliases.
     """
-    return elementwise(key32.scalar, np.int64, _ints("ids", ids)).astype(np.uint32)
+    return elementwise(key32.scalar, np.int64, _bits("ids", ids)).astype(np.uint32)
 
 
 @njit
@@ -157,9 +201,24 @@ def pack_id(chart, layer, level, gx, gy, r) -> np.ndarray:
     """Globally unique stroke id: int64 from (chart, layer, birth level, birth cell, row).
 
     Bit layout (63 bits): chart 10 | layer 2 | level 4 | gx + 2^21 (22) | gy + 2^21 (22) | row 3.
+
+    Parameters
+    ----------
+    chart, layer, level, gx, gy, r : (...) integer arrays, broadcast together
+        chart in [0, 1023], layer in [0, 3], level in [0, 15], gx and gy in [-2^21, 2^21 - 1],
+        r in [0, 7]: each field's bits above. A value outside its field would spill into
+        the next one (two tuples, one id), so it is refused.
+
+    Returns
+    -------
+    (...) int64 ndarray of ids >= 0
     """
     named = {"chart": chart, "layer": layer, "level": level, "gx": gx, "gy": gy, "r": r}
-    return elementwise(pack_id.scalar, np.int64, *(_ints(k, v) for k, v in named.items()))
+    fields = [
+        as_ints(k, named[k], lo=lo, hi=hi, hint=f"an id holds {k} in {bits} bits")
+        for k, lo, hi, bits in _ID_FIELDS
+    ]
+    return elementwise(pack_id.scalar, np.int64, *fields)
 
 
 def unpack_id(ids) -> dict[str, np.ndarray]:
@@ -181,9 +240,21 @@ def _born_at(level, gx, gy, r, kx):
 def born_at(level, gx, gy, r) -> np.ndarray:
     """Whether the seed of row r in cell (gx, gy) of ``level`` is new there (not in level - 1):
     a seed of level l >= 1 already existed at l - 1 exactly when (gx & 1, gy & 1) == (KX[r] & 1,
-    r & 1). ``born_at.scalar(level, gx, gy, r, kx)`` takes the row's column kx = KX[r]."""
-    args = [_ints(k, v) for k, v in zip("level gx gy r".split(), (level, gx, gy, r), strict=True)]
-    return elementwise(born_at.scalar, np.bool_, *args, KX[args[3]])
+    r & 1). ``born_at.scalar(level, gx, gy, r, kx)`` takes the row's column kx = KX[r].
+
+    Parameters
+    ----------
+    level, gx, gy : (...) integer arrays
+    r : (...) integer array in [0, 6]
+        The seed's row in its cell.
+
+    Returns
+    -------
+    (...) bool ndarray, broadcast shape
+    """
+    args = [as_ints(k, v) for k, v in zip("level gx gy".split(), (level, gx, gy), strict=True)]
+    rows = as_ints("r", r, lo=0, hi=N_ROWS - 1, hint=_ROW_HINT)
+    return elementwise(born_at.scalar, np.bool_, *args, rows, KX[rows])
 
 
 def seed_set(level: int) -> np.ndarray:
@@ -267,14 +338,37 @@ def _level_rule(s, max_level):
     return big_l, f, thin
 
 
+#: Dyadic scales below this thin rows to nothing: 2^s rounds to 0 below -1075.
+_S_FLOOR = -1100.0
+
+
 @face(_level_rule)
 def level_rule(s, max_level: int) -> np.ndarray:
     """(..., 3): L, f and the thinning gain of a dyadic scale s: L = floor(s), f = s - L; where
     s < 0, L = 0, f = 0 and the gain 2^s (rows thinned at random, same ink); where L >=
     ``max_level``, L = max_level and f = 0. Levels <= L are active, level L + 1 fades in with
-    :func:`fade_in` (f)."""
+    :func:`fade_in` (f).
+
+    Parameters
+    ----------
+    s : (...) float array
+        Finite dyadic scales; any magnitude (every s >= ``max_level`` gives (max_level, 0, 1),
+        every s <= -1075 the gain 0).
+    max_level : int in [0, 12]
+        The deepest level (at most :data:`MAX_LEVEL`).
+
+    Returns
+    -------
+    (..., 3) float64 ndarray: L, f, gain
+    """
     s_ = as_float("s", s, finite=True)
-    return elementwise(level_rule.scalar, np.float64, s_, check_int("max_level", max_level, lo=0))
+    top = check_int(
+        "max_level", max_level, lo=0, hi=MAX_LEVEL, hint="the field's deepest level is MAX_LEVEL"
+    )
+    # s past either end changes nothing: L = max_level, f = 0 above; 2^s = 0 below -1075 (so
+    # floor(s) stays an int64 for any finite s)
+    s_ = np.clip(s_.astype(np.float64), _S_FLOOR, float(top))
+    return elementwise(level_rule.scalar, np.float64, s_, top)
 
 
 @njit
@@ -303,7 +397,7 @@ def _row_distance(q, ry, rows, d_q):
 def row_distance(q, ry, rows, d_q) -> np.ndarray:
     """|q - ry / rows| d_q: pixels across from q to row ry of a level with ``rows`` rows per
     unit of q (7 2^level)."""
-    args = as_float("q", q), _ints("ry", ry), as_float("rows", rows), as_float("d_q", d_q)
+    args = as_float("q", q), as_ints("ry", ry), as_float("rows", rows), as_float("d_q", d_q)
     return elementwise(row_distance.scalar, np.float64, *args)
 
 
@@ -318,7 +412,7 @@ def _stroke_length(h, length, jitter, inv_scale):
 @face(_stroke_length)
 def stroke_length(h, length: float, jitter: float, level) -> np.ndarray:
     """lam (1 + j (2 h - 1)) 2^-level: a stroke's length along p, h its length hash."""
-    inv = np.ldexp(1.0, -_ints("level", level))
+    inv = np.ldexp(1.0, -as_ints("level", level))
     lam, j = as_float("length", length), as_float("jitter", jitter)
     return elementwise(stroke_length.scalar, np.float64, as_float("h", h), lam, j, inv)
 
@@ -332,8 +426,22 @@ def _stroke_start(gx, kx7, inv_scale, length):
 def stroke_start(gx, r, level, length) -> np.ndarray:
     """p_start = (gx + KX[r] / 7) 2^-level - length / 2: where the stroke of seed (gx, r) of
     ``level`` starts along p (centred on its seed). ``stroke_start.scalar(gx, kx7, 2^-level,
-    length)`` takes the row's KX[r] / 7."""
-    args = _ints("gx", gx), KX7[_ints("r", r)], np.ldexp(1.0, -_ints("level", level))
+    length)`` takes the row's KX[r] / 7.
+
+    Parameters
+    ----------
+    gx : (...) integer array
+    r : (...) integer array in [0, 6]
+        The seed's row in its cell.
+    level : (...) integer array
+    length : (...) float array
+
+    Returns
+    -------
+    (...) float64 ndarray, broadcast shape
+    """
+    rows = as_ints("r", r, lo=0, hi=N_ROWS - 1, hint=_ROW_HINT)
+    args = as_ints("gx", gx), KX7[rows], np.ldexp(1.0, -as_ints("level", level))
     return elementwise(stroke_start.scalar, np.float64, *args, as_float("length", length))
 
 

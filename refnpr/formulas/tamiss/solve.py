@@ -48,8 +48,9 @@ def cg_solve(A, b, iterations: int = 4, *, rtol: float | None = None) -> np.ndar
 
     Parameters
     ----------
-    A : (..., k, k) float
-        Symmetric positive (semi-)definite matrices (not checked for definiteness).
+    A : (..., k, k) float, k >= 0
+        Symmetric positive (semi-)definite matrices (not checked for definiteness); k = 0
+        gives the empty solution (..., 0).
     b : (..., k) float
         Right-hand sides; batch shapes of A and b broadcast.
     iterations : int >= 0
@@ -77,6 +78,10 @@ def cg_solve(A, b, iterations: int = 4, *, rtol: float | None = None) -> np.ndar
             f"b: batch shape {b.shape[:-1]} does not broadcast with A's batch shape "
             f"{A.shape[:-2]}; give one right-hand side per matrix"
         ) from None
+    dt = result_dtype(A, b)
+    rtol = 8 * float(np.finfo(dt).eps) if rtol is None else check_scalar("rtol", rtol, lo=0.0)
+    if k == 0:  # 0 x 0 systems: the empty solution
+        return np.zeros(batch + (0,), dtype=dt)
     scale = np.max(np.abs(A), axis=(-2, -1), keepdims=True)
     asym = np.abs(A - np.swapaxes(A, -1, -2)) > 1e-5 * scale + np.finfo(np.float64).tiny
     if np.any(asym):
@@ -84,8 +89,6 @@ def cg_solve(A, b, iterations: int = 4, *, rtol: float | None = None) -> np.ndar
             "A: expected symmetric matrices (conjugate gradients needs A = A^T), got an "
             "asymmetric one; symmetrize with (A + A.swapaxes(-1, -2)) / 2"
         )
-    dt = result_dtype(A, b)
-    rtol = 8 * float(np.finfo(dt).eps) if rtol is None else check_scalar("rtol", rtol, lo=0.0)
     A = np.broadcast_to(A.astype(dt, copy=False), batch + (k, k))
     b = np.broadcast_to(b.astype(dt, copy=False), batch + (k,))
     return cg_kernel(A, b, iterations, rtol)

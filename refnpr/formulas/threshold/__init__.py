@@ -36,12 +36,12 @@ from refnpr._jit import njit
 from .. import lighting
 from .._face import elementwise
 from .._shading_checks import broadcast, check_range, real
-from .._validate import check_int, result_dtype
+from .._validate import result_dtype
 from . import compose, filtering, lines, stipple, strength, textures
 from .compose import *  # noqa: F403
 from .filtering import *  # noqa: F403
 from .lines import *  # noqa: F403
-from .lines import step_any
+from .lines import check_steps, step_any
 from .stipple import *  # noqa: F403
 from .strength import *  # noqa: F403
 from .strength import strength_blend
@@ -108,7 +108,7 @@ def threshold_illumination(
     m_a, l_a, m_d, m_s, l : keyword-only
         Colours as in :func:`refnpr.formulas.lighting.illumination` (scalars or (C,) arrays;
         ``l`` may be a list with one colour per light).
-    n : int >= 1, keyword-only
+    n : int in [1, 2**53], keyword-only
         Number of steps of T_n.
     t_s : (...) array or None, keyword-only
         Threshold texture for the specular terms; None uses ``t``.
@@ -119,7 +119,7 @@ def threshold_illumination(
     -------
     (...) or (..., C) ndarray; float64, or float32 if every array input is float32.
     """
-    n = check_int("n", n, lo=1)
+    n = check_steps(n)
     terms = [f_d, f_s, t, t_s, strength, m_a, l_a, m_d, m_s, l]
     flat = [x for x in terms if x is not None and not isinstance(x, (list, tuple))]
     flat += [y for x in (f_d, f_s, l) if isinstance(x, (list, tuple)) for y in x]

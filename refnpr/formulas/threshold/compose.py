@@ -71,7 +71,13 @@ def layer_schedule(onsets) -> tuple[np.ndarray, np.ndarray]:
         Each layer's darkness ``-ln w_i`` there; beyond the last breakpoint every layer gains
         ``1 / L`` per unit of total darkness. ``levels.sum(axis=1) == lam``.
     """
-    o = check_onsets(onsets, len(onsets))
+    o = real("onsets", onsets, np.dtype(np.float64))
+    if o.ndim != 1 or o.size == 0:
+        raise ValueError(
+            f"onsets: expected a non-empty sequence of intensities in (0, 1] (one per layer), "
+            f"got {describe(onsets)}; pass e.g. (1.0,) or (1.0, 0.5)"
+        )
+    o = check_onsets(o, o.size)
     act = -np.log(o)  # Lambda_i: the total darkness at which layer i appears
     n = len(o)
     lam = 0.0

@@ -10,8 +10,8 @@ from refnpr.device.scalars import clip, frac
 
 from .._face import Whole, elementwise, face
 from .._shading_checks import broadcast, check_range, real, reals
-from .._validate import check_int, result_dtype
-from .lines import _dyadic_remap, _multiscale_line, _step, ldexp, level, step_any
+from .._validate import result_dtype
+from .lines import _dyadic_remap, _multiscale_line, _step, check_steps, ldexp, level, step_any
 
 __all__ = ["pcf_threshold", "mip_threshold", "line_coverage"]
 
@@ -114,15 +114,19 @@ def pcf_threshold(x, t_samples, *, weights=None, n: int = 1) -> np.ndarray:
     t_samples : (..., K) array
         K threshold-texture samples per pixel (last axis).
     weights : (K,) or (..., K) array >= 0, or None, keyword-only
-        Filter weights with a positive sum per pixel; None weighs samples equally.
-    n : int >= 1, keyword-only
+        Finite filter weights with a positive sum per pixel (any magnitude: a pixel whose sums
+        would overflow is scaled by a power of two first, which leaves the quotient unchanged);
+        None weighs samples equally. ``x[..., None]``, ``t_samples`` and ``weights`` broadcast
+        together.
+    n : int in [1, 2**53], keyword-only
         Number of steps of T_n.
 
     Returns
     -------
-    (...) ndarray in [0, 1] for x in [0, 1]; float64, or float32 if the inputs are float32.
+    (...) ndarray in [0, 1] for x in [0, 1], the broadcast shape without K; float64, or float32
+    if the inputs are float32.
     """
-    n = check_int("n", n, lo=1)
+    n = check_steps(n)
     extra = () if weights is None else (weights,)
     dt = result_dtype(x, t_samples, *extra)
     x = real("x", x, dt)
@@ -135,23 +139,50 @@ def pcf_threshold(x, t_samples, *, weights=None, n: int = 1) -> np.ndarray:
         raise ValueError(
             f"t_samples: expected K >= 1 threshold samples on the last axis, got shape {ts.shape}"
         )
-    shape = broadcast(x=x[..., None], t_samples=ts)
     wts = np.zeros((1, 0))
-    if weights is not None:
+    if weights is None:
+        shape = broadcast(x=x[..., None], t_samples=ts)
+    else:
         w = real("weights", weights, dt)
+        if w.ndim > 0 and w.shape[-1] not in (1, ts.shape[-1]):
+            raise ValueError(
+                f"weights: expected shape (K,) or (..., K) with K = {ts.shape[-1]} (one weight "
+                f"per threshold sample), got shape {w.shape}"
+            )
         if np.any(w < 0):
             raise ValueError("weights: expected values >= 0, got a negative weight; use |w|")
-        broadcast(t_samples=ts, weights=w)
-        wts = _rows(w, shape)
-        if np.any(np.sum(wts, axis=-1) <= 0):
-            raise ValueError(
-                "weights: the weights of some pixel sum to 0; give every pixel a positive weight"
-            )
+        shape = broadcast(x=x[..., None], t_samples=ts, weights=w)
     rows = _rows(ts, shape)
     xs = np.broadcast_to(x, shape[:-1]).reshape(-1)
+    if weights is not None:
+        wts = _weight_rows(w, shape, xs)
     index = np.arange(rows.shape[0])
     out = elementwise(_pcf_row, dt, index, xs, Whole(rows), Whole(wts), n)
     return out.reshape(shape[:-1])
+
+
+def _weight_rows(w: np.ndarray, shape: tuple[int, ...], xs: np.ndarray) -> np.ndarray:
+    """The weights as (M, K) rows (:func:`_rows`) whose sums in the kernel stay finite.
+
+    A row whose sum of weights, or the bound ``(1 + |x|)`` times it of the weighted results
+    (|T_n(x, t)| <= 1 + |x|), overflows is scaled by a power of two so that its largest weight
+    lies in [1/2, 1): exact, and the quotient of the two sums is unchanged (only weights under
+    2^-1022 of the largest lose bits, far below the rounding of the sums). Every other row is
+    passed as it is, so the face computes what the kernel does.
+    """
+    rows = _rows(w, shape)
+    with np.errstate(over="ignore"):
+        total = np.sum(rows, axis=-1)  # the kernel's pairwise order
+        huge = ~np.isfinite(total * (1.0 + np.abs(xs)))
+    if np.any(total <= 0):
+        raise ValueError(
+            "weights: the weights of some pixel sum to 0; give every pixel a positive weight"
+        )
+    if np.any(huge):
+        _, e = np.frexp(np.max(rows[huge], axis=-1))
+        rows = rows.copy()
+        rows[huge] = np.ldexp(rows[huge], -e[:, None])
+    return rows
 
 
 def _rows(a: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
@@ -183,14 +214,14 @@ def mip_threshold(x, t_fine, t_coarse, lod_frac, *, n: int = 1) -> np.ndarray:
         Threshold samples at mip levels floor(lambda) and floor(lambda) + 1.
     lod_frac : (...) array in [0, 1]
         Frac(lambda), the weight of the coarse level.
-    n : int >= 1, keyword-only
+    n : int in [1, 2**53], keyword-only
         Number of steps of T_n.
 
     Returns
     -------
     (...) ndarray; float64, or float32 if the inputs are float32.
     """
-    n = check_int("n", n, lo=1)
+    n = check_steps(n)
     dt, x, t0, t1, f = reals(x=x, t_fine=t_fine, t_coarse=t_coarse, lod_frac=lod_frac)
     check_range("lod_frac", f, 0.0, 1.0, "lod_frac is the fractional part of the mip LOD")
     return elementwise(mip_threshold.scalar, dt, x, t0, t1, f, n)

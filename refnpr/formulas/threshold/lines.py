@@ -32,6 +32,15 @@ TINY = float(np.finfo(np.float64).tiny)
 #: 2.0 ** k for k in [-POW2_K, POW2_K] (normal floats: v * 2^k is ldexp(v, k), one rounding).
 POW2_K = 1000
 POW2 = np.array([2.0**k for k in range(-POW2_K, POW2_K + 1)], dtype=np.float64)
+#: Most steps of T_n (eq. 4): x n and k / n are formed in float64, where every integer up to
+#: 2^53 is exact.
+N_MAX = 2**53
+
+
+def check_steps(n) -> int:
+    """The number of steps ``n`` of T_n as an int in [1, :data:`N_MAX`] (``TypeError`` /
+    ``ValueError`` naming ``n`` otherwise)."""
+    return check_int("n", n, lo=1, hi=N_MAX, hint="T_n counts its steps in float64")
 
 
 # ------------------------------------------------------------------ device helpers (private)
@@ -119,14 +128,14 @@ def step_n(x, t, n: int) -> np.ndarray:
         Continuous shading value.
     t : array_like
         Threshold in [0, 1]; broadcasts against ``x``.
-    n : int >= 1
-        Number of steps (n = 1 is eq. 3 for x in [0, 1]).
+    n : int in [1, 2**53]
+        Number of steps (n = 1 is eq. 3 for x in [0, 1]); x n is formed in float64.
 
     Returns
     -------
     ndarray with the broadcast shape; float64, or float32 if the inputs are float32.
     """
-    n = check_int("n", n, lo=1)
+    n = check_steps(n)
     dt, x, t = reals(x=x, t=t)
     return elementwise(step_n.scalar, dt, x, t, n)  # eq. 4
 

@@ -39,6 +39,18 @@ def _angle(name: str, value) -> float:
     return check_scalar(name, value, hint="angles are in radians")
 
 
+def _angles(angles) -> list[float]:
+    """``angles`` (a non-empty sequence or 1-D array of radians) as a list of floats."""
+    one_d = isinstance(angles, np.ndarray) and angles.ndim == 1
+    seq = isinstance(angles, Sequence) and not isinstance(angles, (str, bytes))
+    if not (one_d or seq) or len(angles) == 0:
+        raise ValueError(
+            f"angles: expected a non-empty sequence of radians, got {describe(angles)}; "
+            "pass at least one angle, e.g. (0.3,) for single lines"
+        )
+    return [_angle(f"angles[{i}]", a) for i, a in enumerate(angles)]
+
+
 @njit
 def _hatch_coordinate(u, v, sin_a, cos_a):
     return -u * sin_a + v * cos_a  # v rotated: iso-lines along (cos a, sin a)
@@ -96,8 +108,8 @@ def hatch_threshold(
         Their screen derivatives per pixel (G-buffer ``duv_dx``, ``duv_dy``).
     w : float or (...) array > 0, keyword-only
         Line period in pixels.
-    angles : sequence of floats, keyword-only
-        Hatching directions in texture space, radians; one angle gives single lines.
+    angles : sequence or (L,) array of floats, keyword-only
+        Hatching directions in texture space, radians; one angle, ``(a,)``, gives single lines.
     onsets : sequence of floats, keyword-only
         Per-angle onset intensity (see :func:`combine_thresholds`).
     uniform : bool, keyword-only
@@ -109,9 +121,7 @@ def hatch_threshold(
     -------
     (...) ndarray in [0, 1); float64, or float32 if the inputs are float32.
     """
-    if isinstance(angles, (int, float)) or len(angles) == 0:
-        raise ValueError(f"angles: expected a non-empty sequence of radians, got {angles!r}")
-    angs = [_angle(f"angles[{i}]", a) for i, a in enumerate(angles)]
+    angs = _angles(angles)
     dt = result_dtype(uv, duv_dx, duv_dy)
     uv = _uv("uv", uv, dt)
     gx = _uv("duv_dx", duv_dx, dt)

@@ -312,7 +312,7 @@ def toon_lookup(texture, tone, detail) -> np.ndarray:
 
     Parameters
     ----------
-    texture : (rows, cols) or (rows, cols, C) float
+    texture : (rows, cols) or (rows, cols, C) float, rows, cols, C >= 1
         Row index grows with detail D (row 0 is D = 0), column index with tone. Integer textures
         are read as float64 without rescaling.
     tone : (...) float
@@ -335,6 +335,11 @@ def toon_lookup(texture, tone, detail) -> np.ndarray:
             f"texture: expected shape (rows, cols) or (rows, cols, C) with rows, cols >= 1, got "
             f"{describe(tex)}; a 1D ramp must be turned into a 2D texture first (e.g. "
             "ramp[None, :] or a toon_texture_* builder)"
+        )
+    if tex.ndim == 3 and tex.shape[2] < 1:
+        raise ValueError(
+            f"texture: expected shape (rows, cols, C) with C >= 1 channels, got shape {tex.shape}; "
+            "pass a (rows, cols) gray texture or give it at least one channel"
         )
     u = _check_no_nan("tone", tone)
     v = _check_no_nan("detail", detail)
