@@ -32,7 +32,7 @@ class ImageMetrics:
     ssim: float
     tolerance: float
     #: "ok", "missing" (no candidate), "size" (sizes differ), "unreadable" (a file that is not
-    #: a readable image)
+    #: a readable image), "nonfinite" (an image holding NaN or infinite values)
     status: str = "ok"
     #: Why the status is not "ok": the two sizes, the file and the decoder's reason
     message: str = ""
@@ -129,6 +129,15 @@ def compare_images(
     if reference.shape != candidate.shape:
         why = f"sizes differ: reference {_wxh(reference)}, candidate {_wxh(candidate)}"
         return ImageMetrics.failed(name, tolerance, "size", why)
+    for what, image in (("reference", reference), ("candidate", candidate)):
+        bad = ~np.isfinite(image)
+        if bad.any():
+            y, x = np.argwhere(bad)[0][:2]
+            why = (
+                f"the {what} holds {int(bad.sum())} NaN or infinite value(s), the first at pixel "
+                f"(x={x}, y={y}); metrics of such an image mean nothing"
+            )
+            return ImageMetrics.failed(name, tolerance, "nonfinite", why)
     ref, cand = _flatten(reference), _flatten(candidate)
     diff = np.abs(cand - ref)
     lum_r, lum_c = luminance(ref), luminance(cand)

@@ -37,6 +37,20 @@ def test_metrics_against_naive_computation():
     assert m.ssim < 1.0
 
 
+def test_an_image_holding_nan_or_inf_fails_naming_the_first_pixel():
+    a = _img(2).astype(float) / 255
+    b = a.copy()
+    b[5, 7, 1] = np.nan
+    b[9, 2, 0] = np.inf
+    m = compare_images(a, b, name="x")
+    assert m.status == "nonfinite" and not m.passes(max_frac_over=1.0, min_ssim=0.0)
+    assert "the candidate holds 2 NaN or infinite value(s), the first at pixel (x=7, y=5)" in (
+        m.message
+    )
+    assert compare_images(b, a).message.startswith("the reference holds 2")
+    assert m.as_dict()["max_abs"] is None
+
+
 def test_compare_dirs_reports_missing_and_size(tmp_path):
     ref, cand, out = tmp_path / "ref", tmp_path / "cand", tmp_path / "out"
     write_png_atomic(ref / "same.png", _img(2))
