@@ -75,17 +75,20 @@ RENAMES = [
     ("tam", {"fill": [0.9, 0.8, 0.7]}, {"paper": [0.9, 0.8, 0.7]}),
     ("tamiss", {"fill": 0.5}, {"paper": 0.5}),
 ]
+#: old name -> the other parameters under which the style reads it (else it is only warned about)
+READ_WITH = {"pcf_levels": {"source": "image", "filter": "pcf"}}
 
 
 @pytest.mark.parametrize("style, old, new", RENAMES)
 def test_old_names_warn_and_mean_the_same(style, old, new):
     (old_name,) = old
+    ctx = READ_WITH.get(old_name, {})
     with pytest.warns(DeprecationWarning, match=rf"parameter '{old_name}' is deprecated, use"):
-        by_old = get_style(style, **old)
-    assert by_old.params() == get_style(style, **new).params()
+        by_old = get_style(style, **ctx, **old)
+    assert by_old.params() == get_style(style, **ctx, **new).params()
     cls = type(by_old)
     with pytest.warns(DeprecationWarning, match=rf"'{old_name}' is deprecated"):
-        direct = cls(**old)  # direct construction goes through the same rename
+        direct = cls(**ctx, **old)  # direct construction goes through the same rename
     assert direct.params() == by_old.params()
 
 
@@ -102,7 +105,8 @@ def test_old_and_new_name_together_is_an_error(style, old, new):
 def test_current_names_do_not_warn():
     with warnings.catch_warnings():
         warnings.simplefilter("error", DeprecationWarning)
-        get_style("threshold", directions=["u", "v"], mip="trilinear", uv_scale=[2, 3])
+        get_style("threshold", directions=["u", "v"], uv_scale=[2, 3])
+        get_style("threshold", source="image", filter="pcf", mip="trilinear")
         get_style("halftone", tone_correct=True, screen={"kind": "dither", "rank_equalize": False})
         get_style("tamiss", paper=0.5)
         style_from_spec({"name": "toon", "contours": {"ink": [1.0, 0.0, 0.0]}})
@@ -182,7 +186,7 @@ def test_material_uv_scale_default_is_one():
 # ---------------------------------------------------------------------------------------------
 OLD_SPELLINGS = [
     lambda: get_style("threshold", angles=[0.0]),
-    lambda: style_from_spec({"name": "threshold", "pcf_levels": 1}),
+    lambda: style_from_spec({"name": "threshold", "pcf_levels": 1, **READ_WITH["pcf_levels"]}),
     lambda: ThresholdStyle(scale=2.0),
     lambda: HalftoneStyle(equalize=True),
     lambda: HalftoneStyle(screen={"kind": "dither", "texture": "brick", "uniform": True}),
