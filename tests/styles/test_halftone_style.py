@@ -381,3 +381,28 @@ def test_auto_slope_antialiases_like_supersampling():
     auto = render(scene, {**base, "threshold": "smooth", "c": "auto"}, 48, 48).rgba[..., 0]
     err_binary, err_auto = np.abs(binary - ref).mean(), np.abs(auto - ref).mean()
     assert err_auto < 0.25 * err_binary, (err_auto, err_binary)
+
+
+@pytest.mark.parametrize(
+    "params, warned",
+    [
+        ({"tone_correct": True}, "tone_correct: True is ignored with stroke-map screens only"),
+        ({"tone_correct": True, "screen": "engraving"}, None),
+        ({"anisotropy": 8, "screen": "engraving"}, "anisotropy: 8 is ignored with engraving"),
+        ({"anisotropy": 8}, None),
+    ],
+)
+def test_a_parameter_no_screen_in_view_reads_warns_once(params, warned):
+    import warnings
+
+    style = get_style("halftone", **params)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        first = render("halftone_teapot", style, 24, 16, 1)
+        render("halftone_teapot", style, 24, 16, 1)  # the same style again: no second warning
+    messages = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    assert messages == ([] if warned is None else [messages[0]])
+    assert warned is None or warned in messages[0]
+    plain = {"name": "halftone", **{k: v for k, v in params.items() if k == "screen"}}
+    if warned is not None:  # ignored indeed: the image is the one without it
+        np.testing.assert_array_equal(first.rgba, render("halftone_teapot", plain, 24, 16, 1).rgba)

@@ -17,6 +17,7 @@ import numpy as np
 from refnpr.image import srgb_to_linear
 
 from .._common import needs_position, rgba_from, rgba_out
+from .._declare import warn_unused
 from .._frame import frame_record
 from . import _kernels as K
 from .params import PARAMS
@@ -108,6 +109,7 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
         if present[i]
     ]
     objects = [(sc, object_tables(style, i, obj, sc)) for i, obj, sc in screens]
+    _warn_unread(style, [sc for _, _, sc in screens])
     _shade_objects(objects, frame, record, p.show, out, raw)
     if getattr(ctx, "wants_intermediates", False):  # the raw views, as show draws them
         covered = frame.cover >= 0
@@ -118,6 +120,24 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
     if not color:  # an 8-bit file of the image stores the raw values
         return rgba_from(srgb_to_linear(raw), frame.cover >= 0)
     return out
+
+
+def _warn_unread(style: Any, screens: list) -> None:
+    """Warn (once per style) where no screen in view reads ``tone_correct`` (stroke maps do
+    not) or ``anisotropy`` (engraving ramps are isotropic): the parameter changes nothing."""
+    p = style.p
+    if not screens or getattr(style, "_warned_unread", False):
+        return
+    kinds = {"strokes" if sc.kind == "strokes" else "engraving" if sc.direction is not None
+             else "other" for sc in screens}  # fmt: skip
+    if p.tone_correct and kinds == {"strokes"}:
+        warn_unused("tone_correct", True, "stroke-map screens only in view",
+                    "remove tone_correct, or give an engraving or dither screen")  # fmt: skip
+        style._warned_unread = True
+    if p.anisotropy > 1 and kinds == {"engraving"}:
+        warn_unused("anisotropy", p.anisotropy, "engraving screens only in view (a 1D ramp)",
+                    "remove anisotropy, or give a dither or stroke-map screen")  # fmt: skip
+        style._warned_unread = True
 
 
 def _shade_objects(
