@@ -1353,6 +1353,7 @@ def load_gltf(
         animation,
         fps,
         objects_at=objects_at,
+        hidden=hidden,
         names=[o.name for o in objects],
         cam_at=cam_at,
         cam_params=cam_params,
@@ -1604,6 +1605,18 @@ def _channels(r: _Reader, ai: int, nodes: list[_Node]) -> dict[int, dict[str, _S
     return out
 
 
+def _locals_at(nodes: list[_Node], channels: dict, t: float) -> dict[int, np.ndarray]:
+    """The local matrices of the animated nodes at time ``t`` (their channels sampled)."""
+    local = {}
+    for ni, paths in channels.items():
+        tr, q, s = nodes[ni].trs
+        tr = _sample(paths["translation"], t, False) if "translation" in paths else tr
+        q = _sample(paths["rotation"], t, True) if "rotation" in paths else q
+        s = _sample(paths["scale"], t, False) if "scale" in paths else s
+        local[ni] = _trs_matrix(tr, q, s)
+    return local
+
+
 def _animation(
     r: _Reader,
     nodes,
@@ -1612,6 +1625,7 @@ def _animation(
     fps,
     *,
     objects_at,
+    hidden,
     names,
     cam_at,
     cam_params,
@@ -1662,6 +1676,18 @@ def _animation(
             f"{frames} frames x {values} animated values is more than {MAX_ANIMATION_KEYS} keys; "
             "use a lower fps",
         )
+    for f in range(frames) if any(pl.node in moved for pl in hidden) else ():
+        world = _world(nodes, order, _locals_at(nodes, channels, f / fps))
+        for pl in hidden:
+            if pl.node in moved and not _singular(world[pl.node][:3, :3]):
+                field = _zero_scale_field(nodes, pl.node)
+                raise r.fail(
+                    field,
+                    f"node {nodes[pl.node].name!r} has a zero scale at rest, and animations[{ai}] "
+                    f"gives it a non-zero one at time {f / fps:g} s (frame {f}); refnpr leaves "
+                    "an object of zero scale out of the scene, so it would never appear: give "
+                    f"{field} a tiny non-zero value instead (e.g. 1e-6, far below a pixel)",
+                )
     if values == 0:
         return Animation(frames, fps)
     keys: dict[str, list[Keyframe]] = {}
@@ -1671,13 +1697,7 @@ def _animation(
 
     for f in range(frames):
         t = f / fps
-        local = {}
-        for ni, paths in channels.items():
-            tr, q, s = nodes[ni].trs
-            tr = _sample(paths["translation"], t, False) if "translation" in paths else tr
-            q = _sample(paths["rotation"], t, True) if "rotation" in paths else q
-            s = _sample(paths["scale"], t, False) if "scale" in paths else s
-            local[ni] = _trs_matrix(tr, q, s)
+        local = _locals_at(nodes, channels, t)
         world = _world(nodes, order, local)
         for j, pl in objs:
             tr, q, s = _decompose(r, nodes, pl.node, world[pl.node], ai, t, f, local)

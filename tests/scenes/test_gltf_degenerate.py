@@ -215,6 +215,27 @@ def test_an_animated_zero_scale_says_how_to_hide_an_object(tmp_path):
     np.testing.assert_allclose(np.diag(scene.at(48).objects[0].transform)[:3], ones)
 
 
+def test_an_object_of_zero_rest_scale_that_the_animation_shows_is_refused(tmp_path):
+    """A node scaled 0 at rest and scaled up by the animation (an "appear" effect) would be
+    left out of every frame; the file is refused with the fix instead."""
+
+    def appear(values, name):
+        d = Tri()
+        d.node(mesh=0, name="late", scale=[0.0, 0.0, 0.0])  # nodes[2]
+        return d.animate(2, "scale", [0.0, 1.0], values).write(tmp_path / name)
+
+    with pytest.raises(
+        GltfError,
+        match=r"/appear\.gltf: nodes\[2\]\.scale: node 'late' has a zero scale at rest, and "
+        r"animations\[0\] gives it a non-zero one at time 0\.0416667 s \(frame 1\).*give "
+        r"nodes\[2\]\.scale a tiny non-zero value instead",
+    ):
+        quiet(load_gltf, appear([[0.0] * 3, [1.0] * 3], "appear.gltf"))
+    # scaled, but never away from zero: it stays out, as a static zero scale does
+    scene = quiet(load_gltf, appear([[0.0] * 3, [0.0] * 3], "never.gltf"))
+    assert [o.name for o in scene.objects] == ["tri"]
+
+
 def test_a_camera_animated_to_zero_scale_names_the_time(tmp_path):
     d = Tri().animate(1, "scale", [0.0, 1.0], [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]])
     with pytest.raises(
