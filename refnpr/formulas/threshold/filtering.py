@@ -186,9 +186,11 @@ def _weight_rows(w: np.ndarray, shape: tuple[int, ...], xs: np.ndarray) -> np.nd
 
 
 def _rows(a: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    """``a`` broadcast to ``shape`` as contiguous float64 rows ``(M, K)``."""
+    """``a`` broadcast to ``shape`` as contiguous, writable float64 rows ``(M, K)``: writable
+    like the style kernel's scratch rows, so that :func:`_pcf_threshold` is compiled once for
+    both (numba types an array's writability)."""
     full = np.broadcast_to(a.astype(np.float64, copy=False), shape)
-    return np.ascontiguousarray(full).reshape(-1, shape[-1])
+    return np.array(full, dtype=np.float64, order="C").reshape(-1, shape[-1])
 
 
 @njit
