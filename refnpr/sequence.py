@@ -356,33 +356,42 @@ def _plan(
 def claim(out: Path, created: tuple[Path, ...] = ()) -> Iterator[None]:
     """Hold ``out``'s run lock for the block and remove the temporaries a killed run left; if
     the block raises, remove the directories of ``created`` (:attr:`_Plan.created`) that are
-    still empty, so that a run that wrote no frame leaves no directory behind.
+    still empty, so that a run that wrote no frame leaves no directory behind (only while
+    holding the lock: a run refused by it leaves the holder's directory alone).
 
     Raises
     ------
     ValueError
         Another run (of this or another process) holds the lock.
     """
+    if fcntl is None:
+        with _removing_on_failure(created):
+            _remove_temporaries(out)
+            yield
+        return
+    fd = os.open(out, os.O_RDONLY)
     try:
-        if fcntl is None:
-            _remove_temporaries(out)
-            yield
-            return
-        fd = os.open(out, os.O_RDONLY)
         try:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                raise ValueError(
-                    f"out_dir: {str(out)!r} is being written by another `refnpr animate` run; "
-                    "wait for it to end, or give another directory"
-                ) from None
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise ValueError(
+                f"out_dir: {str(out)!r} is being written by another `refnpr animate` run; "
+                "wait for it to end, or give another directory"
+            ) from None
+        with _removing_on_failure(created):
             _remove_temporaries(out)
             yield
-        finally:
-            os.close(fd)  # releases the lock
+    finally:
+        os.close(fd)  # releases the lock
+
+
+@contextlib.contextmanager
+def _removing_on_failure(created: tuple[Path, ...]) -> Iterator[None]:
+    """Remove the empty directories of ``created`` (deepest first) if the block raises."""
+    try:
+        yield
     except BaseException:
-        for d in created:  # deepest first; a directory with anything in it stays
+        for d in created:  # a directory with anything in it stays, and its parents
             try:
                 d.rmdir()
             except OSError:

@@ -186,3 +186,18 @@ def test_warnings_are_one_line_without_a_source_location(tmp_path, capsys):
         "refnpr render: warning: specular: False is ignored with mode='lake'; remove specular "
         "or use mode='step'\n"
     )
+
+
+def test_a_run_refused_by_the_lock_leaves_the_holders_new_directory(tmp_path):
+    """Two runs that both made ``out`` (they started together): the one the lock refuses must
+    not remove the directory the other is writing into."""
+    from refnpr import sequence
+
+    out = tmp_path / "new"
+    out.mkdir()
+    with sequence.claim(out, (out,)):
+        with pytest.raises(ValueError, match="is being written by another `refnpr animate` run"):
+            with sequence.claim(out, (out,)):
+                pass
+        assert out.is_dir()
+    assert out.is_dir()  # the holder finished without an error: nothing removed
