@@ -456,6 +456,8 @@ def _write_frame(
         "png_sha256": hashlib.sha256(png).hexdigest(),
         **(extra or {}),
     }
+    if plan.animated_style:  # what the scene's style tracks set on "style" for this frame
+        record["style_tracks"] = _jsonable(plan.scene.animation.style_values(float(f)))
     if plan.exr:
         _write_exr(out / f"{stem}.exr", frame)
         record["exr_sha256"] = _file_sha(out / f"{stem}.exr")
@@ -483,7 +485,10 @@ def render_sequence(
         An animated scene (or a still: one frame), a built-in name or a .toml file.
     style : Style, str, dict or None
         As for :func:`refnpr.render.render`; None: the scene's ``[style]``. The scene's style
-        tracks set their parameters on it each frame (an error if it lacks one).
+        tracks set their parameters on it each frame (an error if it lacks one), also a
+        parameter the dict gives: the frame's record lists the tracked values it used
+        (``style_tracks``). ``refnpr animate --param`` instead replaces the track of the
+        parameter it sets.
     width, height, spp : int
         Image size and samples per pixel.
     out_dir : str or path

@@ -1,5 +1,6 @@
 """`refnpr animate` and `refnpr scenes`' frame counts, called in-process through main(argv)."""
 
+import json
 import re
 
 import imageio.v3 as iio
@@ -201,3 +202,25 @@ def test_a_run_refused_by_the_lock_leaves_the_holders_new_directory(tmp_path):
                 pass
         assert out.is_dir()
     assert out.is_dir()  # the holder finished without an error: nothing removed
+
+
+def test_a_frame_record_lists_the_values_the_style_tracks_set(tmp_path):
+    from refnpr.sequence import render_sequence
+
+    path = tmp_path / "n.toml"
+    path.write_text(
+        SCENE
+        + '[[animation.track]]\ntarget = "style.n"\ninteger = true\n'
+        + "keys = [{ frame = 0, value = 2 }, { frame = 3, value = 5 }]\n"
+    )
+    out = tmp_path / "o"
+    render_sequence(path, {"name": "toon", "n": 4}, 8, 8, 1, out_dir=out)
+    records = [json.loads((out / f"frame_{f:05d}.json").read_text()) for f in range(4)]
+    assert [r["style_tracks"] for r in records] == [{"n": n} for n in (2, 3, 4, 5)]
+    assert all(r["style"] == {"name": "toon", "n": 4} for r in records)
+    want = render(load_scene(path).at(3), {"name": "toon", "n": 5}, 8, 8, 1).to_srgb8()
+    np.testing.assert_array_equal(iio.imread(out / "frame_00003.png"), want)
+    plain = tmp_path / "plain.toml"
+    plain.write_text(SCENE)  # a camera track, no style track
+    render_sequence(plain, None, 8, 8, 1, out_dir=tmp_path / "still", frames="0:1")
+    assert "style_tracks" not in (tmp_path / "still" / "frame_00000.json").read_text()
