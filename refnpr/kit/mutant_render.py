@@ -96,6 +96,13 @@ def _inner(style: Any) -> Any:
     return style.base if style.name == "contoured" else style
 
 
+def _reads_lod_bias(style: Any) -> bool:
+    """Whether the style's chosen modes read its ``lod_bias`` (threshold: source image only)."""
+    inner = _inner(style)
+    params = getattr(type(inner), "PARAMS", None)
+    return params is not None and "lod_bias" in params.by_name and params.reads("lod_bias", inner.p)
+
+
 def _share_textures(old: Any, new: Any) -> None:
     """Let ``new`` (the same style with other LOD or texture settings) reuse the textures
     ``old`` built (CLAHE pyramids, halftone screens and their tone tables): the same files and
@@ -118,7 +125,11 @@ def _nearest_style(style: Any, spec: Any, lod_bias: float | None) -> Any:
         while rep > 2 and rep * rep * tex.shape[0] * tex.shape[1] > _TOON_TEXELS:
             rep //= 2
         return style_from_spec(_spec_with(spec, "texture", repeat_texels(tex, rep)))
-    if inner.name not in ("threshold", "halftone") or lod_bias is None:
+    if (
+        inner.name not in ("threshold", "halftone")
+        or lod_bias is None
+        or not _reads_lod_bias(style)
+    ):
         raise NotApplicable(
             "the style samples no texture with linear filtering"
             if inner.name not in ("tam", "tamiss")
@@ -361,7 +372,7 @@ class CaseRenderer:
             covered = gb["tri_id"] >= 0
             lod[covered] += delta
             return self._render(self._keep(gb, {"lod": lod}))
-        if self.lod_bias is None:
+        if self.lod_bias is None or not _reads_lod_bias(self.style):
             raise NotApplicable("the style samples no mip-mapped texture (no lod_bias parameter)")
         from ..styles import style_from_spec
 

@@ -412,6 +412,10 @@ class Params:
         ordered = {p.name: values[p.name] for p in self.params}
         return Values(self, ordered, frozenset(kw) & set(self.names))
 
+    def reads(self, name: str, values: Values) -> bool:
+        """Whether the modes of validated ``values`` read parameter ``name`` (``used_when``)."""
+        return self._ignored(self.by_name[name], values._values) is None
+
     @staticmethod
     def _ignored(p: Param, values: Mapping[str, Any]) -> tuple[str, str] | None:
         """The mode that ignores ``p`` and how to fix it, for the warning; None where read."""
