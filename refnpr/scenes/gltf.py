@@ -1290,7 +1290,11 @@ def load_gltf(
     if hidden:
         _warn(f"{given}: {len(hidden)} object(s) with a zero scale are not drawn")
     if not objects_at:
-        raise GltfError(f"{given}: every mesh node has a zero scale; nothing to render")
+        raise GltfError(
+            f"{given}: every mesh node has a zero scale; nothing to render (refnpr leaves an "
+            "object of zero scale out of the scene; one that an animation scales up needs a tiny "
+            "non-zero rest scale instead, e.g. 1e-6)"
+        )
     objects = [instance(pl, world[pl.node]) for pl in objects_at]
     bounds_lo = np.min([o.world_mesh().positions.min(axis=0) for o in objects], axis=0)
     bounds_hi = np.max([o.world_mesh().positions.max(axis=0) for o in objects], axis=0)

@@ -231,6 +231,13 @@ def test_an_object_of_zero_rest_scale_that_the_animation_shows_is_refused(tmp_pa
         r"nodes\[2\]\.scale a tiny non-zero value instead",
     ):
         quiet(load_gltf, appear([[0.0] * 3, [1.0] * 3], "appear.gltf"))
+    only = Tri(tri={"scale": [0.0, 0.0, 0.0]}).animate(
+        0, "scale", [0.0, 1.0], [[0.0] * 3, [1.0] * 3]
+    )
+    with pytest.raises(
+        GltfError, match=r"every mesh node has a zero scale; .* needs a tiny non-zero rest scale"
+    ):
+        quiet(load_gltf, only.write(tmp_path / "only.gltf"))
     # scaled, but never away from zero: it stays out, as a static zero scale does
     scene = quiet(load_gltf, appear([[0.0] * 3, [0.0] * 3], "never.gltf"))
     assert [o.name for o in scene.objects] == ["tri"]
