@@ -164,13 +164,29 @@ def _style_params(args: argparse.Namespace) -> dict[str, object]:
 
 
 def _with_params(style: dict | None, params: dict, scene: str) -> dict:
-    """The scene's own style table with the --param values (no --style given)."""
+    """The scene's own style table with the --param values (no --style given). A value of the
+    table that the modes --param chooses do not read is left out (it would be reset to its
+    default anyway): the warning for an ignored parameter is for what the user gave."""
     if not style:
         raise ValueError(
             f"--param needs --style: the scene {scene!r} names no style; "
             "add --style NAME (list them with `refnpr styles`)"
         )
-    return {**style, **params}
+    merged = {**style, **params}
+    from .styles import get_style_class
+
+    try:
+        declared = get_style_class(merged.get("name")).PARAMS
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            values = declared.validate({k: v for k, v in merged.items() if k != "name"})
+    except (TypeError, ValueError, AttributeError):  # reported when the style is built
+        return merged
+    return {
+        k: v
+        for k, v in merged.items()
+        if k == "name" or k in params or k not in declared.by_name or declared.reads(k, values)
+    }
 
 
 def _params_over_tracks(scene: Any, params: dict) -> Any:

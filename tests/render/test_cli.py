@@ -233,3 +233,14 @@ def test_a_param_nested_too_deeply_is_a_usage_error(capsys):
         main(["render", "--param", f"n={deep}", "-o", "x.png"])
     assert info.value.code == 2
     assert "--param: the value of 'n' nests arrays or tables too deeply" in capsys.readouterr().err
+
+
+def test_param_warns_for_what_the_user_gave_not_for_the_scene_table(tmp_path, capsys):
+    """veryovka_dolly's [style] sets uniform = true for its lines; --param source=image reads no
+    uniform, and the scene's own value drops out without a warning the user cannot act on."""
+    out = str(tmp_path / "d.png")
+    args = ["render", "--scene", "veryovka_dolly", "--size", "16x12", "--spp", "1", "-o", out]
+    assert main([*args, "-q", "--param", "source=image"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main([*args, "-q", "--param", "source=image", "--param", "uniform=true"]) == 0
+    assert "warning: uniform: True is ignored with source='image'" in capsys.readouterr().err
