@@ -266,12 +266,16 @@ def test_sample_indication_matches_naive_loop_and_its_texels():
         sample_indication([[2.0]], uv)
 
 
-def test_tangent_frame_matches_the_solved_jacobian():
-    rng = np.random.default_rng(9)
-    n = rng.normal(size=(200, 3))
+def _random_frames(seed: int, k: int):
+    """k random unit normals, position and uv derivatives: ``(n, dpdx, dpdy, dudx, dudy)``."""
+    rng = np.random.default_rng(seed)
+    n = rng.normal(size=(k, 3))
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    dpdx, dpdy = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
-    dudx, dudy = rng.normal(size=(200, 2)), rng.normal(size=(200, 2))
+    return n, rng.normal(size=(k, 3)), rng.normal(size=(k, 3)), *rng.normal(size=(2, k, 2))
+
+
+def test_tangent_frame_matches_the_solved_jacobian():
+    n, dpdx, dpdy, dudx, dudy = _random_frames(9, 200)
     t, b, valid = tangent_frame(n, dpdx, dpdy, dudx, dudy)
     assert valid.all()
     for k in range(200):  # [dP/dx dP/dy] = [dP/du dP/dv] J, then Gram-Schmidt against N
@@ -287,11 +291,7 @@ def test_tangent_frame_matches_the_solved_jacobian():
 
 
 def test_tangent_frame_is_orthonormal_with_the_unit_normal():
-    rng = np.random.default_rng(10)
-    n = rng.normal(size=(300, 3))
-    n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    dpdx, dpdy = rng.normal(size=(300, 3)), rng.normal(size=(300, 3))
-    dudx, dudy = rng.normal(size=(300, 2)), rng.normal(size=(300, 2))
+    n, dpdx, dpdy, dudx, dudy = _random_frames(10, 300)
     t, b, valid = tangent_frame(n, dpdx, dpdy, dudx, dudy)
     assert valid.all()
     for u, v in ((t, n), (b, n), (t, b)):

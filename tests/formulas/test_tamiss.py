@@ -639,15 +639,21 @@ def test_stress_visible_segments_extreme_coefficients(c):
 # the RPTAM stroke field (formulas.tamiss.field): each face against a plain Python loop
 
 
+def _level_rule_by_the_book(v: float, max_level: int) -> tuple[int, float, float]:
+    """(L, f, thin) of the docstring's rule, on Python's exact integer floor."""
+    big_l, f, thin = math.floor(v), v - math.floor(v), 1.0
+    if big_l < 0:
+        big_l, f, thin = 0, 0.0, 2.0**v
+    if big_l >= max_level:
+        big_l, f = max_level, 0.0
+    return big_l, f, thin
+
+
 def test_level_rule_and_fade_in_match_the_definition():
     s = np.array([-2.5, -0.25, 0.0, 0.5, 1.0, 3.75, 9.99, 10.0, 12.5])
     got = tamiss.level_rule(s, 10)
     for (big_l, f, thin), v in zip(got, s, strict=True):
-        want_l, want_f, want_thin = math.floor(v), v - math.floor(v), 1.0
-        if want_l < 0:
-            want_l, want_f, want_thin = 0, 0.0, 2.0**v
-        if want_l >= 10:
-            want_l, want_f = 10, 0.0
+        want_l, want_f, want_thin = _level_rule_by_the_book(v, 10)
         assert (big_l, f) == (want_l, want_f) and thin == pytest.approx(want_thin, rel=1e-15)
     np.testing.assert_allclose(tamiss.fade_in([0.0, 0.5, 1.0]), [0.0, 2**0.5 - 1, 1.0])
     with pytest.raises(ValueError, match="s"):
@@ -751,12 +757,7 @@ def test_level_rule_saturates_for_any_finite_scale():
     )
     got = tamiss.level_rule(s, 12)
     for (big_l, f, thin), v in zip(got, s, strict=True):
-        want_l, want_f, want_thin = math.floor(v), v - math.floor(v), 1.0
-        if want_l < 0:
-            want_l, want_f, want_thin = 0, 0.0, 2.0**v
-        if want_l >= 12:
-            want_l, want_f = 12, 0.0
-        assert (big_l, f, thin) == (want_l, want_f, want_thin)
+        assert (big_l, f, thin) == _level_rule_by_the_book(v, 12)
 
 
 @pytest.mark.parametrize("max_level", [-1, 13, 2**64])
