@@ -229,7 +229,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from .image import check_png_path
     from .render import render
 
-    check_png_path(args.output)  # before rendering, not after
+    check_png_path(args.output, "-o/--output")  # before rendering, not after
     if args.exr is not None:
         from .exr import check_exr_path
 

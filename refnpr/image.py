@@ -282,25 +282,28 @@ def _decode_reason(exc: BaseException) -> str:
     return f"the file is corrupt or not an image ({type(exc).__name__}: {first})"
 
 
-def check_png_path(path: str | os.PathLike) -> Path:
-    """``path`` as a Path, validated before any work: not a directory, a ``.png`` suffix, and a
-    parent directory that exists (or can be created) and is writable; else a ValueError naming
-    the path as given and what to give instead."""
+def check_png_path(path: str | os.PathLike, what: str = "path") -> Path:
+    """``path`` as a Path, validated before any work: not empty, not a directory, a ``.png``
+    suffix, and a parent directory that exists (or can be created) and is writable; else a
+    ValueError naming ``what`` (the parameter or option), the path as given and what to give
+    instead."""
     shown = os.fspath(path)
     p = Path(path)
+    if isinstance(shown, str) and not shown.strip():
+        raise ValueError(f"{what}: expected a file name ending in .png, got {shown!r}")
     if isinstance(shown, str) and shown.endswith(("/", os.sep)):
         raise ValueError(
-            f"path: {shown!r} names a directory (it ends with a slash); give a file name "
+            f"{what}: {shown!r} names a directory (it ends with a slash); give a file name "
             f"ending in .png, such as {shown + 'out.png'!r}"
         )
     if p.is_dir():
-        raise ValueError(f"path: {shown!r} is a directory; give a file name ending in .png")
+        raise ValueError(f"{what}: {shown!r} is a directory; give a file name ending in .png")
     if p.suffix.lower() != ".png":
         raise ValueError(
-            f"path: expected a .png file name, got {shown!r}; refnpr writes 8-bit PNG only "
+            f"{what}: expected a .png file name, got {shown!r}; refnpr writes 8-bit PNG only "
             f"(such as {str(p.with_suffix('.png'))!r})"
         )
-    check_parent_writable(p, shown, "path")
+    check_parent_writable(p, shown, what)
     return p
 
 

@@ -103,7 +103,11 @@ def test_output_path_checked_before_rendering(tmp_path, capsys):
     assert main(["render", "--size", "8x8", "-o", str(tmp_path / "d.png")]) == 2
     assert "is a directory" in capsys.readouterr().err
     assert main(["render", "--size", "8x8", "-o", str(tmp_path / "x.jpg")]) == 2
-    assert "expected a .png file name" in capsys.readouterr().err
+    assert "error: -o/--output: expected a .png file name" in capsys.readouterr().err
+    assert main(["render", "--size", "8x8", "-o", ""]) == 2  # not "'' is a directory"
+    assert "error: -o/--output: expected a file name ending in .png, got ''" in (
+        capsys.readouterr().err
+    )
 
 
 def test_missing_scene_file_is_a_clear_error(tmp_path, capsys):
