@@ -19,7 +19,7 @@ from typing import Any
 
 from ._memory import read_proc_number
 
-__all__ = ["atomic_file", "check_parent_writable"]
+__all__ = ["atomic_file", "check_output_file", "check_parent_writable"]
 
 
 def check_parent_writable(p: Path, shown: str, what: str) -> None:
@@ -37,6 +37,31 @@ def check_parent_writable(p: Path, shown: str, what: str) -> None:
         raise ValueError(
             f"{what}: cannot write {shown!r} (directory {str(parent)!r} is not writable)"
         )
+
+
+def check_output_file(path: str | os.PathLike, what: str, suffix: str, note: str = "") -> Path:
+    """``path`` as a Path, validated before any work as a file to write: not empty, not a
+    directory, ending in ``suffix`` (any case), in a parent directory that exists (or can be
+    created) and is writable; else a ValueError naming ``what`` (the parameter or option), the
+    path as given and what to give instead (``note`` follows a wrong suffix's message)."""
+    shown = os.fspath(path)
+    p = Path(path)
+    if isinstance(shown, str) and not shown.strip():
+        raise ValueError(f"{what}: expected a file name ending in {suffix}, got {shown!r}")
+    if isinstance(shown, str) and shown.endswith(("/", os.sep)):
+        raise ValueError(
+            f"{what}: {shown!r} names a directory (it ends with a slash); give a file name "
+            f"ending in {suffix}, such as {shown + 'out' + suffix!r}"
+        )
+    if p.is_dir():
+        raise ValueError(f"{what}: {shown!r} is a directory; give a file name ending in {suffix}")
+    if p.suffix.lower() != suffix:
+        raise ValueError(
+            f"{what}: expected a {suffix} file name, got {shown!r}{note} (such as "
+            f"{str(p.with_suffix(suffix))!r})"
+        )
+    check_parent_writable(p, shown, what)
+    return p
 
 
 #: Signals whose default action ends the process: while an atomic write runs (main thread),

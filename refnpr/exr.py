@@ -56,7 +56,7 @@ from typing import Any
 
 import numpy as np
 
-from ._atomic import atomic_file, check_parent_writable
+from ._atomic import atomic_file, check_output_file
 
 __all__ = [
     "EXR_PASSES",
@@ -92,20 +92,11 @@ def check_exr_path(path: str | os.PathLike, *, what: str = "path") -> Path:
     """``path`` as a Path, validated before any work: not a directory, an ``.exr`` suffix, a
     parent directory that exists (or can be created) and is writable, and OpenEXR installed;
     else a ValueError naming ``what``, the path as given and what to give instead."""
-    shown = os.fspath(path)
-    p = Path(path)
-    if p.is_dir() or (isinstance(shown, str) and shown.endswith(("/", os.sep))):
-        raise ValueError(f"{what}: {shown!r} is a directory; give a file name ending in .exr")
-    if p.suffix.lower() != ".exr":
-        raise ValueError(
-            f"{what}: expected a .exr file name, got {shown!r} (such as "
-            f"{str(p.with_suffix('.exr'))!r})"
-        )
-    check_parent_writable(p, shown, what)
+    p = check_output_file(path, what, ".exr")
     try:
         import OpenEXR  # noqa: F401
     except ImportError:
-        raise _missing_openexr(what, shown) from None
+        raise _missing_openexr(what, os.fspath(path)) from None
     return p
 
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ._atomic import atomic_file, check_parent_writable
+from ._atomic import atomic_file, check_output_file
 
 __all__ = [
     "IMAGE_FORMATS",
@@ -283,28 +283,11 @@ def _decode_reason(exc: BaseException) -> str:
 
 
 def check_png_path(path: str | os.PathLike, what: str = "path") -> Path:
-    """``path`` as a Path, validated before any work: not empty, not a directory, a ``.png``
-    suffix, and a parent directory that exists (or can be created) and is writable; else a
-    ValueError naming ``what`` (the parameter or option), the path as given and what to give
-    instead."""
-    shown = os.fspath(path)
-    p = Path(path)
-    if isinstance(shown, str) and not shown.strip():
-        raise ValueError(f"{what}: expected a file name ending in .png, got {shown!r}")
-    if isinstance(shown, str) and shown.endswith(("/", os.sep)):
-        raise ValueError(
-            f"{what}: {shown!r} names a directory (it ends with a slash); give a file name "
-            f"ending in .png, such as {shown + 'out.png'!r}"
-        )
-    if p.is_dir():
-        raise ValueError(f"{what}: {shown!r} is a directory; give a file name ending in .png")
-    if p.suffix.lower() != ".png":
-        raise ValueError(
-            f"{what}: expected a .png file name, got {shown!r}; refnpr writes 8-bit PNG only "
-            f"(such as {str(p.with_suffix('.png'))!r})"
-        )
-    check_parent_writable(p, shown, what)
-    return p
+    """``path`` as a Path, validated before any work (:func:`refnpr._atomic.check_output_file`):
+    not empty, not a directory, a ``.png`` suffix, and a parent directory that exists (or can
+    be created) and is writable; else a ValueError naming ``what`` (the parameter or option),
+    the path as given and what to give instead."""
+    return check_output_file(path, what, ".png", "; refnpr writes 8-bit PNG only")
 
 
 def write_png_atomic(path: str | os.PathLike, pixels: np.ndarray) -> Path:
