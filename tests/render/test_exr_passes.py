@@ -122,6 +122,10 @@ def test_bad_exr_targets_and_channels_are_clear_errors(tmp_path, capsys):
         Image(np.zeros((4, 4, 4), np.float32), passes={"depth": np.zeros((3, 4))})
     assert main(["render", "--size", "8x8", "--exr", str(tmp_path / "x.png")]) == 2
     assert "--exr: expected a .exr file name" in capsys.readouterr().err
+    assert main(["render", "--size", "8x8", "-o", str(tmp_path / "o.png"), "--exr", ""]) == 2
+    assert "--exr: expected a file name ending in .exr, got ''" in capsys.readouterr().err
+    assert main(["render", "--size", "8x8", "--exr", str(tmp_path) + "/"]) == 2
+    assert "names a directory (it ends with a slash)" in capsys.readouterr().err
     target = tmp_path / "c.exr"
     with pytest.raises(ValueError, match="every channel needs one shape"):
         write_exr_channels(target, {"R": np.zeros((2, 2)), "G": np.zeros((2, 3))})
