@@ -1359,6 +1359,7 @@ def load_gltf(
         objects_at=objects_at,
         hidden=hidden,
         names=[o.name for o in objects],
+        meshes=[o.mesh for o in objects],
         cam_at=cam_at,
         cam_params=cam_params,
         cam_distance=cam_distance,
@@ -1609,6 +1610,35 @@ def _channels(r: _Reader, ai: int, nodes: list[_Node]) -> dict[int, dict[str, _S
     return out
 
 
+def _box_corners(positions: np.ndarray) -> np.ndarray:
+    """(8, 3) corners of the axis-aligned box of ``positions`` (N, 3)."""
+    lo, hi = positions.min(axis=0), positions.max(axis=0)
+    return np.array([[(lo, hi)[k >> a & 1][a] for a in range(3)] for k in range(8)])
+
+
+def _check_reach(r: _Reader, ai: int, name: str, mesh: Mesh, corners, m: np.ndarray, at) -> None:
+    """An error naming the animation, the object and the time ``at = (t, frame)`` where the
+    world matrix ``m`` places ``mesh`` beyond the coordinate limit (its box's ``corners``
+    first: an affine map keeps the vertices inside their box's image)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        reach = np.abs(corners @ m[:3, :3].T + m[:3, 3])
+        if np.all(reach <= MAX_COORDINATE):
+            return
+        pos = mesh.positions @ m[:3, :3].T + m[:3, 3]
+    t, f = at
+    subject = f"object {name!r} at time {t:g} s (frame {f})"
+    msg = (
+        coordinate_limit_message(subject, pos)
+        if np.all(np.isfinite(pos))
+        else (f"{subject} has vertex coordinates beyond float64")
+    )
+    if msg is not None:
+        raise r.fail(
+            f"animations[{ai}]",
+            msg + "; or give the animation smaller scales and translations",
+        )
+
+
 def _locals_at(nodes: list[_Node], channels: dict, t: float) -> dict[int, np.ndarray]:
     """The local matrices of the animated nodes at time ``t`` (their channels sampled)."""
     local = {}
@@ -1631,6 +1661,7 @@ def _animation(
     objects_at,
     hidden,
     names,
+    meshes,
     cam_at,
     cam_params,
     cam_distance,
@@ -1699,11 +1730,13 @@ def _animation(
     def add(target: str, frame: int, value) -> None:
         keys.setdefault(target, []).append(Keyframe(frame, tuple(float(x) for x in value)))
 
+    corners = {j: _box_corners(meshes[j].positions) for j, _ in objs}
     for f in range(frames):
         t = f / fps
         local = _locals_at(nodes, channels, t)
         world = _world(nodes, order, local)
         for j, pl in objs:
+            _check_reach(r, ai, names[j], meshes[j], corners[j], world[pl.node], (t, f))
             tr, q, s = _decompose(r, nodes, pl.node, world[pl.node], ai, t, f, local)
             add(f'object "{names[j]}".translation', f, tr)
             add(f'object "{names[j]}".rotation', f, q)

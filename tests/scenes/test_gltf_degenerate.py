@@ -243,6 +243,23 @@ def test_an_object_of_zero_rest_scale_that_the_animation_shows_is_refused(tmp_pa
     assert [o.name for o in scene.objects] == ["tri"]
 
 
+def test_an_animation_that_carries_an_object_beyond_the_coordinate_limit_names_the_frame(
+    tmp_path,
+):
+    """Checked when the file is read (the object's box against 1e15), not when that frame is
+    rendered after the frames before it were written."""
+    grow = Tri().animate(0, "scale", [0.0, 1.0], [[1.0] * 3, [1e20] * 3])
+    with pytest.raises(
+        GltfError,
+        match=r"/grow\.gltf: animations\[0\]: object 'tri' at time 0\.0416667 s \(frame 1\) has a "
+        r"vertex coordinate of magnitude 4\.17e\+18 .*above the limit 1e\+15",
+    ):
+        quiet(load_gltf, grow.write(tmp_path / "grow.gltf"))
+    within = Tri().animate(0, "translation", [0.0, 1.0], [[0.0] * 3, [9e14, 0.0, 0.0]])
+    scene = quiet(load_gltf, within.write(tmp_path / "within.gltf"))  # 9e14 + 1: inside
+    assert scene.at(24).objects[0].transform[0, 3] == pytest.approx(9e14, rel=1e-7)  # float32 keys
+
+
 def test_a_camera_animated_to_zero_scale_names_the_time(tmp_path):
     d = Tri().animate(1, "scale", [0.0, 1.0], [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]])
     with pytest.raises(
