@@ -179,7 +179,7 @@ def _with_params(style: dict | None, params: dict, scene: str) -> dict:
         declared = get_style_class(merged.get("name")).PARAMS
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            values = declared.validate({k: v for k, v in merged.items() if k != "name"})
+            values = declared.validate({k: v for k, v in merged.items() if k in declared.by_name})
     except (TypeError, ValueError, AttributeError):  # reported when the style is built
         return merged
     return {

@@ -248,3 +248,11 @@ def test_param_warns_for_what_the_user_gave_not_for_the_scene_table(tmp_path, ca
     assert capsys.readouterr().err == ""
     assert main([*args, "-q", "--param", "source=image", "--param", "uniform=true"]) == 0
     assert "warning: uniform: True is ignored with source='image'" in capsys.readouterr().err
+    scene = tmp_path / "c.toml"  # the same with a contour layer in the table
+    scene.write_text(
+        '[camera]\neye = [0.0, 0.5, 4.0]\ntarget = [0.0, 0.0, 0.0]\n[style]\nname = "threshold"\n'
+        'source = "lines"\nuniform = true\ncontours = { width = 1.5 }\n[[object]]\nmesh = "uv_sphere"\n'
+    )
+    args = ["render", "--scene", str(scene), "--size", "16x12", "--spp", "1", "-o", out, "-q"]
+    assert main([*args, "--param", "source=image"]) == 0
+    assert capsys.readouterr().err == ""
