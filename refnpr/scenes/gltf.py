@@ -817,18 +817,23 @@ def _placement_error(
 ) -> GltfError | None:
     """The error for an object whose node's world matrix ``m`` places ``mesh`` beyond the
     coordinate limit (or overflows), naming the field that carries it there; None if it fits."""
+    subject = f"{what}, placed by the world transform of nodes[{i}] {nodes[i].name!r},"
+    msg = _reach_message(subject, mesh, m)
+    return None if msg is None else r.fail(_large_field(nodes, i), msg)
+
+
+def _reach_message(subject: str, mesh: Mesh, m: np.ndarray) -> str | None:
+    """The refusal of ``mesh`` placed by the world matrix ``m`` beyond the coordinate limit
+    (or beyond float64), naming ``subject``; None if every vertex fits."""
     with np.errstate(over="ignore", invalid="ignore"):
         pos = mesh.positions @ m[:3, :3].T + m[:3, 3]
-    subject = f"{what}, placed by the world transform of nodes[{i}] {nodes[i].name!r},"
-    if not np.all(np.isfinite(pos)):
-        msg = (
-            f"{subject} has vertex coordinates beyond float64 (the node's transform composed "
-            "with its parents' overflows); rescale the model (e.g. to metres or kilometres) "
-            f"so that every |coordinate| is <= {MAX_COORDINATE:.0e}"
-        )
-    else:
-        msg = coordinate_limit_message(subject, pos)
-    return None if msg is None else r.fail(_large_field(nodes, i), msg)
+    if np.all(np.isfinite(pos)):
+        return coordinate_limit_message(subject, pos)
+    return (
+        f"{subject} has vertex coordinates beyond float64 (the node's transform composed "
+        "with its parents' overflows); rescale the model (e.g. to metres or kilometres) "
+        f"so that every |coordinate| is <= {MAX_COORDINATE:.0e}"
+    )
 
 
 def _triangles(r: _Reader, mode: int, idx: np.ndarray, where: str) -> np.ndarray:
@@ -1621,21 +1626,13 @@ def _check_reach(r: _Reader, ai: int, name: str, mesh: Mesh, corners, m: np.ndar
     world matrix ``m`` places ``mesh`` beyond the coordinate limit (its box's ``corners``
     first: an affine map keeps the vertices inside their box's image)."""
     with np.errstate(over="ignore", invalid="ignore"):
-        reach = np.abs(corners @ m[:3, :3].T + m[:3, 3])
-        if np.all(reach <= MAX_COORDINATE):
+        if np.all(np.abs(corners @ m[:3, :3].T + m[:3, 3]) <= MAX_COORDINATE):
             return
-        pos = mesh.positions @ m[:3, :3].T + m[:3, 3]
     t, f = at
-    subject = f"object {name!r} at time {t:g} s (frame {f})"
-    msg = (
-        coordinate_limit_message(subject, pos)
-        if np.all(np.isfinite(pos))
-        else (f"{subject} has vertex coordinates beyond float64")
-    )
+    msg = _reach_message(f"object {name!r} at time {t:g} s (frame {f})", mesh, m)
     if msg is not None:
         raise r.fail(
-            f"animations[{ai}]",
-            msg + "; or give the animation smaller scales and translations",
+            f"animations[{ai}]", msg + "; or give the animation smaller scales and translations"
         )
 
 
@@ -1736,8 +1733,8 @@ def _animation(
         local = _locals_at(nodes, channels, t)
         world = _world(nodes, order, local)
         for j, pl in objs:
-            _check_reach(r, ai, names[j], meshes[j], corners[j], world[pl.node], (t, f))
             tr, q, s = _decompose(r, nodes, pl.node, world[pl.node], ai, t, f, local)
+            _check_reach(r, ai, names[j], meshes[j], corners[j], world[pl.node], (t, f))
             add(f'object "{names[j]}".translation', f, tr)
             add(f'object "{names[j]}".rotation', f, q)
             add(f'object "{names[j]}".scale', f, s)
