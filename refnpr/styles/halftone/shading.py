@@ -109,7 +109,7 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
         if present[i]
     ]
     objects = [(sc, object_tables(style, i, obj, sc)) for i, obj, sc in screens]
-    _warn_unread(style, [sc for _, _, sc in screens])
+    _warn_unread(style, [tables.values for _, tables in objects])
     _shade_objects(objects, frame, record, p.show, out, raw)
     if getattr(ctx, "wants_intermediates", False):  # the raw views, as show draws them
         covered = frame.cover >= 0
@@ -122,19 +122,19 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
     return out
 
 
-def _warn_unread(style: Any, screens: list) -> None:
-    """Warn (once per style) where no screen in view reads ``tone_correct`` (stroke maps do
-    not) or ``anisotropy`` (engraving ramps are isotropic): the parameter changes nothing."""
+def _warn_unread(style: Any, values: list) -> None:
+    """Warn (once per style) where no object in view reads ``tone_correct`` or ``anisotropy``
+    (``values``: their :class:`~._kernels.ObjectValues`, as :func:`object_tables` resolved them:
+    stroke maps are not equalized, engraving ramps are isotropic): the parameter changes
+    nothing."""
     p = style.p
-    if not screens or getattr(style, "_warned_unread", False):
+    if not values or getattr(style, "_warned_unread", False):
         return
-    kinds = {"strokes" if sc.kind == "strokes" else "engraving" if sc.direction is not None
-             else "other" for sc in screens}  # fmt: skip
-    if p.tone_correct and kinds == {"strokes"}:
+    if p.tone_correct and not any(v.equalize for v in values):
         warn_unused("tone_correct", True, "stroke-map screens only in view",
                     "remove tone_correct, or give an engraving or dither screen")  # fmt: skip
         style._warned_unread = True
-    if p.anisotropy > 1 and kinds == {"engraving"}:
+    if p.anisotropy > 1 and all(v.anisotropy == 1 for v in values):
         warn_unused("anisotropy", p.anisotropy, "engraving screens only in view (a 1D ramp)",
                     "remove anisotropy, or give a dither or stroke-map screen")  # fmt: skip
         style._warned_unread = True
