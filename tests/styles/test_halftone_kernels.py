@@ -51,14 +51,14 @@ def _levels(lod: float, n_levels: int) -> tuple[int, int, float]:
 
 
 def _footprint(dx, dy, rows: int, cols: int, aniso: int):
-    px = math.hypot(dx[0] * cols, dx[1] * rows)
-    py = math.hypot(dy[0] * cols, dy[1] * rows)
+    px = math.sqrt((dx[0] * cols) ** 2 + (dx[1] * rows) ** 2)
+    py = math.sqrt((dy[0] * cols) ** 2 + (dy[1] * rows) ** 2)
     p_max, p_min = max(px, py), min(px, py)
     if aniso == 1:
-        return math.log2(max(p_max, 1e-30)), [np.zeros(2)]
-    n = max(1, min(math.ceil(p_max / max(p_min, 1e-30) - 1e-9), aniso))
+        return math.log2(max(p_max, 2.0**-64)), [np.zeros(2)]
+    n = max(1, min(math.ceil(p_max / max(p_min, 2.0**-64) - 1e-9), aniso))
     axis = np.asarray(dx if px >= py else dy, float)
-    return math.log2(max(p_max / n, 1e-30)), [axis * ((j + 0.5) / n - 0.5) for j in range(n)]
+    return math.log2(max(p_max / n, 2.0**-64)), [axis * ((j + 0.5) / n - 0.5) for j in range(n)]
 
 
 def _filtered(levels, uv, lod, offsets, k=None):

@@ -239,12 +239,12 @@ void main() {
     probes = 1;
     axis = real2(0);
     if (anisotropy == 1) {
-        lod = real(log2(float(max(max(px, py), real(1e-30)))));
+        lod = real(log2(float(max(max(px, py), real(exp2(-64.0))))));
     } else {
         real p_max = max(px, py), p_min = min(px, py);
-        real ratio = p_max / max(p_min, real(1e-30));
+        real ratio = p_max / max(p_min, real(exp2(-64.0)));
         probes = int(clamp(ceil(ratio - real(1e-9)), real(1), real(anisotropy)));
-        lod = real(log2(float(max(p_max / real(probes), real(1e-30)))));
+        lod = real(log2(float(max(p_max / real(probes), real(exp2(-64.0))))));
         axis = px >= py ? cdx : cdy;
     }
     lod += real(lod_offset);
