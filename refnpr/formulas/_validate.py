@@ -17,6 +17,7 @@ __all__ = [
     "check_finite",
     "check_scalar",
     "check_int",
+    "check_bool",
     "as_ints",
     "INT64_MIN",
     "INT64_MAX",
@@ -119,6 +120,17 @@ def check_scalar(
             f"{name}: expected a value in {interval}, got {v}" + (f"; {hint}" if hint else "")
         )
     return v
+
+
+def check_bool(name: str, value) -> bool:
+    """Validate a flag: ``True`` or ``False`` (a numpy bool too), returned as a Python bool.
+
+    Anything else is a ``TypeError``: a string such as ``"no"`` or a number would otherwise be
+    taken by its truth value.
+    """
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise TypeError(f"{name}: expected a bool (True or False), got {describe(value)}")
 
 
 def _int_range(lo: int | None, hi: int | None) -> tuple[int, int, str]:

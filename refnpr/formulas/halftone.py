@@ -28,7 +28,7 @@ from refnpr.device.vectors import dot, unit_scaled
 
 from ._face import Whole, elementwise, face
 from ._shading_checks import broadcast, check_range, frac, real, reals, trailing
-from ._validate import check_int, check_scalar, describe, result_dtype
+from ._validate import check_bool, check_int, check_scalar, describe, result_dtype
 
 __all__ = [
     "binary_threshold",
@@ -118,7 +118,7 @@ def smooth_threshold(screen, intensity, c: float = 4.0, *, centred: bool = False
     """
     c = check_scalar("c", c, lo=0, lo_open=True, hint="c is the slope of the ramp, e.g. 4.0")
     dt, scr, x = reals(screen=screen, intensity=intensity)
-    return elementwise(smooth_threshold.scalar, dt, scr, x, c, bool(centred))
+    return elementwise(smooth_threshold.scalar, dt, scr, x, c, check_bool("centred", centred))
 
 
 def smooth_threshold_tone(intensity, c: float = 4.0, *, centred: bool = False) -> np.ndarray:
@@ -145,7 +145,9 @@ def smooth_threshold_tone(intensity, c: float = 4.0, *, centred: bool = False) -
     c = check_scalar("c", c, lo=0, lo_open=True, hint="c is the slope of the ramp, e.g. 4.0")
     dt = result_dtype(intensity)
     x = real("intensity", intensity, np.dtype(np.float64))
-    off = 0.5 if centred else 1.0  # ramp clip(off + c z, 0, 1) runs over z in [lo, hi]
+    off = (
+        0.5 if check_bool("centred", centred) else 1.0
+    )  # ramp clip(off + c z, 0, 1) runs over z in [lo, hi]
     lo, hi = -off / c, (1 - off) / c
     # z = screen + I - 1 is uniform on [I - 1, I]: white part + ramp part (midpoint x length)
     white = np.clip(x - np.maximum(x - 1, hi), 0, None)
@@ -526,7 +528,14 @@ def stroke_lighting(
     broadcast(normal_map=nm, light=li)
     n = (nm[..., 0], nm[..., 1], nm[..., 2])
     v = (li[..., 0], li[..., 1], li[..., 2])
-    return elementwise(stroke_lighting.scalar, dt, n, v, bool(encoded), bool(normalize))
+    return elementwise(
+        stroke_lighting.scalar,
+        dt,
+        n,
+        v,
+        check_bool("encoded", encoded),
+        check_bool("normalize", normalize),
+    )
 
 
 def _profile(profile: str) -> str:

@@ -30,7 +30,7 @@ from refnpr.device.vectors import dot, reflect, unit_scaled
 
 from ._face import elementwise, face
 from ._shading_checks import broadcast, check_range, real, trailing
-from ._validate import as_float, check_int, check_scalar, describe, result_dtype
+from ._validate import as_float, check_bool, check_int, check_scalar, describe, result_dtype
 
 __all__ = [
     "ambient",
@@ -121,7 +121,7 @@ def diffuse(normal, light, *, normalize: bool = True) -> np.ndarray:
     """
     dt = result_dtype(normal, light)
     n, l = _vectors(dt, normal=normal, light=light)
-    return elementwise(diffuse.scalar, dt, n, l, bool(normalize))
+    return elementwise(diffuse.scalar, dt, n, l, check_bool("normalize", normalize))
 
 
 @njit
@@ -154,7 +154,9 @@ def specular_base(normal, light, view, *, model: str = "blinn-phong", normalize:
         raise ValueError(f"model: expected one of {_MODELS}, got {describe(model)}")
     dt = result_dtype(normal, light, view)
     n, l, v = _vectors(dt, normal=normal, light=light, view=view)
-    return elementwise(specular_base.scalar, dt, n, l, v, model == "phong", bool(normalize))
+    return elementwise(
+        specular_base.scalar, dt, n, l, v, model == "phong", check_bool("normalize", normalize)
+    )
 
 
 @njit
@@ -197,7 +199,9 @@ def specular(
     p = check_scalar("shininess", shininess, lo=0, lo_open=True, hint="use e.g. 32.0")
     dt = result_dtype(normal, light, view)
     n, l, v = _vectors(dt, normal=normal, light=light, view=view)
-    return elementwise(specular.scalar, dt, n, l, v, p, model == "phong", bool(normalize))
+    return elementwise(
+        specular.scalar, dt, n, l, v, p, model == "phong", check_bool("normalize", normalize)
+    )
 
 
 @njit

@@ -25,7 +25,16 @@ import numpy as np
 from refnpr._jit import njit
 
 from .._face import elementwise, face
-from .._validate import INT64_MIN, as_float, as_ints, as_vectors, check_int, check_scalar, describe
+from .._validate import (
+    INT64_MIN,
+    as_float,
+    as_ints,
+    as_vectors,
+    check_bool,
+    check_int,
+    check_scalar,
+    describe,
+)
 from ..lighting import luminance
 
 __all__ = [
@@ -483,8 +492,9 @@ def tam_opacity(limit, tau, fade: float, clip: bool) -> np.ndarray:
     """The TAM baseline's density decision of a stroke: 1 if tau < limit else 0 (``clip``), or
     clip((limit - tau) / fade, 0, 1); limit = rho * gain."""
     args = as_float("limit", limit), as_float("tau", tau)
+    clip = check_bool("clip", clip)
     fade = check_scalar("fade", fade, lo=0.0, lo_open=not clip)
-    return elementwise(tam_opacity.scalar, np.float64, *args, fade, bool(clip))
+    return elementwise(tam_opacity.scalar, np.float64, *args, fade, clip)
 
 
 @njit

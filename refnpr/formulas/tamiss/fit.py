@@ -10,7 +10,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .._face import elementwise
-from .._validate import as_float, as_vectors, check_int, check_scalar, describe, result_dtype
+from .._validate import (
+    as_float,
+    as_vectors,
+    check_bool,
+    check_int,
+    check_scalar,
+    describe,
+    result_dtype,
+)
 from .curve import cubic, cubic_slope
 from .moments import N_REGRESSORS, fragment_regressors, group_ids, normalize_t
 from .segments import visible_segments
@@ -275,7 +283,7 @@ def fit_fragments(
         raise ValueError("ids: expected at least one fragment, got none")
     lo = np.minimum.reduceat(t_[order], starts)  # min blending pass
     hi = np.maximum.reduceat(t_[order], starts)  # max blending pass
-    if centre_xy:
+    if check_bool("centre_xy", centre_xy):
         xy = np.stack([x_, y_], axis=-1)[order]
         o = (np.minimum.reduceat(xy, starts) + np.maximum.reduceat(xy, starts)) * dt.type(0.5)
     else:

@@ -10,7 +10,7 @@ from refnpr.device.scalars import clip, frac
 
 from .._face import Whole, elementwise, face
 from .._shading_checks import broadcast, check_range, real, reals
-from .._validate import result_dtype
+from .._validate import check_bool, result_dtype
 from .lines import _dyadic_remap, _multiscale_line, _step, check_steps, ldexp, level, step_any
 
 __all__ = ["pcf_threshold", "mip_threshold", "line_coverage"]
@@ -381,4 +381,4 @@ def line_coverage(v, s, intensity, dv_dx, dv_dy, *, uniform: bool = False) -> np
     the conditioning of locating a line edge inside a footprint that small.
     """
     dt, v, s, x, gx, gy = reals(np.float64, v=v, s=s, intensity=intensity, dv_dx=dv_dx, dv_dy=dv_dy)
-    return elementwise(line_coverage.scalar, dt, v, s, x, gx, gy, bool(uniform))
+    return elementwise(line_coverage.scalar, dt, v, s, x, gx, gy, check_bool("uniform", uniform))

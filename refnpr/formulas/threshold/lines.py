@@ -12,7 +12,7 @@ from refnpr.device.scalars import ONE_BELOW, clip, frac
 
 from .._face import elementwise, face
 from .._shading_checks import check_positive, check_range, reals
-from .._validate import check_int
+from .._validate import check_bool, check_int
 
 __all__ = [
     "step",
@@ -300,7 +300,7 @@ def multiscale_line(v, t, *, uniform: bool = False) -> np.ndarray:
     """
     dt, v, t = reals(v=v, t=t)
     check_range("t", t, 0.0, 1.0, "t is the fractional part of the dyadic scale")
-    return _below_one(elementwise(multiscale_line.scalar, dt, v, t, bool(uniform)))
+    return _below_one(elementwise(multiscale_line.scalar, dt, v, t, check_bool("uniform", uniform)))
 
 
 @njit
@@ -382,4 +382,6 @@ def line_threshold(v, s, *, uniform: bool = False, noise=None) -> np.ndarray:
     """
     dt, v, s, *z = reals(v=v, s=s, **({} if noise is None else {"noise": noise}))
     z = z[0] if z else 0.0
-    return _below_one(elementwise(line_threshold.scalar, dt, v, s, bool(uniform), z))
+    return _below_one(
+        elementwise(line_threshold.scalar, dt, v, s, check_bool("uniform", uniform), z)
+    )

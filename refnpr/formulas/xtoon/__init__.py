@@ -22,7 +22,7 @@ from refnpr.device.scalars import clip01
 from refnpr.device.vectors import unit_scaled
 
 from .._face import Whole, elementwise, face
-from .._validate import as_float, as_vectors, check_scalar, describe, result_dtype
+from .._validate import as_float, as_vectors, check_bool, check_scalar, describe, result_dtype
 from . import shapes, textures
 from .shapes import *  # noqa: F403
 from .textures import *  # noqa: F403
@@ -95,10 +95,9 @@ def tone(n_dot_l, *, half_lambert: bool = False) -> np.ndarray:
     -------
     (...) float64, or float32 if ``n_dot_l`` is float32
     """
-    if not isinstance(half_lambert, (bool, np.bool_)):
-        raise TypeError(f"half_lambert: expected a bool, got {half_lambert!r}")
+    half_lambert = check_bool("half_lambert", half_lambert)
     c = _check_no_nan("n_dot_l", n_dot_l)
-    return elementwise(tone.scalar, result_dtype(c), c, bool(half_lambert))
+    return elementwise(tone.scalar, result_dtype(c), c, half_lambert)
 
 
 @njit
@@ -262,10 +261,9 @@ def detail_highlight(v_dot_r, s: float, *, one_sided: bool = False) -> np.ndarra
     D : (...) float in [0, 1]
     """
     s = check_scalar("s", s, lo=1.0, hint="X-Toon sec. 3.2 requires shininess s >= 1")
-    if not isinstance(one_sided, (bool, np.bool_)):
-        raise TypeError(f"one_sided: expected a bool, got {one_sided!r}")
+    one_sided = check_bool("one_sided", one_sided)
     c = _check_no_nan("v_dot_r", v_dot_r)
-    return elementwise(detail_highlight.scalar, result_dtype(c), c, s, bool(one_sided))
+    return elementwise(detail_highlight.scalar, result_dtype(c), c, s, one_sided)
 
 
 @njit
@@ -432,5 +430,5 @@ def blend_normals(n, n_abstract, weight, *, normalize: bool = True) -> np.ndarra
         (a[..., 0], a[..., 1], a[..., 2]),
         (b[..., 0], b[..., 1], b[..., 2]),
         w,
-        bool(normalize),
+        check_bool("normalize", normalize),
     )
