@@ -90,6 +90,20 @@ def test_normalize_t_maps_range_to_unit_interval():
         tamiss.normalize_t(t, 0.3, 0.2)
 
 
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_normalize_t_over_a_span_wider_than_the_largest_float_is_finite(dtype):
+    # t_max - t_min overflows to inf: (t - c) / h would be inf / inf = NaN
+    big = np.finfo(dtype).max
+    t = np.array([-big, -big / 2, 0.0, big / 2, big], dtype=dtype)
+    got = tamiss.normalize_t(t, dtype(-big), dtype(big))
+    assert got.dtype == dtype
+    np.testing.assert_array_equal(got, np.array([-1.0, -0.5, 0.0, 0.5, 1.0], dtype=dtype))
+    # a span that fits keeps the plain difference: bit for bit the formula (2 t - lo - hi) / (hi - lo)
+    lo, hi = dtype(-big / 4), dtype(big / 4)
+    got = tamiss.normalize_t(t[1:4], lo, hi)
+    np.testing.assert_array_equal(got, np.array([-2.0, 0.0, 2.0], dtype=dtype))
+
+
 @given(
     ids=hnp.arrays(np.int64, st.integers(1, 60), elements=st.integers(0, 6)),
     seed=st.integers(0, 2**32 - 1),

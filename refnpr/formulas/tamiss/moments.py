@@ -58,6 +58,8 @@ def fragment_regressors(s, x, y) -> np.ndarray:
 @njit
 def _normalize_t(t, lo, hi, half_c):
     half = (hi - lo) * half_c
+    if half == np.inf:  # t_max - t_min overflows; their halves' difference does not
+        half = hi * half_c - lo * half_c
     if half > 0:
         return (t - (lo + half)) / half
     return half_c - half_c  # a single t: s = 0
@@ -67,8 +69,8 @@ def _normalize_t(t, lo, hi, half_c):
 def normalize_t(t, t_min, t_max) -> np.ndarray:
     """s = (2 t - t_min - t_max) / (t_max - t_min), so [t_min, t_max] maps to [-1, 1].
 
-    Computed as (t - c) / h with h = (t_max - t_min) / 2, c = t_min + h. Where t_max == t_min,
-    s = 0. Inputs broadcast; float32 in -> float32 out (float32 arithmetic).
+    Computed as (t - c) / h with h = (t_max - t_min) / 2 (t_max / 2 - t_min / 2 where the
+    difference overflows), c = t_min + h. Where t_max == t_min, s = 0. Inputs broadcast; float32 in -> float32 out (float32 arithmetic).
     ``normalize_t.scalar(t, t_min, t_max, half)`` is the device function (``half``: 0.5 in
     the float type of its arguments).
     """
