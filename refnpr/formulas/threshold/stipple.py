@@ -355,7 +355,8 @@ def stipple_threshold(
         dot across scales and drifts towards its lattice point by half its offset per octave
         of zoom; dots are round up to an ink fraction of about pi (1/2 - jitter)^2.
     seed : int, keyword-only
-        Seed of the row phases.
+        Seed of the row phases; its low 32 bits (:func:`seed_bits`): seeds equal modulo 2**32
+        give the same dots.
     tone_table : StippleToneTable or None, keyword-only
         From :func:`stipple_tone_table` with the same ``jitter``; None keeps the plain blend.
 

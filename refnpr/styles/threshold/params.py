@@ -314,7 +314,7 @@ PARAMS = Params(
     Param(
         "noise_seed",
         0,
-        "seed of the line noise and of the stipple's dot placement",
+        "seed of the line noise and of the stipple's dot placement (its low 32 bits)",
         kind="int",
         record=False,
         used_when=_SCREENS,
