@@ -30,11 +30,20 @@ LUMA = lighting.LUMA_709
 INK_THRESHOLD = 0.5
 
 
-def luminance(rgb: np.ndarray) -> np.ndarray:
-    """(H, W) float64 luminance of (H, W, 3 or 4) linear RGB[A] (alpha ignored)."""
+def luminance(rgb: np.ndarray, *, name: str = "rgb") -> np.ndarray:
+    """(H, W) float64 luminance of (H, W, 3 or 4) linear RGB[A] (alpha ignored); errors name
+    the image ``name``."""
     a = np.asarray(rgb)
     if a.ndim != 3 or a.shape[2] not in (3, 4):
-        raise ValueError(f"rgb: expected an (H, W, 3) or (H, W, 4) image, got shape {a.shape}")
+        raise ValueError(f"{name}: expected an (H, W, 3) or (H, W, 4) image, got shape {a.shape}")
+    if a.dtype.kind == "f":
+        bad = ~np.isfinite(a[..., :3]).all(axis=-1)
+        if bad.any():
+            y, x = (int(i) for i in np.argwhere(bad)[0])
+            raise ValueError(
+                f"{name}: expected finite colours, got NaN or inf in {int(bad.sum())} of its "
+                f"pixels, the first at (y, x) = ({y}, {x}): {a[y, x].tolist()}"
+            )
     return lighting.luminance(a)
 
 
@@ -102,8 +111,8 @@ def pair_metrics(
                 f"{name}: expected an (H, W, 3 or 4) image of the motion field's size "
                 f"{motion.shape}, got shape {shape}"
             )
-    y = luminance(image)
-    y_prev = luminance(prev_image)
+    y = luminance(image, name="image")
+    y_prev = luminance(prev_image, name="prev_image")
     y_hat = warp(y_prev, motion)
     m = motion.valid
     n = int(m.sum())

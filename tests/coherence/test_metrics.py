@@ -124,6 +124,17 @@ def test_luminance_weights():
         luminance(np.zeros((4, 4)))
 
 
+@pytest.mark.parametrize("which", ["image", "prev_image"])
+def test_a_frame_with_a_nan_pixel_is_refused_by_its_name(which):
+    sc = scene([wall()])
+    mf = motion_field(gbuf(sc), gbuf(sc), sc, sc)
+    images = {"image": np.ones((H, W, 4)), "prev_image": np.ones((H, W, 4))}
+    images[which][2, 3, 1] = np.nan
+    message = rf"^{which}: expected finite colours, got NaN or inf in 1 of its pixels, the first "
+    with pytest.raises(ValueError, match=message + r"at \(y, x\) = \(2, 3\)"):
+        pair_metrics(images["image"], images["prev_image"], mf)
+
+
 # -- measure ------------------------------------------------------------------------------
 def test_static_scene_measures_zero():
     sc = scene([wall(tz=-1.0), SceneObject(icosphere(2, 1.0), transform_matrix((0.3, 0, 0.5)))])
