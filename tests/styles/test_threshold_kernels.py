@@ -427,3 +427,18 @@ def test_kernel_compiles_only_the_frames_modes():
     want = {(K.ANALYTIC, True, False), (K.CONSTANT, False, False), (K.LINES, False, True)}
     assert want <= set(K.shade_threshold_for.kernels)
     assert math.isfinite(K.ANALYTIC) and K.ANALYTIC not in (K.CONSTANT, K.LINES, K.IMAGE)
+
+
+def test_stipple_with_and_without_tone_table_shares_one_compiled_scalar():
+    """numba types an array's writability: ``NO_TABLE`` and a tone table's ``cdf`` are both
+    read-only, so the stipple scalar is compiled for one ``cdf`` type, by the face and the
+    kernel alike."""
+    ctx = random_ctx(5, "directional", shape=(4, 5))
+    uv = np.random.default_rng(0).uniform(0.0, 4.0, (20, 2))
+    table = thr.stipple_tone_table(n_t=3, n_y=5, samples=16)
+    thr.stipple_threshold(uv, 1.3, 2.2)
+    thr.stipple_threshold(uv, 1.3, 2.2, tone_table=table)
+    ThresholdStyle(source="stipple").shade(ctx)
+    ThresholdStyle(source="stipple", uniform=True).shade(ctx)
+    cdf_types = {sig[-1] for sig in thr.stipple_threshold.scalar.signatures}
+    assert cdf_types and all(not t.mutable for t in cdf_types), cdf_types

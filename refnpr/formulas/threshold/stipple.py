@@ -58,8 +58,10 @@ _TABLE_TILES = 64.0
 _M1 = np.uint64(0x9E3779B97F4A7C15)
 _M2 = np.uint64(0xBF58476D1CE4E5B9)
 _M3 = np.uint64(0x94D049BB133111EB)
-#: No tone table (:func:`stipple_threshold`'s ``cdf`` argument): the plain blend.
+#: No tone table (:func:`stipple_threshold`'s ``cdf`` argument): the plain blend. Read-only,
+#: as a table's ``cdf`` is, so that the kernels reading either are compiled once.
 NO_TABLE = np.zeros((0, 0, 0))
+NO_TABLE.setflags(write=False)
 
 
 #: Default and largest dot offset, in tiles of the dot's level.
