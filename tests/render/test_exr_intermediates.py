@@ -107,6 +107,25 @@ def test_halftone_pixels_are_paper_exactly_where_intensity_clears_the_screen():
     assert 10 < paper[clear].sum() < clear.sum() - 10  # both outcomes occur
 
 
+@pytest.mark.parametrize(
+    "options", [{}, {"mip": "per_level", "tone_correct": True}, {"c": "auto"}], ids=str
+)
+def test_halftone_keeps_its_intermediates_from_the_color_pass(monkeypatch, options):
+    """One pass of the object kernel gives the image and its intermediates, equal to the
+    images that show='intensity' and show='screen' draw."""
+    from refnpr.styles.halftone import shading
+
+    passes = []
+    run = shading._shade_objects
+    monkeypatch.setattr(shading, "_shade_objects", lambda *a: passes.append(a[3]) or run(*a))
+    style = {"name": "halftone", "screen": "gravel", **options}  # a dither screen
+    image = render("halftone_teapot", style, 64, 48, 4, passes=True)
+    assert passes == ["color"]
+    for name, show in (("intensity", "intensity"), ("threshold", "screen")):
+        drawn = render("halftone_teapot", {**style, "show": show}, 64, 48, 4, passes=True)
+        assert np.array_equal(image.passes[name], drawn.passes[name]), name
+
+
 def test_tamiss_stroke_ids_match_its_ids_view_and_survive_the_exr(tmp_path):
     from refnpr.styles.tamiss.show import id_colors
 

@@ -262,7 +262,9 @@ def shade_object_for(show, bump, fwidth, per_level):
     def shade_object(lo, hi, frame, style, tables, out, raw):
         """Shade the samples of object ``tables.values.index`` into ``out (nH, nW, 4)``
         float32 (``show`` color: RGBA, zero where not covered) or ``raw (nH, nW, 3)`` float64
-        (the raw value, or the normal map's RGB)."""
+        (the raw value, or the normal map's RGB). With ``show`` color, a full-size ``raw``
+        also gets each sample's intensity (channel 0) and trilinear screen value (channel 1),
+        the values ``show`` intensity and screen draw; a (1, 1, 3) stand-in gets nothing."""
         # the records' arrays as locals, taken once (reading them from a record inside the
         # loops takes and drops a reference to each array per sample)
         mesh_id, cover, normal, position = frame.mesh_id, frame.cover, frame.normal, frame.position
@@ -291,6 +293,7 @@ def shade_object_for(show, bump, fwidth, per_level):
             if kind[i] == LIGHT_POINT:
                 need_pos = True
         lit = show == SHOW_COLOR or show == SHOW_INTENSITY
+        keep = show == SHOW_COLOR and raw.shape[0] == mesh_id.shape[0]  # the intermediates
         nw = mesh_id.shape[1]
         scr = np.empty((_F + 2 * kind.shape[0], nw))  # each row written before it is read
         at = np.empty(nw, dtype=np.int64)  # the packed samples' columns
@@ -403,6 +406,9 @@ def shade_object_for(show, bump, fwidth, per_level):
                     for ch in range(3):
                         raw[y, x, ch] = inten
                     continue
+                if keep:
+                    raw[y, x, 0] = inten
+                    raw[y, x, 1] = probes(pyr, cu, cv, lod, n, axis, np.int64(0))
                 c = style.slope
                 if fwidth:
                     step = style.step

@@ -97,7 +97,8 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
     record = style_record(p, int(ctx.gb.n))
     out = rgba_out(ctx, shape)  # written in full: prepare, then every object in view
     color = p.show == "color"
-    raw = np.zeros((1, 1, 3)) if color else np.ones(shape + (3,))
+    keep = getattr(ctx, "wants_intermediates", False)
+    raw = np.zeros((1, 1, 3)) if color and not keep else np.ones(shape + (3,))
     one = p.paper if color else (1.0, 1.0, 1.0)  # the value 1 off objects
     rows = np.empty((shape[0], max(len(scene.objects), 1)), dtype=np.int64)
     K.prepare(frame, np.asarray(one, dtype=np.float64), rows, out)
@@ -111,12 +112,17 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
     objects = [(sc, object_tables(style, i, obj, sc)) for i, obj, sc in screens]
     _warn_unread(style, [tables.values for _, tables in objects])
     _shade_objects(objects, frame, record, p.show, out, raw)
-    if getattr(ctx, "wants_intermediates", False):  # the raw views, as show draws them
+    if keep:  # the raw views, as show draws them (the color pass kept them in raw)
         covered = frame.cover >= 0
-        for name, show in (("intensity", "intensity"), ("threshold", "screen")):
-            values = np.ones(shape + (3,))
-            _shade_objects(objects, frame, record, show, np.empty((0, 0, 4), np.float32), values)
-            ctx.keep(name, np.where(covered, values[..., 0], 0.0))
+        for ch, (name, show) in enumerate((("intensity", "intensity"), ("threshold", "screen"))):
+            if color:
+                values = raw[..., ch]
+            else:
+                values = np.ones(shape + (3,))
+                none = np.empty((0, 0, 4), np.float32)
+                _shade_objects(objects, frame, record, show, none, values)
+                values = values[..., 0]
+            ctx.keep(name, np.where(covered, values, 0.0))
     if not color:  # an 8-bit file of the image stores the raw values
         return rgba_from(srgb_to_linear(raw), frame.cover >= 0)
     return out
