@@ -45,6 +45,7 @@ import warnings
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
+import numpy as np
 from numba._dispatcher import compute_fingerprint as _fingerprint
 from numba.core import caching as _numba_caching
 from numba.core import config as _numba_config
@@ -303,6 +304,26 @@ def readonly(a):
         a = a.view()
         a.flags.writeable = False
     return a
+
+
+def _is_record(value) -> bool:
+    return isinstance(value, tuple) and hasattr(value, "_fields")
+
+
+def frozen(record):
+    """``record`` (a named tuple of arrays, numbers and records) with every array in it read-only
+    (:func:`readonly`), records inside it too.
+
+    numba types an array's writability: a kernel reading a G-buffer channel rasterized here
+    (writable) in one frame and one loaded from a kit (read-only) in another would be compiled
+    twice. The records that kernels only read are built frozen (``styles._frame.frame_record``,
+    the styles' tables)."""
+    return type(record)(
+        *(
+            readonly(v) if isinstance(v, np.ndarray) else frozen(v) if _is_record(v) else v
+            for v in record
+        )
+    )
 
 
 # -- Banded kernels: a serial nogil kernel run over contiguous bands of its loop on Python threads.

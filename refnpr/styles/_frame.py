@@ -12,6 +12,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from refnpr._jit import frozen
 from refnpr.device.lights import Lights, lights_record
 
 __all__ = ["Frame", "Materials", "frame_record", "materials_record"]
@@ -134,7 +135,7 @@ def frame_record(ctx: Any, channels: tuple[str, ...] = ()) -> Frame:
             grids[name] = _grid(name, gb[name], shape + tail, "f")
         else:
             grids[name] = _STAND_IN[len(tail) and tail[0]]
-    return Frame(
+    frame = Frame(
         cover=cover,
         mesh_id=mesh_id,
         eye=np.ascontiguousarray(np.asarray(scene.camera.eye, dtype=np.float64)),
@@ -142,6 +143,7 @@ def frame_record(ctx: Any, channels: tuple[str, ...] = ()) -> Frame:
         materials=materials_record(scene),
         **grids,
     )
+    return frozen(frame)  # kernels only read it: one compiled kernel, whatever the G-buffer
 
 
 #: Channels not rasterized for a frame: float32 stand-ins by trailing size (0: a scalar grid).

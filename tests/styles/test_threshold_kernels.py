@@ -442,3 +442,24 @@ def test_stipple_with_and_without_tone_table_shares_one_compiled_scalar():
     ThresholdStyle(source="stipple", uniform=True).shade(ctx)
     cdf_types = {sig[-1] for sig in thr.stipple_threshold.scalar.signatures}
     assert cdf_types and all(not t.mutable for t in cdf_types), cdf_types
+
+
+@pytest.mark.parametrize("source", ["lines", "image"])
+def test_a_read_only_gbuffer_is_shaded_by_the_same_compiled_kernel(source):
+    """numba types an array's writability; the frame record and the tables are built read-only,
+    so a G-buffer loaded read-only (a kit's) and one rasterized here share one compiled
+    kernel, with the same result."""
+    from refnpr.styles.threshold import _kernels as K
+
+    ctx = random_ctx(7, "directional", shape=(4, 5))
+    style = ThresholdStyle(source=source)
+    want = style.shade(ctx)
+    kernels = set(K.shade_threshold_for.kernels.values())
+    counts = {k: len(k.body.signatures) for k in kernels}
+    frozen_gb = _GB({k: v.copy() for k, v in ctx.gb.items()}, ctx.gb.n)
+    for a in frozen_gb.values():
+        a.flags.writeable = False
+    got = style.shade(ShadeContext(frozen_gb, ctx.scene))
+    assert set(K.shade_threshold_for.kernels.values()) == kernels
+    assert {k: len(k.body.signatures) for k in kernels} == counts
+    _bits_equal(got, want)

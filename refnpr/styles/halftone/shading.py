@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from refnpr._jit import frozen
 from refnpr.image import srgb_to_linear
 
 from .._common import needs_position, rgba_from, rgba_out
@@ -73,7 +74,7 @@ def object_tables(style: Any, index: int, obj: Any, screen: Any) -> K.Tables:
         equalize=bool(equalize),
     )
     imap = _NO_MAP if imap is None else np.ascontiguousarray(imap, dtype=np.float64)
-    return K.Tables(screen.pyramid.packed(), normals, luts, lut_x, imap, values)
+    return frozen(K.Tables(screen.pyramid.packed(), normals, luts, lut_x, imap, values))
 
 
 def channels(style: Any, scene: Any) -> tuple[str, ...]:

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from refnpr._jit import frozen
 from refnpr.formulas import lighting
 from refnpr.formulas.threshold import step_n
 
@@ -136,7 +137,9 @@ def lit_rgba(
             powers[:] = 0
         spec_mag = 1.01 * np.abs(m.specular[:, None, :] * color[None, :, :]).sum(axis=2)
         spec_mag = np.ascontiguousarray(spec_mag)
-        tables = K.Tables(np.zeros(1), none, none, np.zeros(1), spec_on, powers, spec_mag, albedo)
+        tables = frozen(
+            K.Tables(np.zeros(1), none, none, np.zeros(1), spec_on, powers, spec_mag, albedo)
+        )
         kept = kept_out(ctx, shape, 2)
         K.shade_smooth_for(albedo.shape[0] > 0, kept.shape[0] > 0)(frame, record, tables, out, kept)
         keep_all(ctx, kept, ("tone",))
@@ -146,7 +149,9 @@ def lit_rgba(
     if specular and record.mode != K.LAKE:
         edge_lo, edge_hi, tones = _step_edges(m.shininess, record.n, record.t)
     no_powers = np.zeros(1, dtype=np.int64)
-    tables = K.Tables(ramp, edge_lo, edge_hi, tones, spec_on, no_powers, np.zeros((1, 1)), albedo)
+    tables = frozen(
+        K.Tables(ramp, edge_lo, edge_hi, tones, spec_on, no_powers, np.zeros((1, 1)), albedo)
+    )
     kept = kept_out(ctx, shape, 2)
     K.shade_toon_for(albedo.shape[0] > 0, kept.shape[0] > 0)(frame, record, tables, out, kept)
     keep_all(ctx, kept, ("tone", "toon_tone"))

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from refnpr._jit import frozen
 from refnpr.formulas import threshold as thr
 from refnpr.formulas.threshold.stipple import NO_TABLE, seed_bits
 
@@ -116,22 +117,24 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
     else:
         src = K.CONSTANT
     angles = [float(np.radians(d)) for d in dirs]  # as hatch_coordinate takes them
-    tables = K.Tables(
-        row_start=row_start,
-        normals=normals,
-        t=np.ascontiguousarray(t_tab, dtype=np.float64),
-        w=np.ascontiguousarray(w_tab, dtype=np.float64),
-        offsets=np.ascontiguousarray(offsets, dtype=np.float64),
-        noise=np.ascontiguousarray(noise, dtype=np.float64),
-        uv_scale=uv_scale,
-        log2_sv=np.ascontiguousarray(log2_sv, dtype=np.float64),
-        sin=np.array([math.sin(a) for a in angles], dtype=np.float64),
-        cos=np.array([math.cos(a) for a in angles], dtype=np.float64),
-        channel=channel,
-        lam=np.ascontiguousarray(lam, dtype=np.float64),
-        levels=np.ascontiguousarray(levels, dtype=np.float64),
-        cdf=np.ascontiguousarray(cdf, dtype=np.float64),
-        spec_on=np.ascontiguousarray(spec_on),
+    tables = frozen(
+        K.Tables(
+            row_start=row_start,
+            normals=normals,
+            t=np.ascontiguousarray(t_tab, dtype=np.float64),
+            w=np.ascontiguousarray(w_tab, dtype=np.float64),
+            offsets=np.ascontiguousarray(offsets, dtype=np.float64),
+            noise=np.ascontiguousarray(noise, dtype=np.float64),
+            uv_scale=uv_scale,
+            log2_sv=np.ascontiguousarray(log2_sv, dtype=np.float64),
+            sin=np.array([math.sin(a) for a in angles], dtype=np.float64),
+            cos=np.array([math.cos(a) for a in angles], dtype=np.float64),
+            channel=channel,
+            lam=np.ascontiguousarray(lam, dtype=np.float64),
+            levels=np.ascontiguousarray(levels, dtype=np.float64),
+            cdf=np.ascontiguousarray(cdf, dtype=np.float64),
+            spec_on=np.ascontiguousarray(spec_on),
+        )
     )
     record = PARAMS.record(
         p,

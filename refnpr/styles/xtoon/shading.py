@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from refnpr._jit import frozen
+
 from .._common import keep_all, kept_out, rgba_out
 from .._frame import frame_record
 from . import _kernels as K
@@ -47,13 +49,13 @@ def shade_rgba(cfg: Config, ctx: Any) -> np.ndarray:
     # the texture's float32 values as float64 (exact: the kernel's loads need no conversion)
     tex = np.ascontiguousarray(cfg.texture, dtype=np.float64).reshape(-1)
     if fused(cfg):
-        tables = K.Tables(tex, False, np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1))
+        tables = frozen(K.Tables(tex, False, np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1)))
     else:
         ev = evaluate(cfg, ctx)
         offsets = np.zeros(shape[0] + 1, dtype=np.int64)
         np.cumsum(np.count_nonzero(ev.mask, axis=1), out=offsets[1:])
         given = (np.ascontiguousarray(a, dtype=np.float64) for a in (ev.tone, ev.detail))
-        tables = K.Tables(tex, True, offsets, *given)
+        tables = frozen(K.Tables(tex, True, offsets, *given))
     out = rgba_out(ctx, shape)  # written in full by the kernel
     bad = np.zeros(shape[0], dtype=np.uint8)
     kept = kept_out(ctx, shape, 2)
