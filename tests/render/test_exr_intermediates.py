@@ -107,9 +107,7 @@ def test_halftone_pixels_are_paper_exactly_where_intensity_clears_the_screen():
     assert 10 < paper[clear].sum() < clear.sum() - 10  # both outcomes occur
 
 
-@pytest.mark.parametrize(
-    "options", [{}, {"mip": "per_level", "tone_correct": True}, {"c": "auto"}], ids=str
-)
+@pytest.mark.parametrize("options", [{}, {"mip": "per_level", "tone_correct": True}], ids=str)
 def test_halftone_keeps_its_intermediates_from_the_color_pass(monkeypatch, options):
     """One pass of the object kernel gives the image and its intermediates, equal to the
     images that show='intensity' and show='screen' draw."""
