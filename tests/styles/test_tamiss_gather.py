@@ -280,7 +280,7 @@ def test_tam_ink_keeps_the_candidate_cap_for_wide_strokes():
 
     from refnpr.styles.tamiss._kernels import _CAP
 
-    n = 120
+    n = 40
     inp = replace(random_inputs(n, 3), darkness=np.full(n, 0.1))
     field = StrokeField.from_params(
         directions=["u", 60.0], period=1.0, length=2.0, width_jitter=0.3
