@@ -567,11 +567,9 @@ def load_scene(name_or_path: str | Path, *, camera: str | int | None = None) -> 
     FileNotFoundError
         If a scene file path does not exist.
     """
-    from .gltf import GLTF_EXTENSIONS, load_gltf
+    from .gltf import is_gltf_path, load_gltf
 
-    is_gltf = isinstance(name_or_path, (str, Path)) and (
-        Path(name_or_path).suffix.lower() in GLTF_EXTENSIONS
-    )
+    is_gltf = is_gltf_path(name_or_path)
     if camera is not None and not is_gltf:
         raise ValueError(
             f"camera: {camera!r} names a glTF camera, but scene {str(name_or_path)!r} is not a "
