@@ -44,7 +44,7 @@ def luminance(rgb: np.ndarray, *, name: str = "rgb") -> np.ndarray:
                 f"{name}: expected finite colours, got NaN or inf in {int(bad.sum())} of its "
                 f"pixels, the first at (y, x) = ({y}, {x}): {a[y, x].tolist()}"
             )
-    return lighting.luminance(a)
+    return lighting.luminance(a[..., :3])  # alpha ignored, also where it is not finite
 
 
 class _Row:

@@ -261,6 +261,7 @@ def decode_stroke_map(screen, intensity, *, c: float | None = None, centred: boo
     -------
     (...) ndarray in [0, 1]; float64, or float32 if the inputs are float32.
     """
+    centred = check_bool("centred", centred)
     if c is None:
         return binary_threshold(screen, intensity)
     return smooth_threshold(screen, intensity, c, centred=centred)

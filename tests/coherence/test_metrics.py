@@ -124,6 +124,12 @@ def test_luminance_weights():
         luminance(np.zeros((4, 4)))
 
 
+def test_luminance_ignores_alpha_even_where_it_is_not_finite():
+    rgba = np.ones((2, 3, 4))
+    rgba[1, 2, 3] = np.nan
+    np.testing.assert_array_equal(luminance(rgba), luminance(rgba[..., :3]))
+
+
 @pytest.mark.parametrize("which", ["image", "prev_image"])
 def test_a_frame_with_a_nan_pixel_is_refused_by_its_name(which):
     sc = scene([wall()])

@@ -52,11 +52,27 @@ CALLS = {
         lambda f: xtoon.blend_normals(_N, _L, 0.5, normalize=f),
     ),
     "tamiss.tam_opacity clip": ("clip", lambda f: tm.tam_opacity(_X, _X, 0.1, f)),
+    "halftone.decode_stroke_map centred (binary)": (
+        "centred",
+        lambda f: halftone.decode_stroke_map(_X, _X, centred=f),
+    ),
+    "xtoon.toon_texture_fade alpha": (
+        "alpha",
+        lambda f: xtoon.toon_texture_fade(np.ones((4, 4)), 3, alpha=f),
+    ),
 }
 
 
-@pytest.mark.parametrize("case", sorted(CALLS))
-@pytest.mark.parametrize("bad", ["no", 1, 0.0, None, np.array([True])], ids=repr)
+#: Flags whose None is a value of their own (``alpha=None``: from the channel count).
+NONE_IS_A_VALUE = {"xtoon.toon_texture_fade alpha"}
+BAD = ["no", 1, 0.0, None, np.array([True])]
+
+
+@pytest.mark.parametrize(
+    "case, bad",
+    [(c, b) for c in sorted(CALLS) for b in BAD if not (b is None and c in NONE_IS_A_VALUE)],
+    ids=repr,
+)
 def test_a_flag_that_is_not_a_bool_is_refused_by_name(case, bad):
     name, call = CALLS[case]
     with pytest.raises(TypeError, match=rf"^{name}: expected a bool \(True or False\), got "):

@@ -124,6 +124,25 @@ def test_halftone_keeps_its_intermediates_from_the_color_pass(monkeypatch, optio
         assert np.array_equal(image.passes[name], drawn.passes[name]), name
 
 
+@pytest.mark.parametrize("height", [1, 2])
+def test_halftone_on_a_grid_of_one_or_two_rows_gives_the_image_with_or_without_passes(
+    monkeypatch, height
+):
+    """Without intermediates the kernel gets a ``raw`` stand-in that no sample grid matches,
+    even one of a single row (a (1, 1, 3) stand-in matched it: the kernel then wrote each
+    sample's values past its end)."""
+    from refnpr.styles.halftone import shading
+
+    raws = []
+    run = shading._shade_objects
+    monkeypatch.setattr(shading, "_shade_objects", lambda *a: raws.append(a[5].shape) or run(*a))
+    plain = render("halftone_teapot", "halftone", 64, height, 1)
+    assert raws and all(shape[0] != height for shape in raws), raws
+    with_passes = render("halftone_teapot", "halftone", 64, height, 1, passes=True)
+    assert np.array_equal(plain.rgba, with_passes.rgba)
+    assert set(with_passes.passes) >= {"intensity", "threshold"}
+
+
 def test_tamiss_stroke_ids_match_its_ids_view_and_survive_the_exr(tmp_path):
     from refnpr.styles.tamiss.show import id_colors
 

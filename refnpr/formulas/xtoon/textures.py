@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float, check_int, check_scalar, describe
+from .._validate import as_float, check_bool, check_int, check_scalar, describe
 from ..lighting import luminance
 
 __all__ = [
@@ -240,7 +240,9 @@ def toon_texture_fade(
     n, D = _rows(rows)
     contrast = check_scalar("contrast", contrast, lo=0.0)
     opacity = check_scalar("opacity", opacity, lo=0.0)
-    has_alpha = (r.ndim == 2 and r.shape[1] in (2, 4)) if alpha is None else bool(alpha)
+    has_alpha = (
+        (r.ndim == 2 and r.shape[1] in (2, 4)) if alpha is None else check_bool("alpha", alpha)
+    )
     if has_alpha and r.ndim == 1:
         raise ValueError(
             "alpha: a ramp of shape (cols,) has no alpha channel; pass (cols, 2) or (cols, 4) "

@@ -264,7 +264,7 @@ def shade_object_for(show, bump, fwidth, per_level):
         float32 (``show`` color: RGBA, zero where not covered) or ``raw (nH, nW, 3)`` float64
         (the raw value, or the normal map's RGB). With ``show`` color, a full-size ``raw``
         also gets each sample's intensity (channel 0) and trilinear screen value (channel 1),
-        the values ``show`` intensity and screen draw; a (1, 1, 3) stand-in gets nothing."""
+        the values ``show`` intensity and screen draw; a (0, 0, 3) stand-in gets nothing."""
         # the records' arrays as locals, taken once (reading them from a record inside the
         # loops takes and drops a reference to each array per sample)
         mesh_id, cover, normal, position = frame.mesh_id, frame.cover, frame.normal, frame.position

@@ -99,7 +99,8 @@ def shade_rgba(style: Any, ctx: Any) -> np.ndarray:
     out = rgba_out(ctx, shape)  # written in full: prepare, then every object in view
     color = p.show == "color"
     keep = getattr(ctx, "wants_intermediates", False)
-    raw = np.zeros((1, 1, 3)) if color and not keep else np.ones(shape + (3,))
+    # a (0, 0, 3) stand-in: the kernel writes raw where its rows are the grid's (even one row)
+    raw = np.zeros((0, 0, 3)) if color and not keep else np.ones(shape + (3,))
     one = p.paper if color else (1.0, 1.0, 1.0)  # the value 1 off objects
     rows = np.empty((shape[0], max(len(scene.objects), 1)), dtype=np.int64)
     K.prepare(frame, np.asarray(one, dtype=np.float64), rows, out)
