@@ -145,9 +145,8 @@ def smooth_threshold_tone(intensity, c: float = 4.0, *, centred: bool = False) -
     c = check_scalar("c", c, lo=0, lo_open=True, hint="c is the slope of the ramp, e.g. 4.0")
     dt = result_dtype(intensity)
     x = real("intensity", intensity, np.dtype(np.float64))
-    off = (
-        0.5 if check_bool("centred", centred) else 1.0
-    )  # ramp clip(off + c z, 0, 1) runs over z in [lo, hi]
+    centred = check_bool("centred", centred)
+    off = 0.5 if centred else 1.0  # ramp clip(off + c z, 0, 1) runs over z in [lo, hi]
     lo, hi = -off / c, (1 - off) / c
     # z = screen + I - 1 is uniform on [I - 1, I]: white part + ramp part (midpoint x length)
     white = np.clip(x - np.maximum(x - 1, hi), 0, None)

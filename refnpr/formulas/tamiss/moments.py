@@ -70,7 +70,8 @@ def normalize_t(t, t_min, t_max) -> np.ndarray:
     """s = (2 t - t_min - t_max) / (t_max - t_min), so [t_min, t_max] maps to [-1, 1].
 
     Computed as (t - c) / h with h = (t_max - t_min) / 2 (t_max / 2 - t_min / 2 where the
-    difference overflows), c = t_min + h. Where t_max == t_min, s = 0. Inputs broadcast; float32 in -> float32 out (float32 arithmetic).
+    difference overflows), c = t_min + h. Where t_max == t_min, s = 0. Inputs broadcast;
+    float32 in -> float32 out (float32 arithmetic).
     ``normalize_t.scalar(t, t_min, t_max, half)`` is the device function (``half``: 0.5 in
     the float type of its arguments).
     """
