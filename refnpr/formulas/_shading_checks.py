@@ -82,9 +82,17 @@ def frac(x: np.ndarray) -> np.ndarray:
     return np.minimum(r, one_below(r.dtype))
 
 
-def unit_vectors(vec: np.ndarray) -> np.ndarray:
-    """``vec / |vec|`` along the last axis without overflow; zero vectors stay zero."""
+def scaled_lengths(vec: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(m, w, |w|)`` of vectors along the last axis: the largest |component| ``m``, the
+    vectors divided by it ``w`` (zero vectors stay zero) and their lengths, each keeping the
+    last axis (length 1 for ``m`` and ``|w|``). ``|vec| = m |w|`` without overflow or underflow
+    on the way."""
     m = np.max(np.abs(vec), axis=-1, keepdims=True)
     w = vec / np.where(m > 0, m, 1)
-    length = np.sqrt(np.sum(w * w, axis=-1, keepdims=True))
+    return m, w, np.sqrt(np.sum(w * w, axis=-1, keepdims=True))
+
+
+def unit_vectors(vec: np.ndarray) -> np.ndarray:
+    """``vec / |vec|`` along the last axis without overflow; zero vectors stay zero."""
+    _, w, length = scaled_lengths(vec)
     return w / np.where(length > 0, length, 1)

@@ -27,7 +27,7 @@ from refnpr.device.scalars import clip01
 from refnpr.device.vectors import dot, unit_scaled
 
 from ._face import Whole, elementwise, face
-from ._shading_checks import broadcast, check_range, frac, real, reals, trailing
+from ._shading_checks import broadcast, check_range, frac, real, reals, scaled_lengths, trailing
 from ._validate import check_bool, check_int, check_scalar, describe, result_dtype
 
 __all__ = [
@@ -363,9 +363,8 @@ _UNIT_TOL = 1e-5
 def _check_unit(name: str, vectors: np.ndarray) -> None:
     """Raise ``ValueError`` unless every (..., 3) vector of ``vectors`` has length 1 within
     :data:`_UNIT_TOL`."""
-    big = np.max(np.abs(vectors), axis=-1)  # the length scaled by the largest component: no
-    scale = np.where(big > 0.0, big, 1.0)  # overflow or underflow on the way
-    length = big * np.sqrt(np.sum((vectors / scale[..., None]) ** 2, axis=-1))
+    big, _, scaled = scaled_lengths(vectors)
+    length = (big * scaled)[..., 0]
     off = ~(np.abs(length - 1.0) <= _UNIT_TOL)
     if np.any(off):
         at = np.unravel_index(int(np.flatnonzero(off)[0]), off.shape)
