@@ -16,6 +16,7 @@ __all__ = [
     "result_dtype",
     "check_finite",
     "check_scalar",
+    "to_float",
     "check_int",
     "check_bool",
     "as_ints",
@@ -36,6 +37,19 @@ def describe(value) -> str:
         return f"array of shape {value.shape} ({value.dtype})"
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def to_float(name: str, value) -> float:
+    """``float(value)`` of a real number ``value``; an integer beyond the float range (a Python
+    int of about 309 digits or more, where ``float`` raises ``OverflowError``) is a
+    ``ValueError`` naming ``name``. NaN and inf pass: the caller checks finiteness."""
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(
+            f"{name}: expected a finite number, got an integer beyond the float range "
+            f"(|value| > 1.8e308)"
+        ) from None
 
 
 def as_float(name: str, value, *, finite: bool = False) -> np.ndarray:
@@ -106,7 +120,7 @@ def check_scalar(
             value = value.item()
         else:
             raise TypeError(f"{name}: expected a real number, got {describe(value)}")
-    v = float(value)
+    v = to_float(name, value)
     if not np.isfinite(v):
         raise ValueError(f"{name}: must be finite, got {v}")
     bad = (lo is not None and (v <= lo if lo_open else v < lo)) or (

@@ -32,6 +32,8 @@ from typing import Any
 
 import numpy as np
 
+from refnpr.formulas._validate import to_float
+
 from ._names import check_known, renamed_params, warn_caller
 
 __all__ = [
@@ -207,7 +209,7 @@ class Param:
                 raise TypeError(f"{name}: expected an integer, got {short_repr(value)}")
             v: float | int = int(value)
         else:
-            v = float(value)
+            v = to_float(name, value)
             if not math.isfinite(v):
                 raise ValueError(f"{name}: expected a finite number, got {v}")
         lo, hi = self.lo, self.hi

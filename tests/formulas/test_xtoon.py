@@ -90,6 +90,7 @@ def test_detail_depth_float32_in_float32_out():
         ({"z_min": 0.0, "r": 2.0}, ValueError, r"z_min: expected a value in \(0\.0, inf\]"),
         ({"z_min": -1.0, "r": 2.0}, ValueError, r"z_min: .*got -1\.0"),
         ({"z_min": "1", "r": 2.0}, TypeError, r"z_min: expected a real number"),
+        ({"z_min": 10**400, "r": 2.0}, ValueError, r"z_min: .*integer beyond the float range"),
     ],
 )
 def test_detail_depth_rejects_bad_parameters(kwargs, err, match):

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from refnpr.formulas._validate import to_float
 from refnpr.texture import (
     BUILTIN_TEXTURES,
     TILINGS,
@@ -43,6 +44,7 @@ from refnpr.texture import (
 )
 from refnpr.texture import screens as S
 
+from .._declare import check_number
 from .._names import renamed_params
 
 __all__ = [
@@ -135,8 +137,10 @@ def normalize_spec(spec: Any) -> dict[str, Any]:
                 f"screen.profile: expected 'ramp' or 'triangle', got {out['profile']!r}"
             )
         a = out["angle"]
-        if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a):
+        if isinstance(a, bool) or not isinstance(a, (int, float)):
             raise TypeError(f"screen.angle: expected a number of degrees, got {a!r}")
+        if not math.isfinite(to_float("screen.angle", a)):
+            raise ValueError(f"screen.angle: expected a finite number of degrees, got {a!r}")
     elif kind == "dither":
         spec = renamed_params("screen", spec, _DITHER_RENAMED)
         out = _with_defaults("dither", spec, _DITHER_KEYS)
@@ -145,6 +149,13 @@ def normalize_spec(spec: Any) -> dict[str, Any]:
                 f"screen.texture: expected 'material', a built-in texture name or an image path, "
                 f"got {out['texture']!r}"
             )
+        # CLAHE's settings, named as the screen table's keys (clahe_pyramid checks them too)
+        out["window"] = check_number("screen.window", out["window"], integer=True, lo=2)
+        out["clip_limit"] = check_number(
+            "screen.clip_limit", out["clip_limit"], lo=0.0, lo_open=True, hi=1.0
+        )
+        if not isinstance(out["rank_equalize"], (bool, np.bool_)):  # 1 and 0 are not flags
+            raise TypeError(f"screen.rank_equalize: expected a bool, got {out['rank_equalize']!r}")
         if out["tiling"] not in TILINGS:
             raise ValueError(
                 f"screen.tiling: expected one of {list(TILINGS)} ('periodic' makes an image "

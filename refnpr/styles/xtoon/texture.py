@@ -42,6 +42,8 @@ def _how() -> str:
 
 
 def _check_array(tex: Any, name: str) -> np.ndarray:
+    if np.iscomplexobj(tex):  # np.asarray(..., float64) would drop the imaginary part
+        raise TypeError(f"{name}: expected a real texture array, got a complex one; {_how()}")
     try:
         a = np.asarray(tex, dtype=np.float64)
     except (TypeError, ValueError) as exc:
