@@ -109,11 +109,16 @@ class Light:
                 f"kind: unknown light kind {self.kind!r}; expected one of {LIGHT_KINDS}"
             )
         d = check_vec("direction", self.direction, 3)
-        length = math.sqrt(sum(x * x for x in d))
-        if length == 0.0:
+        big = max(abs(x) for x in d)
+        if big == 0.0:
             raise ValueError(
                 "direction: must not be the zero vector; give the direction to the light"
             )
+        squares = sum(x * x for x in d)
+        if not 2.0**-960 < squares < math.inf:  # the squares under- or overflow: scale first
+            d = tuple(x / big for x in d)
+            squares = sum(x * x for x in d)
+        length = math.sqrt(squares)
         position = self.position
         if self.kind == "point":
             if position is None:

@@ -39,6 +39,21 @@ def test_material_validation(kwargs, exc, match):
         Material(**kwargs)
 
 
+@pytest.mark.parametrize(
+    ("direction", "unit"),
+    [
+        ((1e200, 0.0, 0.0), (1.0, 0.0, 0.0)),  # the squares overflow
+        ((1e-200, 0.0, 0.0), (1.0, 0.0, 0.0)),  # the squares underflow to 0
+        ((1e-160, 1e-160, 0.0), (math.sqrt(0.5), math.sqrt(0.5), 0.0)),  # subnormal squares
+        ((-3e300, 4e300, 0.0), (-0.6, 0.8, 0.0)),
+    ],
+)
+def test_light_direction_of_any_finite_length_is_normalized(direction, unit):
+    d = Light(direction=direction).direction
+    assert d == pytest.approx(unit, rel=1e-15)
+    assert math.hypot(*d) == pytest.approx(1.0, rel=1e-15)
+
+
 def test_light_normalizes_and_validates():
     d = Light().direction
     assert d == pytest.approx((1 / math.sqrt(3),) * 3)
