@@ -298,7 +298,9 @@ def style_from_spec(spec: Any) -> Style:
             raise ValueError(f"style: a style table needs a 'name' key, got keys {sorted(spec)}")
         contours = params.pop("contours", None) if name != "contoured" else None
         style = get_style(name, **params)
-        if contours not in (None, False):
+        # None and False (by identity: 0 == False) mean no contour layer; any other value is
+        # the layer's to validate
+        if contours is not None and contours is not False and contours is not np.False_:
             return get_style("contoured", base=style, contours=contours)
         return style
     raise TypeError(f"style: expected a Style, a name or a table, got {type(spec).__name__}")

@@ -19,6 +19,7 @@ from .catalogue import Case, Correct, Exits, Raises, cli, parametrize
 VE = ValueError
 TE = TypeError
 ANY = (ValueError, TypeError)
+NAN = float("nan")
 CAM = {"eye": [0.0, 0.5, 4.0], "target": [0.0, 0.0, 0.0]}
 
 
@@ -337,6 +338,70 @@ CASES = [
         _channels("sphere", "threshold", source="image"),
         Correct(_no_uv),
         notes="every object gets the constant t: the skip rule says no uv",
+    ),
+    Case(
+        "halftone-c-huge-int",
+        M,
+        "halftone c=10**400 (an integer beyond the float range)",
+        _render("halftone_sphere", "halftone", c=10**400),
+        Raises(VE, r"c: expected a finite number, got an integer beyond the float range"),
+    ),
+    Case(
+        "halftone-engraving-angle-huge-int",
+        M,
+        "halftone screen={kind='engraving', angle=10**400}",
+        _render("halftone_sphere", "halftone", screen={"kind": "engraving", "angle": 10**400}),
+        Raises(VE, r"screen\.angle: expected a finite number, got an integer beyond"),
+    ),
+    Case(
+        "halftone-engraving-angle-nan",
+        M,
+        "halftone screen={kind='engraving', angle=nan}",
+        _render("halftone_sphere", "halftone", screen={"kind": "engraving", "angle": NAN}),
+        Raises(VE, r"screen\.angle: expected a finite number of degrees, got nan"),
+    ),
+    Case(
+        "halftone-dither-rank-equalize-1",
+        M,
+        "halftone screen={kind='dither', rank_equalize=1}",
+        _render(
+            "halftone_sphere",
+            "halftone",
+            screen={"kind": "dither", "texture": "brick", "rank_equalize": 1},
+        ),
+        Raises(TE, r"screen\.rank_equalize: expected a bool, got 1"),
+    ),
+    Case(
+        "halftone-dither-window-0",
+        M,
+        "halftone screen={kind='dither', window=0}",
+        _render(
+            "halftone_sphere",
+            "halftone",
+            screen={"kind": "dither", "texture": "brick", "window": 0},
+        ),
+        Raises(VE, r"screen\.window: expected an integer >= 2, got 0"),
+    ),
+    Case(
+        "xtoon-complex-texture",
+        M,
+        "xtoon texture=<complex array>",
+        _render("sphere", "xtoon", texture=np.zeros((4, 8, 3), complex)),
+        Raises(TE, r"texture: expected a real texture array, got a complex one"),
+    ),
+    Case(
+        "toon-contours-0",
+        N,
+        "toon contours=0 (an integer, not False)",
+        _render("sphere", "toon", contours=0),
+        Raises(TE, r"contours: expected a ContourLayer, a table or True, got 0"),
+    ),
+    Case(
+        "threshold-t-lines",
+        N,
+        "threshold source='lines' t=0.1 (the constant threshold of source constant and image)",
+        _warned("room", "threshold", source="lines", t=0.1),
+        _warns("t: 0.1 is ignored with source='lines'", "source='constant'"),
     ),
     Case(
         "cli-xtoon-detail-map-nan",

@@ -128,7 +128,14 @@ PARAMS = Params(
         choices=SOURCES,
     ),
     Param("n", 1, "steps of T_n (eq. 4): n + 1 tones", kind="int", lo=1, hi=256),
-    Param("t", 0.5, "threshold: source constant, untextured objects of image", lo=0.0, hi=1.0),
+    Param(
+        "t",
+        0.5,
+        "threshold: source constant, untextured objects of image",
+        lo=0.0,
+        hi=1.0,
+        used_when={"source": ("constant", "image")},
+    ),
     Param("specular", True, "add the thresholded specular term (needs positions)", kind="bool"),
     Param(
         "specular_threshold",
