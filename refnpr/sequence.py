@@ -1,13 +1,16 @@
 """Render frames of an animated scene to a directory, restartably (``refnpr animate``).
 
 Frame ``f`` is ``DIR/frame_00000.png`` (8-bit sRGB RGBA), optionally ``.exr`` (linear float32
-RGBA and the frame's G-buffer passes, the layout of :mod:`refnpr.exr`), and ``.json``, the restart record, written last; every file through a temporary file and
-an atomic rename (a SIGKILL's temporaries are removed by the next run). A record holds a hash of
-everything the pixels depend on and the SHA-256 of the files it describes; a frame whose record
-and files match is done. A stateless style skips done frames; a stateful one re-runs from frame 0
-(or ``Style.state_frames()`` frames before the first frame still to render) up to the last frame
-still to render, without rewriting done frames. Either way the directory after any number of
-kills and restarts is byte-identical to an uninterrupted run (docs/animation.md).
+RGBA and the frame's G-buffer passes, the layout of :mod:`refnpr.exr`), and ``.json``, the
+restart record, written last; every file through a temporary file and an atomic rename (a
+SIGKILL's temporaries are removed by the next run). A record holds a hash of everything the
+pixels depend on (:func:`scene_digest`; the style's parameter values, arrays by their dtype,
+shape and bytes; the content of the image files the scene and the style name) and the SHA-256
+of the files it describes; a frame whose record and files match is done. A stateless style
+skips done frames; a stateful one re-runs from frame 0 (or ``Style.state_frames()`` frames before the first frame
+still to render) up to the last frame still to render, without rewriting done frames. Either way
+the directory after any number of kills and restarts is byte-identical to an uninterrupted run
+(docs/animation.md).
 
 One run at a time writes a directory: a run holds an exclusive ``flock`` on ``DIR`` itself (POSIX;
 released when the run ends or its process dies; no file is left), and a second run on the same
@@ -18,6 +21,7 @@ temporary files under way.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import os
@@ -36,6 +40,8 @@ from .image import Image, atomic_file
 from .render import DEFAULT_STYLE, RenderContext, _check_args, as_scene
 from .scenes._params import check_int
 from .styles import Style, style_from_spec
+from .styles._declare import Values
+from .texture import EmbeddedImage
 
 try:
     import fcntl
@@ -157,31 +163,127 @@ def _hash_arrays(h: Any, *arrays: Any) -> None:
         h.update(a.tobytes())
 
 
+def _array_entry(a: np.ndarray) -> dict[str, Any]:
+    """An array as JSON: the SHA-256 of its bytes, its dtype and its shape."""
+    a = np.ascontiguousarray(a)
+    digest = hashlib.sha256(a.tobytes()).hexdigest()
+    return {"array": digest, "dtype": a.dtype.str, "shape": list(a.shape)}
+
+
 def _jsonable(value: Any) -> Any:
+    """``value`` as JSON for a record: tables and lists as such, arrays by
+    :func:`_array_entry`, numpy scalars as numbers, anything else by its ``repr``."""
     if isinstance(value, dict):
         return {str(k): _jsonable(v) for k, v in sorted(value.items(), key=lambda kv: str(kv[0]))}
     if isinstance(value, (list, tuple)):
         return [_jsonable(v) for v in value]
     if isinstance(value, np.ndarray):
-        return {"array": hashlib.sha256(np.ascontiguousarray(value).tobytes()).hexdigest()}
+        return _array_entry(value)
+    if isinstance(value, np.generic):
+        value = value.item()
     if isinstance(value, (str, int, float, bool)) or value is None:
         return value
     return repr(value)
 
 
+#: Files hashed by content up to this size; a larger one by its size and modification time.
+_CONTENT_HASH_BYTES = 64 << 20
+
+
+def _file_entry(path: str, files: dict[str, Any]) -> Any:
+    """What a string that names an existing file stands for in a digest: its path and its
+    content's SHA-256 (above :data:`_CONTENT_HASH_BYTES`, its size and modification time),
+    memoized in ``files``; None where ``path`` names no file."""
+    if path in files:
+        return files[path]
+    entry = None
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):  # no such file, or a name no file can have
+        st = None
+    if st is not None and Path(path).is_file():
+        if st.st_size > _CONTENT_HASH_BYTES:
+            entry = {"file": path, "size": st.st_size, "mtime_ns": st.st_mtime_ns}
+        else:
+            entry = {"file": path, "sha256": _file_sha(Path(path))}
+    files[path] = entry
+    return entry
+
+
+def _canonical(value: Any, files: dict[str, Any], depth: int = 0) -> Any:
+    """``value`` as JSON that holds everything a render reads of it: as :func:`_jsonable`,
+    and a string naming a file also by the file's content (:func:`_file_entry`), an embedded
+    image by its bytes' digest, a Style instance by its class and parameter values
+    (:func:`_style_values`), a dataclass by its fields."""
+    if depth > 32:
+        return repr(value)
+    if isinstance(value, EmbeddedImage):
+        return {"embedded": value.sha256}
+    if isinstance(value, str):
+        entry = _file_entry(value, files)
+        return value if entry is None else entry
+    if isinstance(value, Style):
+        return _style_values(value, files, depth + 1)
+    if isinstance(value, Values):
+        return {n: _canonical(value[n], files, depth + 1) for n in value._params.names}
+    if isinstance(value, dict):
+        items = sorted(value.items(), key=lambda kv: str(kv[0]))
+        return {str(k): _canonical(v, files, depth + 1) for k, v in items}
+    if isinstance(value, (list, tuple)):
+        return [_canonical(v, files, depth + 1) for v in value]
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
+        return {"type": _type_name(value), **_canonical(fields, files, depth + 1)}
+    return _jsonable(value)
+
+
+def _type_name(value: Any) -> str:
+    return f"{type(value).__module__}.{type(value).__qualname__}"
+
+
+def _style_values(style: Style, files: dict[str, Any], depth: int) -> dict[str, Any]:
+    """A Style instance as JSON for a digest: its class, ``params()``, and the full values of
+    every parameter declaration it holds (the validated :class:`~refnpr.styles._declare.Values`
+    among its attributes and those of its refnpr objects, arrays by their bytes: ``params()``
+    shows an array by its shape only) and of the styles it wraps."""
+    found: dict[str, Any] = {}
+
+    def visit(obj: Any, where: str, level: int) -> None:
+        for k, v in sorted(vars(obj).items()):
+            if isinstance(v, (Values, Style)):
+                found[f"{where}{k}"] = _canonical(v, files, depth)
+            elif level < 2 and type(v).__module__.startswith("refnpr.") and hasattr(v, "__dict__"):
+                visit(v, f"{where}{k}.", level + 1)  # a config or a layer holding values
+
+    if hasattr(style, "__dict__"):
+        visit(style, "", 0)
+    return {
+        "type": _type_name(style),
+        "params": _canonical(style.params(), files, depth),
+        "values": found,
+    }
+
+
 def scene_digest(scene: Any) -> str:
     """SHA-256 hex digest of everything of ``scene`` that a render reads: meshes (positions,
-    faces, normals, uv, attributes), transforms, materials, camera, lights, ambient, background,
-    style table and animation tracks."""
+    faces, normals, uv, attributes), transforms, materials (with the content of their texture
+    files), camera, lights, ambient, background, style table (with the content of the files it
+    names) and animation tracks."""
+    return _scene_digest(scene, {})
+
+
+def _scene_digest(scene: Any, files: dict[str, Any]) -> str:
     h = hashlib.sha256()
     c = scene.camera
     h.update(repr((scene.name, scene.ambient, scene.background)).encode())
     _hash_arrays(h, c.eye, c.target, c.up)
     h.update(repr((c.fov_y, c.near, c.far, scene.lights)).encode())
-    h.update(json.dumps(_jsonable(scene.style)).encode())
+    h.update(json.dumps(_canonical(scene.style, files)).encode())
     for obj in scene.objects:
         m = obj.mesh
         h.update(repr((obj.name, m.name, obj.material)).encode())
+        textures = [obj.material.texture, obj.material.color_texture]
+        h.update(json.dumps(_canonical(textures, files)).encode())
         _hash_arrays(h, obj.transform, m.positions, m.faces, m.normals, m.uv)
         for k in sorted(m.attributes):
             h.update(k.encode())
@@ -251,6 +353,7 @@ class _Plan:
     spec: Any
     label: Any
     digest: str
+    style_digest: str
     base_style: Style
     animated_style: bool
     stateful: bool
@@ -272,6 +375,7 @@ class _Plan:
             "refnpr": __version__,
             "scene": self.digest,
             "style": self.label,
+            "style_values": self.style_digest,
             "size": [self.width, self.height],
             "spp": self.spp,
             "frame": f,
@@ -332,13 +436,17 @@ def _plan(
     animated_style = bool(_check_style_tracks(scene, spec, base_style, user_style))
     if isinstance(spec, str):
         spec = {"name": spec}
+    files: dict[str, Any] = {}  # the files the scene and the style name, hashed once
+    digest = _scene_digest(scene, files)
+    values = json.dumps(_canonical(spec, files), sort_keys=True).encode()
     created = tuple(p for p in (out, *out.parents) if not p.exists())
     out.mkdir(parents=True, exist_ok=True)
     return _Plan(
         scene=scene,
         spec=spec,
         label={"instance": repr(spec)} if isinstance(spec, Style) else _jsonable(spec),
-        digest=scene_digest(scene),
+        digest=digest,
+        style_digest=hashlib.sha256(values).hexdigest(),
         base_style=base_style,
         animated_style=animated_style,
         stateful=is_stateful(base_style),

@@ -472,3 +472,79 @@ def test_a_full_disk_while_writing_an_exr_frame_is_a_clear_error(tmp_path, monke
     for rgba in (rng.random((30, 40, 4)), np.zeros((30, 40, 4))):  # large and tiny writes
         with pytest.raises(ValueError, match=r"exr: writing '.*frame_00000\.exr' failed: "):
             sequence._write_exr(tmp_path / "frame_00000.exr", rgba)
+
+
+TEXTURED_TOML = """
+[camera]
+eye = [0.0, 0.0, 4.0]
+target = [0.0, 0.0, 0.0]
+[style]
+name = "threshold"
+source = "image"
+[[light]]
+direction = [0.6, 0.7, 1.0]
+[[object]]
+mesh = "uv_sphere"
+n_u = 12
+n_v = 6
+[object.material]
+texture = "t.png"
+"""
+
+
+def test_an_edited_texture_file_rerenders_the_frames_that_read_it(tmp_path):
+    path = tmp_path / "textured.toml"
+    path.write_text(TEXTURED_TOML)
+    rng = np.random.default_rng(3)
+    iio.imwrite(tmp_path / "t.png", rng.integers(0, 256, (16, 16), dtype=np.uint8))
+    out = tmp_path / "frames"
+    assert render_sequence(path, None, 8, 8, 1, out_dir=out).rendered == [0]
+    assert render_sequence(path, None, 8, 8, 1, out_dir=out).skipped == [0]
+    iio.imwrite(tmp_path / "t.png", np.full((16, 16), 255, dtype=np.uint8))  # same name
+    assert render_sequence(path, None, 8, 8, 1, out_dir=out).rendered == [0]
+    want = render(path, None, 8, 8, 1).to_srgb8()
+    np.testing.assert_array_equal(pixels(out / "frame_00000.png"), want)
+
+
+def test_a_style_file_parameter_is_hashed_by_its_content(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    iio.imwrite("t.png", np.zeros((16, 16), dtype=np.uint8))
+    style = {"name": "threshold", "source": "image", "texture": "t.png"}
+    out = tmp_path / "frames"
+    assert render_sequence("sphere", style, 8, 8, 1, out_dir=out).rendered == [0]
+    iio.imwrite("t.png", np.full((16, 16), 255, dtype=np.uint8))
+    assert render_sequence("sphere", style, 8, 8, 1, out_dir=out).rendered == [0]
+    want = render("sphere", style, 8, 8, 1).to_srgb8()
+    np.testing.assert_array_equal(pixels(out / "frame_00000.png"), want)
+
+
+def toon_textures():
+    """Two 2D toon textures of one shape: a ramp and its reverse."""
+    ramp = np.linspace(0.0, 1.0, 32, dtype=np.float32)[None, :, None]
+    a = np.broadcast_to(ramp, (16, 32, 3)).copy()
+    return a, np.ascontiguousarray(a[:, ::-1])
+
+
+def test_a_style_instance_is_hashed_by_its_parameter_values(tmp_path):
+    a, b = toon_textures()
+    out = tmp_path / "frames"
+    for tex in (a, b):
+        style = get_style("xtoon", texture=tex)
+        assert render_sequence("sphere", style, 8, 8, 1, out_dir=out).rendered == [0]
+        want = render("sphere", get_style("xtoon", texture=tex), 8, 8, 1).to_srgb8()
+        np.testing.assert_array_equal(pixels(out / "frame_00000.png"), want)
+    same = get_style("xtoon", texture=b.copy())  # equal values: done
+    assert render_sequence("sphere", same, 8, 8, 1, out_dir=out).skipped == [0]
+
+
+def test_an_array_in_a_style_table_is_hashed_with_its_shape_and_dtype(tmp_path):
+    a, _ = toon_textures()
+    out = tmp_path / "frames"
+    for tex in (a, np.ascontiguousarray(a.reshape(32, 16, 3))):  # the same bytes
+        style = {"name": "xtoon", "texture": tex}
+        assert render_sequence("sphere", style, 8, 8, 1, out_dir=out).rendered == [0]
+        want = render("sphere", style, 8, 8, 1).to_srgb8()
+        np.testing.assert_array_equal(pixels(out / "frame_00000.png"), want)
+    record = json.loads((out / "frame_00000.json").read_text())
+    assert record["style"]["texture"]["shape"] == [32, 16, 3]
+    assert record["style"]["texture"]["dtype"] == "<f4"
