@@ -6,8 +6,9 @@ restart record, written last; every file through a temporary file and an atomic 
 SIGKILL's temporaries are removed by the next run). A record holds a hash of everything the
 pixels depend on (:func:`scene_digest`; the style's parameter values, arrays by their dtype,
 shape and bytes; the content of the image files the scene and the style name) and the SHA-256
-of the files it describes; a frame whose record and files match is done. A stateless style
-skips done frames; a stateful one re-runs from frame 0 (or ``Style.state_frames()`` frames before the first frame
+of the files it describes; a frame whose record and files match is done. A frame rendered again
+without ``.exr`` loses the ``.exr`` of its earlier render. A stateless style skips done frames;
+a stateful one re-runs from frame 0 (or ``Style.state_frames()`` frames before the first frame
 still to render) up to the last frame still to render, without rewriting done frames. Either way
 the directory after any number of kills and restarts is byte-identical to an uninterrupted run
 (docs/animation.md).
@@ -547,10 +548,14 @@ def _write_frame(
     its ``(H, W, 4)`` pixels, RGBA only), then its record, each atomically.
 
     ``extra`` adds keys to the record (not to its hash): a distributed chunk's ``state_from``.
+    Without ``plan.exr`` an earlier render's EXR of the frame is removed: it would not show
+    the new PNG's pixels.
     """
     out = plan.out
     stem = FRAME_NAME.format(f)
     (out / f"{stem}.json").unlink(missing_ok=True)  # a stale record must not outlive its PNG
+    if not plan.exr:
+        (out / f"{stem}.exr").unlink(missing_ok=True)
     with atomic_file(out / f"{stem}.png", suffix=".png") as tmp:
         tmp.write_bytes(png)
     record = {

@@ -548,3 +548,16 @@ def test_an_array_in_a_style_table_is_hashed_with_its_shape_and_dtype(tmp_path):
     record = json.loads((out / "frame_00000.json").read_text())
     assert record["style"]["texture"]["shape"] == [32, 16, 3]
     assert record["style"]["texture"]["dtype"] == "<f4"
+
+
+def test_a_frame_rendered_without_exr_removes_its_old_exr(tmp_path):
+    out = tmp_path / "frames"
+    render_sequence("sphere", "toon", 8, 8, 1, out_dir=out, exr=True)
+    assert (out / "frame_00000.exr").is_file()
+    again = render_sequence("sphere", "toon", 16, 12, 1, out_dir=out)
+    assert again.rendered == [0]
+    assert sorted(p.name for p in out.iterdir()) == ["frame_00000.json", "frame_00000.png"]
+    # a done frame keeps the EXR of its own render
+    render_sequence("sphere", "toon", 16, 12, 1, out_dir=out, exr=True)
+    assert render_sequence("sphere", "toon", 16, 12, 1, out_dir=out).skipped == [0]
+    assert (out / "frame_00000.exr").is_file()
