@@ -11,12 +11,18 @@ Where the parameters and their ranges come from
 * The names: the style class's ``parameters()``; the starting values: the style instance's
   ``params()`` (its current values, defaults filled in). Parameters whose value is not a
   number, a flag or a string (colours, lists, tables, None) get no control.
-* Ranges are probed against the style's own validation: a candidate range per type (``[0, 1]``
-  for a float in [0, 1), ``[0, 4 v]`` above, ``[-4, 4]`` for 0, ``[0, max(4 v, v + 8)]`` for
-  an integer), each end moved towards the default by bisection until the style accepts it.
-* Choices: the style's message for an unknown string (``expected one of [...]``, or the names
-  it quotes or lists), each listed name kept only if the style accepts it. A string parameter
-  without listed choices gets a text box.
+* Ranges: a span around the starting value ``v`` per type (``[0, 1]`` for a float in (0, 1),
+  ``[0, 4 v]`` above, ``[-4, 4]`` for 0, ``[0, max(4 v, v + 8)]`` for an integer), cut to the
+  range of the style's parameter declaration (``Style.PARAMS``): where a declared bound cuts
+  it, that bound is the slider end (one step, or 1, inside it where the bound is open). An end
+  the declaration does not cut is probed against the style's own validation, moved towards
+  ``v`` by bisection until the style accepts it, with the modes that read the parameter set
+  (its declared ``used_when``): a style does not validate a parameter its mode ignores.
+* Choices: the declared choices; for an undeclared parameter, the style's message for an
+  unknown string (``expected one of [...]``, or the names it quotes or lists), each listed name
+  kept only if the style accepts it. A string parameter without listed choices gets a text box.
+* The probes hold the other parameters the style was built with fixed (numpy scalars as
+  numbers); a value without a literal form (an array) is left to its default there.
 """
 
 from __future__ import annotations
@@ -38,7 +44,7 @@ import numpy as np
 from .image import Image
 from .raster import Camera
 from .render import DEFAULT_STYLE, as_scene, render
-from .styles import Style, get_style, style_from_spec
+from .styles import Style, get_style, get_style_class, style_from_spec
 
 __all__ = ["Explorer", "Orbit", "explore", "orbit_camera", "orbit_of", "parameter_controls"]
 
@@ -116,52 +122,121 @@ def _error(spec: tuple[tuple[str, Any], ...], name: str, value: Any) -> str | No
     return None
 
 
+def _plain(value: Any) -> Any:
+    """``value`` with numpy scalars as Python numbers (in tuples, lists and tables too)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (tuple, list)):
+        items = [_plain(v) for v in value]
+        return tuple(items) if isinstance(value, tuple) else items
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
 def _frozen(spec: Mapping[str, Any]) -> tuple[tuple[str, Any], ...]:
-    """``spec`` as a hashable key of the probes' caches (values by ``repr``)."""
-    return tuple(sorted((k, repr(v)) for k, v in spec.items()))
+    """``spec`` as a hashable key of the probes' caches (values by ``repr``), leaving out the
+    values without a literal form (arrays, objects), which the probes leave to their defaults."""
+    items = []
+    for k, v in spec.items():
+        text = repr(_plain(v))
+        try:
+            ast.literal_eval(text)
+        except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
+            continue
+        items.append((k, text))
+    return tuple(sorted(items))
 
 
 def _thawed(style_name: str, base: tuple[tuple[str, Any], ...]) -> tuple[tuple[str, Any], ...]:
     return tuple((k, ast.literal_eval(v)) for k, v in base) + (("name", style_name),)
 
 
+def _declared(style_name: str, name: str) -> Any:
+    """The declaration (``Param``) of parameter ``name`` of style ``style_name``; None where the
+    style declares none."""
+    params = getattr(get_style_class(style_name), "PARAMS", None)
+    return None if params is None else params.by_name.get(name)
+
+
+def _reading_modes(style_name: str, name: str, spec: Mapping[str, Any]) -> dict[str, Any]:
+    """The mode values to add to ``spec`` so that the style reads ``name``: for each mode of
+    its declared ``used_when`` (and theirs) that ``spec`` sets to a mode ignoring it, the first
+    mode that reads it. Modes that only need a value given (``NOT_NONE``) are left alone."""
+    params = getattr(get_style_class(style_name), "PARAMS", None)
+    if params is None:
+        return {}
+    modes: dict[str, Any] = {}
+    todo, seen = [name], set()
+    while todo:
+        p = params.by_name.get(todo.pop())
+        if p is None or p.name in seen:
+            continue
+        seen.add(p.name)
+        for other, allowed in p.used_when.items():
+            if isinstance(allowed, str) or other not in params.by_name:
+                continue  # read where any value is given: none to pick
+            now = modes.get(other, spec.get(other, params.by_name[other].default))
+            if now not in allowed:
+                modes[other] = allowed[0]
+            todo.append(other)
+    return modes
+
+
+def _span(value: float, is_int: bool) -> tuple[float, float]:
+    """The candidate slider span around a starting ``value`` (module docstring)."""
+    if is_int:
+        return 0.0, float(max(4 * value, value + 8))
+    if value == 0:
+        return -4.0, 4.0
+    if 0 < value < 1:
+        return 0.0, 1.0
+    if value > 0:
+        return 0.0, 4.0 * value
+    return 4.0 * value, -4.0 * value
+
+
 @functools.lru_cache(maxsize=512)
-def _probe_range(
+def _number_range(
     style_name: str, base: tuple[tuple[str, Any], ...], name: str, value: float, is_int: bool
 ) -> tuple[float, float]:
-    """(lo, hi) around ``value`` that the style accepts (see the module docstring)."""
-    spec = _thawed(style_name, base)
-    if is_int:
-        lo, hi = 0.0, float(max(4 * value, value + 8))
-    elif value == 0:
-        lo, hi = -4.0, 4.0
-    elif 0 < value < 1:
-        lo, hi = 0.0, 1.0
-    elif value > 0:
-        lo, hi = 0.0, 4.0 * value
-    else:
-        lo, hi = 4.0 * value, -4.0 * value
+    """(lo, hi) of the slider of number parameter ``name`` starting at ``value``: declared
+    bounds where the style declares them, probed ends elsewhere (see the module docstring)."""
+    spec = dict(_thawed(style_name, base))
+    spec.update(_reading_modes(style_name, name, spec))
 
     def ok(x: float) -> bool:
-        return _error(spec, name, int(round(x)) if is_int else float(x)) is None
+        return _error(tuple(spec.items()), name, int(x) if is_int else float(x)) is None
 
     def settle(end: float) -> float:
         if ok(end):
             return end
-        good, bad = float(value), end  # the default is accepted; bisect towards it
-        for _ in range(8 if is_int else 7):
-            mid = (good + bad) / 2
-            if is_int and abs(round(mid) - good) < 1:
-                mid = good + math.copysign(1, bad - good)
-                if round(mid) == round(bad):
+        if is_int:  # bisect on whole numbers towards the accepted default
+            good, bad = round(value), round(end)
+            for _ in range(24):
+                if abs(bad - good) <= 1:
                     break
-            if ok(mid):
-                good = mid
-            else:
-                bad = mid
-        return float(round(good)) if is_int else good
+                mid = (good + bad) // 2
+                good, bad = (mid, bad) if ok(mid) else (good, mid)
+            return float(good)
+        good, bad = float(value), end
+        for _ in range(7):
+            mid = (good + bad) / 2
+            good, bad = (mid, bad) if ok(mid) else (good, mid)
+        return good
 
-    return settle(lo), settle(hi)
+    lo, hi = _span(value, is_int)
+    p = _declared(style_name, name)  # a number's declared bounds (None for an undeclared one)
+    cut_lo = p is not None and p.lo is not None and p.lo >= lo
+    cut_hi = p is not None and p.hi is not None and p.hi <= hi
+    lo = float(p.lo) if cut_lo else settle(lo)
+    hi = float(p.hi) if cut_hi else settle(hi)
+    step = 1.0 if is_int else _step(lo, hi)
+    if cut_lo and p.lo_open:
+        lo += step
+    if cut_hi and p.hi_open:
+        hi -= step
+    return lo, hi
 
 
 _LISTED = re.compile(r"expected one of (\[[^\]]*\])")
@@ -173,6 +248,9 @@ def _probe_choices(
 ) -> tuple[str, ...]:
     """The strings the style lists for ``name`` in its message for an unknown value, each
     checked by building the style with it; empty when it lists none."""
+    p = _declared(style_name, name)
+    if getattr(p, "kind", None) == "choice":
+        return tuple(p.choices)
     spec = _thawed(style_name, base)
     message = _error(spec, name, "\x00?")
     if message is None:
@@ -210,12 +288,7 @@ def parameter_controls(style: Style, spec: Mapping[str, Any] | None = None) -> d
     """
     w = _widgets()
     values = style.params()
-    base = _params_only(values if spec is None else spec)
-    try:
-        frozen = _frozen(base)
-        _thawed(style.name, frozen)
-    except (ValueError, SyntaxError):  # values without a literal repr: probe with none fixed
-        frozen = ()
+    frozen = _frozen(_params_only(values if spec is None else spec))
     controls: dict[str, Any] = {}
     for name in type(style).parameters():
         if name not in values:
@@ -225,10 +298,10 @@ def parameter_controls(style: Style, spec: Mapping[str, Any] | None = None) -> d
         if isinstance(v, (bool, np.bool_)):
             controls[name] = w.Checkbox(value=bool(v), description=name, indent=False)
         elif isinstance(v, (int, np.integer)):
-            lo, hi = _probe_range(style.name, frozen, name, float(v), True)
+            lo, hi = _number_range(style.name, frozen, name, float(v), True)
             controls[name] = w.IntSlider(value=int(v), min=int(lo), max=int(hi), **common)
         elif isinstance(v, (float, np.floating)) and math.isfinite(v):
-            lo, hi = _probe_range(style.name, frozen, name, float(v), False)
+            lo, hi = _number_range(style.name, frozen, name, float(v), False)
             step = _step(lo, hi)
             lo, hi = math.ceil(lo / step - 1e-9) * step, math.floor(hi / step + 1e-9) * step
             controls[name] = w.FloatSlider(

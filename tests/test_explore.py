@@ -17,7 +17,7 @@ import pytest
 import refnpr
 from refnpr.explore import Explorer, explore, orbit_camera, orbit_of
 from refnpr.raster import Camera
-from refnpr.styles import get_style, list_styles
+from refnpr.styles import get_style, get_style_class, list_styles
 
 W, H = 40, 30
 
@@ -128,3 +128,70 @@ def test_missing_ipywidgets_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "ipywidgets", None)  # import fails
     with pytest.raises(ImportError, match=r"optional extra `notebook`.*refnpr\[notebook\]"):
         explore("sphere", "toon", width=W, height=H)
+
+
+def assert_within_declared_ranges(style_name, controls):
+    """Every slider end lies in the range the style declares for its parameter."""
+    params = get_style_class(style_name).PARAMS
+    for pname, c in controls.items():
+        p = params.by_name[pname]
+        if not isinstance(c, (ipywidgets.IntSlider, ipywidgets.FloatSlider)):
+            continue
+        if p.lo is not None:
+            assert c.min > p.lo if p.lo_open else c.min >= p.lo, (pname, c.min, p.bounds_text())
+        if p.hi is not None:
+            assert c.max < p.hi if p.hi_open else c.max <= p.hi, (pname, c.max, p.bounds_text())
+
+
+@pytest.mark.parametrize("name", sorted(list_styles()))
+def test_slider_ends_lie_in_the_declared_ranges(explorers, name):
+    declared = name if name != "contoured" else "toon"  # its controls are its base style's
+    assert_within_declared_ranges(declared, explorers[name].controls)
+
+
+@pytest.fixture(scope="module")
+def room():
+    """The room's threshold style, source 'image': lines and stipple parameters unread."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return explore("veryovka_room", width=16, height=12)
+
+
+def test_sliders_of_parameters_the_mode_ignores_keep_their_declared_ranges(room):
+    c = room.controls
+    assert room.spec["source"] == "image"
+    assert (c["noise"].min, c["noise"].max) == (0.0, 1.0)
+    assert (c["jitter"].min, c["jitter"].max) == (0.0, 0.4)
+    assert 0.0 < c["period"].min < c["period"].value
+    assert_within_declared_ranges("threshold", c)
+
+
+def test_a_slider_end_stays_valid_in_the_mode_that_reads_it(room):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # the mode ignores the first changes
+        room.controls["jitter"].value = room.controls["jitter"].max
+        room.controls["period"].value = room.controls["period"].min
+        room.controls["source"].value = "stipple"
+        room.controls["n"].value = 2
+    assert "color:#b00" not in room.status.value, room.status.value
+    assert room.style.p.jitter == 0.4 and room.style.p.period == room.controls["period"].min
+
+
+def test_a_declared_choice_gets_a_dropdown_where_its_mode_ignores_it(explorers):
+    c = explorers["threshold"].controls  # source 'lines': mip is read with images only
+    assert isinstance(c["mip"], ipywidgets.Dropdown)
+    assert tuple(c["mip"].options) == ("per_level", "trilinear")
+
+
+def test_an_integer_slider_reaches_its_declared_minimum():
+    e = explore("sphere", {"name": "toon", "n": 3}, width=8, height=8)
+    assert (e.controls["n"].min, e.controls["n"].value) == (1, 3)
+
+
+def test_numpy_scalars_in_the_table_hold_for_the_probes():
+    # flow_max has no declared lower bound; the style refuses flow_max <= flow_min
+    spec = {"name": "xtoon", "detail": "flow", "flow_min": np.float64(4.0)}
+    e = explore("sphere", spec, width=8, height=8)
+    low = e.controls["flow_max"].min
+    assert 4.0 < low < e.controls["flow_max"].value
+    get_style("xtoon", detail="flow", flow_min=4.0, flow_max=low)  # accepted
