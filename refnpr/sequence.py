@@ -226,7 +226,7 @@ def _canonical(value: Any, files: dict[str, Any], depth: int = 0) -> Any:
     if isinstance(value, Style):
         return _style_values(value, files, depth + 1)
     if isinstance(value, Values):
-        return {n: _canonical(value[n], files, depth + 1) for n in value._params.names}
+        return {n: _canonical(v, files, depth + 1) for n, v in value.items()}
     if isinstance(value, dict):
         items = sorted(value.items(), key=lambda kv: str(kv[0]))
         return {str(k): _canonical(v, files, depth + 1) for k, v in items}

@@ -303,6 +303,11 @@ class Values:
             raise KeyError(f"unknown parameter(s) {sorted(unknown)}")
         return Values(self._params, {**self._values, **changes}, self.given)
 
+    def items(self) -> list[tuple[str, Any]]:
+        """``(name, value)`` of every parameter in declaration order, the values as validated
+        (arrays as arrays, unlike :meth:`as_dict`)."""
+        return [(p.name, self._values[p.name]) for p in self._params.params]
+
     def as_dict(self, *, keep_none: bool = False) -> dict[str, Any]:
         """``{name: value}`` in declaration order as ``params()`` shows them (tuples as lists;
         None values dropped unless ``keep_none``)."""
