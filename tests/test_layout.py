@@ -450,6 +450,7 @@ RANK = {
     "refnpr": -1,
     "_jit": 0,
     "_memory": 0,
+    "_reading": 0,
     "_atomic": 1,
     "device": 1,
     "_kernels": 2,
@@ -482,6 +483,7 @@ ONLY = {
     "raster": {"_jit", "_memory", "device", "formulas"},
     "_jit": set(),
     "_memory": set(),
+    "_reading": set(),
     "_kernels": {"_jit", "device"},
     "refnpr": set(),
 }

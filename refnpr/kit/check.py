@@ -33,9 +33,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from .._reading import inside, printable, read_regular
 from . import KIT_FORMAT, KIT_VERSION, limits
 from ._json import load_json, write_json
-from ._untrusted import inside, printable, read_regular
 from .tolerance import validate_tolerance
 from .verdict import (
     CaseCheck,

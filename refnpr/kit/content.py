@@ -28,8 +28,8 @@ import stat
 from pathlib import Path
 from typing import Any
 
+from .._reading import printable
 from ._json import load_json
-from ._untrusted import printable
 from .limits import MAX_FILE_BYTES, MAX_JSON_BYTES, MAX_JSON_DEPTH
 
 __all__ = [

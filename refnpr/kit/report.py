@@ -38,10 +38,10 @@ from typing import Any
 
 import numpy as np
 
+from .._reading import inside, read_regular
 from ..image import atomic_file, write_png_atomic
 from . import limits
 from ._json import load_json
-from ._untrusted import inside, read_regular
 from .check import CASE_NAME, CaseCheck, Visual, case_style
 from .diagnose import (
     diff_scale,

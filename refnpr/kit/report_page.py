@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 from urllib.parse import quote
 
-from ._untrusted import printable
+from .._reading import printable
 from .check import CaseCheck
 from .diagnose import DIVERGING, Flip, Margin, WorstPixel, straight_linear, straight_srgb
 

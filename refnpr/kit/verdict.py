@@ -16,11 +16,12 @@ from typing import Any
 
 import numpy as np
 
+from .._reading import inside, printable, read_regular
 from ..compare import LEVEL_SLACK, compare_images
 from ..image import decode_png16, is_png16_colour, linear_to_srgb
 from . import limits
 from ._json import jsonable
-from ._untrusted import exr_header, inside, npy_array, npy_header, png_size, printable, read_regular
+from ._untrusted import exr_header, npy_array, npy_header, png_size
 
 __all__ = [
     "CaseCheck",
