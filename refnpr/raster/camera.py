@@ -7,12 +7,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..formulas._validate import to_float
+
 __all__ = ["Camera"]
 
 
 def _vec3(name: str, value) -> np.ndarray:
     try:
         arr = np.asarray(value, dtype=np.float64)
+    except OverflowError:  # a Python int of about 309 digits or more
+        raise ValueError(
+            f"{name}: must be finite, got an integer beyond the float range (|value| > 1.8e308)"
+        ) from None
     except (TypeError, ValueError) as exc:
         raise TypeError(f"{name}: expected 3 numbers, got {value!r}") from exc
     if arr.shape != (3,):
@@ -25,7 +31,7 @@ def _vec3(name: str, value) -> np.ndarray:
 def _real(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name}: expected a real number, got {type(value).__name__} {value!r}")
-    v = float(value)
+    v = to_float(name, value)
     if not math.isfinite(v):
         raise ValueError(f"{name}: must be finite, got {v}")
     return v

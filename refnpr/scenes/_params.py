@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import numbers
 
-from ..formulas._validate import describe
+from ..formulas._validate import describe, to_float
 
 __all__ = ["check_int", "check_real", "check_type", "check_vec", "describe", "positives"]
 
@@ -33,12 +33,13 @@ def check_int(name: str, value, *, minimum: int | None = None, maximum: int | No
 
 
 def check_real(name: str, value, *, positive: bool = False, nonnegative: bool = False) -> float:
-    """``value`` as a finite ``float``; optionally ``> 0`` or ``>= 0``."""
+    """``value`` as a finite ``float``; optionally ``> 0`` or ``>= 0`` (an integer beyond the
+    float range is not finite)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(
             f"{name}: expected a real number, got {type(value).__name__} {describe(value)}"
         )
-    v = float(value)
+    v = to_float(name, value)
     if not math.isfinite(v):
         raise ValueError(f"{name}: expected a finite number, got {v}")
     if positive and v <= 0.0:

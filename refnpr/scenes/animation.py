@@ -233,10 +233,13 @@ class Animation:
         """``frame`` as a float in ``[0, frames - 1]`` (fractional allowed), else ValueError."""
         if isinstance(frame, bool) or not isinstance(frame, (int, float, np.integer, np.floating)):
             raise TypeError(f"frame: expected a number, got {describe(frame)}")
-        f = float(frame)
+        try:
+            f = float(frame)
+        except OverflowError:  # a Python int beyond the float range
+            f = math.inf
         if not math.isfinite(f) or not 0.0 <= f <= self.frames - 1:
             raise ValueError(
-                f"frame: {frame!r} is outside the animation's frames [0, {self.frames - 1}] "
+                f"frame: {describe(frame)} is outside the animation's frames [0, {self.frames - 1}] "
                 f"({self.frames} frames at {self.fps:g} fps)"
             )
         return f

@@ -51,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from .._reading import short_repr
 from ..raster import Camera, Mesh
 from ..raster.mesh import MAX_COORDINATE, coordinate_limit_message
 from ..texture.embedded import EmbeddedImage, probe_image
@@ -133,6 +134,26 @@ def _int(v) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
+def _finite(v) -> bool:
+    """Whether ``v`` is a JSON number that is a finite float64 (an integer beyond the float
+    range, about 1.8e308, is not)."""
+    if not _num(v):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
+def _beyond_float(v) -> str:
+    """A note for a number that ``_finite`` refuses: an integer beyond the float range."""
+    return " (an integer beyond the float range, |value| > 1.8e308)" if _int(v) else ""
+
+
+#: glTF's largest integer (JSON integers must lie in [-(2^53 - 1), 2^53 - 1]).
+_MAX_JSON_INT = (1 << 53) - 1
+
+
 @dataclass
 class _Node:
     index: int
@@ -174,10 +195,10 @@ class _Reader:
         if not _int(index) or not 0 <= index < len(items):
             raise self.fail(
                 where,
-                f"{index!r} is not an index of {key} (the file has {len(items)}: valid indices "
-                f"are 0 to {len(items) - 1})"
+                f"{short_repr(index)} is not an index of {key} (the file has {len(items)}: valid "
+                f"indices are 0 to {len(items) - 1})"
                 if items
-                else f"refers to {key}[{index!r}], but the file has no {key}",
+                else f"refers to {key}[{short_repr(index)}], but the file has no {key}",
             )
         value = items[index]
         if not isinstance(value, dict):
@@ -190,28 +211,37 @@ class _Reader:
         value = obj.get(key, default)
         if value is None:
             raise self.fail(f"{where}.{key}", "missing (an integer is required)")
-        if not _int(value) or value < lo or (hi is not None and value > hi):
+        top = _MAX_JSON_INT if hi is None else hi
+        if not _int(value) or value < lo or value > top:
             rng = f">= {lo}" if hi is None else f"in [{lo}, {hi}]"
-            raise self.fail(f"{where}.{key}", f"expected an integer {rng}, got {value!r}")
+            if hi is None and _int(value) and value > top:
+                rng += " and at most 2^53 - 1 (glTF's largest integer)"
+            raise self.fail(f"{where}.{key}", f"expected an integer {rng}, got {short_repr(value)}")
         return value
 
     def get_numbers(self, obj: dict, key: str, where: str, n: int, default) -> np.ndarray:
         value = obj.get(key, default)
-        if (
-            not isinstance(value, list)
-            or len(value) != n
-            or not all(_num(x) and math.isfinite(x) for x in value)
-        ):
-            raise self.fail(f"{where}.{key}", f"expected {n} finite numbers, got {value!r}")
+        if not isinstance(value, list) or len(value) != n or not all(map(_finite, value)):
+            bad = (
+                next((x for x in value if not _finite(x)), None)
+                if isinstance(value, list)
+                else None
+            )
+            raise self.fail(
+                f"{where}.{key}",
+                f"expected {n} finite numbers, got {short_repr(value)}{_beyond_float(bad)}",
+            )
         return np.array(value, dtype=np.float64)
 
     def get_real(self, obj: dict, key: str, where: str, default=None, *, positive=False) -> float:
         value = obj.get(key, default)
         if value is None:
             raise self.fail(f"{where}.{key}", "missing (a number is required)")
-        if not _num(value) or not math.isfinite(value) or (positive and value <= 0):
+        if not _finite(value) or (positive and value <= 0):
             what = "a positive finite number" if positive else "a finite number"
-            raise self.fail(f"{where}.{key}", f"expected {what}, got {value!r}")
+            raise self.fail(
+                f"{where}.{key}", f"expected {what}, got {short_repr(value)}{_beyond_float(value)}"
+            )
         return float(value)
 
     def name_of(self, obj: dict, where: str, default: str) -> str:
@@ -259,6 +289,11 @@ class _Reader:
             ) from None
         except json.JSONDecodeError as exc:
             raise GltfError(f"{self.label}: invalid glTF JSON: {exc}") from None
+        except ValueError as exc:  # an integer with more digits than Python converts
+            raise GltfError(
+                f"{self.label}: invalid glTF JSON: {str(exc).split(';')[0]} (glTF integers have "
+                "at most 16 digits); repair or re-export the file"
+            ) from None
         except RecursionError:
             raise GltfError(
                 f"{self.label}: invalid glTF JSON: arrays or objects nested too deeply"
@@ -1192,8 +1227,10 @@ def load_gltf(
         raise FileNotFoundError(f"scene: glTF file {given!r} does not exist")
     if p.is_dir():
         raise GltfError(f"scene: {given!r} is a directory; expected a .gltf or .glb file")
-    if isinstance(fps, bool) or not _num(fps) or not math.isfinite(fps) or fps <= 0:
-        raise ValueError(f"fps: expected a positive number of frames per second, got {fps!r}")
+    if not _finite(fps) or fps <= 0:
+        raise ValueError(
+            f"fps: expected a positive number of frames per second, got {short_repr(fps)}"
+        )
     r = _Reader(p, given)
     for key in ("skins",):
         if r.array(key):

@@ -166,6 +166,11 @@ def transform_matrix(
 def _as_transform(value) -> np.ndarray:
     try:
         m = np.array(value, dtype=np.float64)
+    except OverflowError:  # a Python int of about 309 digits or more
+        raise ValueError(
+            "transform: expected a finite (4, 4) matrix, got an integer beyond the float range "
+            "(|value| > 1.8e308)"
+        ) from None
     except (TypeError, ValueError) as exc:
         raise TypeError(f"transform: expected a (4, 4) array of numbers, got {value!r}") from exc
     if m.shape != (4, 4) or not np.all(np.isfinite(m)):

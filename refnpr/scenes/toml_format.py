@@ -392,7 +392,13 @@ def _key(src: str, where: str, spec, fps: float, rotation: bool) -> Keyframe:
         t = spec["time"]
         if isinstance(t, bool) or not isinstance(t, (int, float)):
             raise SceneFileError(f"{src}: {where}: time: expected seconds (a number), got {t!r}")
-        frame = t * fps
+        try:
+            frame = t * fps
+        except OverflowError:  # an integer beyond the float range
+            raise SceneFileError(
+                f"{src}: {where}: time: expected seconds (a finite number), got an integer "
+                "beyond the float range (|value| > 1.8e308)"
+            ) from None
     if rotation:
         has_q, has_aa = "quaternion" in spec, "axis" in spec or "angle_deg" in spec
         if "value" in spec or has_q == has_aa:

@@ -130,6 +130,14 @@ def test_non_finite_camera_parameters():
         Camera.look_at((0, 0, 3), (0, 0, 0), (0, 0, 1))
 
 
+def test_integers_beyond_the_float_range_are_not_finite():
+    huge = 10**400  # float(huge) raises OverflowError
+    with pytest.raises(ValueError, match=r"fov_y: expected a finite number, got an integer beyond"):
+        Camera.look_at((0, 0, 3), (0, 0, 0), fov_y=huge)
+    with pytest.raises(ValueError, match=r"eye: must be finite, got an integer beyond"):
+        Camera.look_at((huge, 0, 3), (0, 0, 0))
+
+
 def test_unknown_channel_lists_the_valid_ones():
     with pytest.raises(
         ValueError, match=r"channels: unknown channel 'colour'; valid channels are"

@@ -276,7 +276,7 @@ def test_at_keeps_untouched_parts_and_clears_the_animation():
 
 def test_frames_outside_the_range_are_errors():
     scene = base_scene(Animation(11, 24.0, (two_keys("camera.fov_y", 40.0, 60.0),)))
-    for bad in (-0.5, 10.01, math.inf, math.nan):
+    for bad in (-0.5, 10.01, math.inf, math.nan, 10**400):  # 10**400: float() overflows
         with pytest.raises(
             ValueError, match=r"frame: .* is outside the animation's frames \[0, 10\]"
         ):

@@ -629,6 +629,59 @@ def test_malformed_nan_and_two_parent_cycle(tmp_path):
         quiet(load_gltf, d.write(tmp_path / "cyc.glb"))
 
 
+def _camera_yfov(value):
+    def edit(doc):
+        doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": value, "znear": 0.1}}]
+        doc["nodes"].append({"camera": 0, "translation": [0, 0, 3]})
+        doc["scenes"][0]["nodes"].append(1)
+
+    return edit
+
+
+HUGE = [  # (label, edit putting the marker 12345 in, its replacement digits, message)
+    (
+        "translation",
+        _set(["nodes", 0, "translation"], [12345, 0, 0]),
+        "1" + "0" * 400,
+        r"nodes\[0\]\.translation: expected 3 finite numbers, got \[10+\.\.\. \(an integer "
+        r"beyond the float range",
+    ),
+    (
+        "yfov",
+        _camera_yfov(12345),
+        "1" + "0" * 400,
+        r"cameras\[0\]\.perspective\.yfov: expected a positive finite number, got 10+\.\.\. "
+        r"\(an integer beyond the float range",
+    ),
+    (
+        "count",
+        _set(["accessors", 0, "count"], 12345),
+        "1" + "0" * 400,
+        r"accessors\[0\]\.count: expected an integer >= 1 and at most 2\^53 - 1",
+    ),
+    (
+        "5000 digits",
+        _set(["nodes", 0, "translation"], [12345, 0, 0]),
+        "1" + "0" * 5000,
+        r"invalid glTF JSON: Exceeds the limit \(\d+ digits\) .* repair or re-export",
+    ),
+]
+
+
+@pytest.mark.parametrize("label, edit, digits, message", HUGE, ids=[h[0] for h in HUGE])
+def test_integers_beyond_the_float_range_name_the_file_and_field(
+    tmp_path, label, edit, digits, message
+):
+    """JSON integers have no size limit: float() of one with 309 digits or more raises
+    OverflowError, and Python refuses to parse one of more than 4300 digits."""
+    path = _base().write(tmp_path / "big.gltf", "file")  # no base64: the marker is unique
+    doc = json.loads(path.read_text())
+    edit(doc)
+    path.write_text(json.dumps(doc).replace("12345", digits))
+    with pytest.raises(GltfError, match=r"big\.gltf: " + message):
+        quiet(load_gltf, path)
+
+
 def test_uris_outside_directory_refused(tmp_path):
     sub = tmp_path / "sub"
     sub.mkdir()

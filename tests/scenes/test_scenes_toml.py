@@ -269,6 +269,28 @@ def test_minimal_scene_defaults(tmp_path):
             r"trip.toml: invalid TOML: arrays or inline tables nested too deeply",
         ),
         ('description = "every feature once"', "objects = 1", "top level: unknown key 'objects'"),
+        (  # integers beyond the float range: float() raises OverflowError
+            "fov_y = 33",
+            "fov_y = 1" + "0" * 400,
+            r"trip.toml: \[camera\]: fov_y: expected a finite number, got an integer beyond the "
+            r"float range",
+        ),
+        (
+            "eye = [1.0, 2.0, 9.0]",
+            "eye = [1" + "0" * 400 + ", 2.0, 9.0]",
+            r"trip.toml: \[camera\]: eye: must be finite, got an integer beyond the float range",
+        ),
+        (
+            "translate = [1, 0, -1]",
+            "translate = [1" + "0" * 400 + ", 0, -1]",
+            r"#1 'pot': transform: translate\[0\]: expected a finite number, got an integer "
+            r"beyond the float range",
+        ),
+        (
+            "[0, 1, 0, 2]",
+            "[0, 1, 0, 2" + "0" * 400 + "]",
+            r"#2 'ball.obj': transform: expected a finite \(4, 4\) matrix, got an integer beyond",
+        ),
     ],
 )
 def test_file_errors_name_file_and_key(scene_dir, old, new, match):
