@@ -487,10 +487,11 @@ class _Reader:
         acc = self.item("accessors", index, where)
         aw = f"accessors[{index}]"
         ctype = acc.get("componentType")
-        if ctype not in _COMPONENTS:
+        if not _int(ctype) or ctype not in _COMPONENTS:
             raise self.fail(
                 f"{aw}.componentType",
-                f"{ctype!r} is not a glTF component type ({', '.join(map(str, _COMPONENTS))})",
+                f"{short_repr(ctype)} is not a glTF component type (an integer: "
+                f"{', '.join(map(str, _COMPONENTS))})",
             )
         if ctype not in components:
             names = ", ".join(_COMPONENTS[c][1] for c in components)
@@ -499,8 +500,10 @@ class _Reader:
                 f"{_COMPONENTS[ctype][1]} cannot be used at {where}; expected {names}",
             )
         kind = acc.get("type")
-        if kind not in types:
-            raise self.fail(f"{aw}.type", f"{kind!r} at {where}; expected {' or '.join(types)}")
+        if not isinstance(kind, str) or kind not in types:
+            raise self.fail(
+                f"{aw}.type", f"{short_repr(kind)} at {where}; expected {' or '.join(types)}"
+            )
         n = self.get_int(acc, "count", aw, lo=1)
         if count is not None and n != count:
             raise self.fail(
@@ -598,11 +601,11 @@ class _Reader:
             parts[key] = part
         iw, vw = f"{sw}.indices", f"{sw}.values"
         ictype = parts["indices"].get("componentType")
-        if ictype not in (5121, 5123, 5125):
+        if not _int(ictype) or ictype not in (5121, 5123, 5125):
             raise self.fail(
                 f"{iw}.componentType",
-                f"{ictype!r}; expected 5121 (UNSIGNED_BYTE), 5123 (UNSIGNED_SHORT) or 5125 "
-                "(UNSIGNED_INT)",
+                f"{short_repr(ictype)}; expected 5121 (UNSIGNED_BYTE), 5123 (UNSIGNED_SHORT) or "
+                "5125 (UNSIGNED_INT)",
             )
         idx = self._packed(parts["indices"], iw, "sparse indices", _COMPONENTS[ictype][0], k, 1)
         idx = idx[:, 0].astype(np.int64)
@@ -901,9 +904,7 @@ def _primitive_mesh(r: _Reader, mi: int, pi: int, prim: Any, name: str, node_w: 
     w = f"meshes[{mi}].primitives[{pi}]"
     if not isinstance(prim, dict):
         raise r.fail(w, f"expected a JSON object, got {type(prim).__name__}")
-    mode = prim.get("mode", 4)
-    if mode not in _MODES:
-        raise r.fail(f"{w}.mode", f"{mode!r} is not a glTF primitive mode (0 to 6)")
+    mode = r.get_int(prim, "mode", w, default=4, hi=6)  # the modes of _MODES
     if mode < 4:
         raise r.fail(
             f"{w}.mode",
@@ -970,7 +971,7 @@ def _primitive_mesh(r: _Reader, mi: int, pi: int, prim: Any, name: str, node_w: 
 def _material(r: _Reader, index: Any, where: str, cache: dict) -> Material:
     if index is None:  # refnpr's default material (glTF's default white, scaled by 0.8)
         return Material()
-    if index in cache:
+    if _int(index) and index in cache:  # 0.0 == 0: only an integer index may hit the cache
         return cache[index]
     mat = r.item("materials", index, where)
     mw = f"materials[{index}]"
@@ -1596,9 +1597,10 @@ def _channels(r: _Reader, ai: int, nodes: list[_Node]) -> dict[int, dict[str, _S
         if path == "weights":
             r.ignore("morph target weight animations")
             continue
-        if path not in _PATH_WIDTH:
+        if not isinstance(path, str) or path not in _PATH_WIDTH:
             raise r.fail(
-                f"{cw}.target.path", f"{path!r}; expected translation, rotation, scale or weights"
+                f"{cw}.target.path",
+                f"{short_repr(path)}; expected translation, rotation, scale or weights",
             )
         if "node" not in target:
             continue  # spec: no node means an extension animates something else

@@ -461,6 +461,17 @@ def test_animation_linear_step_cubic(tmp_path):
     np.testing.assert_allclose(cub.at(2).objects[0].transform[:3, 3], [expect, 0, 0], atol=1e-12)
 
 
+def test_animation_target_path_must_be_a_string(tmp_path):
+    d = animated("LINEAR", [0.0, 1.0], [[0, 0, 0], [1, 0, 0]])
+    d.doc["animations"][0]["channels"][0]["target"]["path"] = ["translation"]
+    with pytest.raises(
+        GltfError,
+        match=r"p\.glb: animations\[0\]\.channels\[0\]\.target\.path: \['translation'\]; "
+        r"expected translation, rotation, scale or weights",
+    ):
+        quiet(load_gltf, d.write(tmp_path / "p.glb"))
+
+
 def test_animation_rotation_slerp_of_parent(tmp_path):
     d = Doc()
     box = d.mesh(trimesh.creation.box())
@@ -596,6 +607,39 @@ MALFORMED = [
         "bad light",
         _set(["nodes", 0, "extensions"], {"KHR_lights_punctual": {"light": 3}}),
         r"nodes\[0\]\.extensions\.KHR_lights_punctual\.light: 3 is not a light index",
+    ),
+    # a list where a number or a string belongs (unhashable: a dict lookup raised TypeError),
+    # and a float where glTF has an integer (4.0 == 4 passed a lookup)
+    (
+        "material as a list",
+        _set(["meshes", 0, "primitives", 0, "material"], [0]),
+        r"meshes\[0\]\.primitives\[0\]\.material: refers to materials\[\[0\]\], but the "
+        r"file has no materials",
+    ),
+    (
+        "mode as a list",
+        _set(["meshes", 0, "primitives", 0, "mode"], [4]),
+        r"meshes\[0\]\.primitives\[0\]\.mode: expected an integer in \[0, 6\], got \[4\]",
+    ),
+    (
+        "mode as a float",
+        _set(["meshes", 0, "primitives", 0, "mode"], 4.0),
+        r"meshes\[0\]\.primitives\[0\]\.mode: expected an integer in \[0, 6\], got 4\.0",
+    ),
+    (
+        "componentType as a list",
+        _set(["accessors", 0, "componentType"], [5126]),
+        r"accessors\[0\]\.componentType: \[5126\] is not a glTF component type \(an integer",
+    ),
+    (
+        "componentType as a float",
+        _set(["accessors", 0, "componentType"], 5126.0),
+        r"accessors\[0\]\.componentType: 5126\.0 is not a glTF component type",
+    ),
+    (
+        "type as a list",
+        _set(["accessors", 0, "type"], ["VEC3"]),
+        r"accessors\[0\]\.type: \['VEC3'\] at meshes\[0\]\.primitives\[0\]\.attributes\.POSITION",
     ),
 ]
 
@@ -798,6 +842,11 @@ SPARSE_BAD = [
         "index type",
         _sparse_edit("indices", "componentType", value=5126),
         r"sparse\.indices\.componentType: 5126; expected 5121",
+    ),
+    (
+        "index type as a float",
+        _sparse_edit("indices", "componentType", value=5123.0),
+        r"sparse\.indices\.componentType: 5123\.0; expected 5121",
     ),
     (
         "indices beyond view",
