@@ -480,10 +480,12 @@ class _Reader:
         components: tuple[int, ...],
         *,
         count: int | None = None,
+        indices: bool = False,
     ) -> np.ndarray:
         """Accessor ``index`` (referenced at ``where``) as an (count, width) float64 array
         (integer accessors as int64, normalized ones scaled to [0, 1] or [-1, 1]); a sparse
-        accessor with its substitutions applied."""
+        accessor with its substitutions applied. ``indices``: it holds vertex indices, which
+        glTF never normalizes."""
         acc = self.item("accessors", index, where)
         aw = f"accessors[{index}]"
         ctype = acc.get("componentType")
@@ -511,7 +513,15 @@ class _Reader:
             )
         normalized = acc.get("normalized", False)
         if not isinstance(normalized, bool) or (normalized and ctype == _FLOAT):
-            raise self.fail(f"{aw}.normalized", f"{normalized!r} is not valid for this accessor")
+            raise self.fail(
+                f"{aw}.normalized", f"{short_repr(normalized)} is not valid for this accessor"
+            )
+        if normalized and indices:
+            raise self.fail(
+                f"{aw}.normalized",
+                f"true for the indices of {where}; glTF indices are plain unsigned integers "
+                "(never normalized): remove `normalized`",
+            )
         dtype = _COMPONENTS[ctype][0]
         width = _WIDTHS[kind]
         elem = dtype.itemsize * width
@@ -941,7 +951,9 @@ def _primitive_mesh(r: _Reader, mi: int, pi: int, prim: Any, name: str, node_w: 
     if "targets" in prim:
         r.ignore("morph targets")
     if "indices" in prim:
-        idx = r.accessor(prim["indices"], f"{w}.indices", ("SCALAR",), (5121, 5123, 5125))[:, 0]
+        idx = r.accessor(
+            prim["indices"], f"{w}.indices", ("SCALAR",), (5121, 5123, 5125), indices=True
+        )[:, 0]
         if idx.size and (idx.max() >= nv):
             bad = int(np.argmax(idx >= nv))
             raise r.fail(

@@ -608,6 +608,20 @@ MALFORMED = [
         _set(["nodes", 0, "extensions"], {"KHR_lights_punctual": {"light": 3}}),
         r"nodes\[0\]\.extensions\.KHR_lights_punctual\.light: 3 is not a light index",
     ),
+    (  # read as floats in [0, 1], the indices were no vertex indices
+        "normalized indices",
+        lambda doc: doc["accessors"][2].update(normalized=True),
+        r"accessors\[2\]\.normalized: true for the indices of meshes\[0\]\.primitives\[0\]"
+        r"\.indices; glTF indices are plain unsigned integers",
+    ),
+    (  # and without NORMAL (flat normals), they indexed an array: an IndexError
+        "normalized indices without normals",
+        lambda doc: (
+            doc["accessors"][2].update(normalized=True),
+            doc["meshes"][0]["primitives"][0]["attributes"].pop("NORMAL"),
+        ),
+        r"accessors\[2\]\.normalized: true for the indices",
+    ),
     # a list where a number or a string belongs (unhashable: a dict lookup raised TypeError),
     # and a float where glTF has an integer (4.0 == 4 passed a lookup)
     (
