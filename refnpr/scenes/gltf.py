@@ -44,7 +44,8 @@ import struct
 import sys
 import urllib.parse
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -745,14 +746,22 @@ def _scene_roots(r: _Reader, nodes: list[_Node]) -> list[int]:
     roots = scene.get("nodes", [])
     if not isinstance(roots, list):
         raise r.fail(f"scenes[{index}].nodes", f"expected an array of node indices, got {roots!r}")
+    seen: dict[int, int] = {}  # node -> its position in the list
     for j, n in enumerate(roots):
         where = f"scenes[{index}].nodes[{j}]"
         if not _int(n) or not 0 <= n < len(nodes):
-            raise r.fail(where, f"{n!r} is not a node index (0 to {len(nodes) - 1})")
+            raise r.fail(where, f"{short_repr(n)} is not a node index (0 to {len(nodes) - 1})")
         if nodes[n].parent is not None:
             raise r.fail(
                 where, f"node {n} is not a root node (its parent is nodes[{nodes[n].parent}])"
             )
+        if n in seen:
+            raise r.fail(
+                where,
+                f"node {n} is listed twice (also at scenes[{index}].nodes[{seen[n]}]); a glTF "
+                "scene lists each root node once: remove the repetition",
+            )
+        seen[n] = j
     return list(roots)
 
 
@@ -1277,7 +1286,7 @@ def load_gltf(
             )
             for pi, prim in enumerate(prims):
                 name = base if len(prims) == 1 else f"{base}[{pi}]"
-                if name in used_names:
+                while name in used_names:  # another node may be named "box (nodes[i])" too
                     name = f"{name} (nodes[{i}])"
                 used_names.add(name)
                 if (mi, pi) not in meshes:
@@ -1771,12 +1780,15 @@ def _animation(
                     "an object of zero scale out of the scene, so it would never appear: give "
                     f"{field} a tiny non-zero value instead (e.g. 1e-6, far below a pixel)",
                 )
+    aw = f"animations[{ai}]"
     if values == 0:
-        return Animation(frames, fps)
+        with _located(r, aw):
+            return Animation(frames, fps)
     keys: dict[str, list[Keyframe]] = {}
 
     def add(target: str, frame: int, value) -> None:
-        keys.setdefault(target, []).append(Keyframe(frame, tuple(float(x) for x in value)))
+        with _located(r, aw):
+            keys.setdefault(target, []).append(Keyframe(frame, tuple(float(x) for x in value)))
 
     corners = {j: _box_corners(meshes[j].positions) for j, _ in objs}
     for f in range(frames):
@@ -1809,13 +1821,26 @@ def _animation(
             )
             for attr, value in placed_at.items():
                 add(f"light[{j}].{attr}", f, value)
-    tracks = []
-    for target, ks in keys.items():
-        interp = "slerp" if target.endswith(".rotation") else "linear"
-        tracks.append(Track(target, tuple(ks), interp))
-    if headlight:
-        tracks += headlight_track(tracks)
-    return Animation(frames, fps, tuple(tracks))
+    with _located(r, aw):  # a Track or Animation refusal names no file
+        tracks = []
+        for target, ks in keys.items():
+            interp = "slerp" if target.endswith(".rotation") else "linear"
+            tracks.append(Track(target, tuple(ks), interp))
+        if headlight:
+            tracks += headlight_track(tracks)
+        return Animation(frames, fps, tuple(tracks))
+
+
+@contextmanager
+def _located(r: _Reader, where: str) -> Iterator[None]:
+    """A ``ValueError`` or ``TypeError`` of the block (a refnpr constructor's, which names no
+    file) as a :class:`GltfError` naming the file and ``where``."""
+    try:
+        yield
+    except GltfError:
+        raise
+    except (TypeError, ValueError) as exc:
+        raise r.fail(where, str(exc)) from None
 
 
 def headlight_track(tracks: Sequence[Track]) -> tuple[Track, ...]:

@@ -461,6 +461,42 @@ def test_animation_linear_step_cubic(tmp_path):
     np.testing.assert_allclose(cub.at(2).objects[0].transform[:3, 3], [expect, 0, 0], atol=1e-12)
 
 
+def test_an_animated_root_listed_twice_is_refused(tmp_path):
+    d = animated("LINEAR", [0.0, 1.0], [[0, 0, 0], [1, 0, 0]])
+    d.doc["scenes"][0]["nodes"] = [0, 0]
+    with pytest.raises(GltfError, match=r"twice\.glb: scenes\[0\]\.nodes\[1\]: node 0 is listed"):
+        quiet(load_gltf, d.write(tmp_path / "twice.glb"))
+
+
+def test_animated_objects_get_unique_names_when_a_node_takes_a_made_up_name(tmp_path):
+    """A repeated name gets " (nodes[i])"; a node may already be named so: that name is taken
+    too, else two moving objects would share their tracks."""
+    d = animated("LINEAR", [0.0, 1.0], [[0, 0, 0], [1, 0, 0]])
+    box = d.doc["nodes"][0]["mesh"]
+    kids = [
+        d.node(root=False, name=n, mesh=box, translation=[2.0 * k, 0.0, 0.0])
+        for k, n in enumerate(["box", "box (nodes[3])", "box"], start=1)
+    ]
+    d.doc["nodes"][0]["children"] = kids
+    scene = quiet(load_gltf, d.write(tmp_path / "names.glb"), fps=2)
+    names = [o.name for o in scene.objects]
+    assert names == ["box", "box (nodes[1])", "box (nodes[3])", "box (nodes[3]) (nodes[3])"]
+    targets = [t.target for t in scene.animation.tracks]
+    assert len(targets) == len(set(targets)) == 3 * 4
+
+
+def test_a_refused_animation_key_names_the_file_and_animation(tmp_path, monkeypatch):
+    import refnpr.scenes.gltf as gltf
+
+    def refuse(frame, value):
+        raise ValueError(f"frame: {frame} refused")
+
+    monkeypatch.setattr(gltf, "Keyframe", refuse)
+    d = animated("LINEAR", [0.0, 1.0], [[0, 0, 0], [1, 0, 0]])
+    with pytest.raises(GltfError, match=r"k\.glb: animations\[0\]: frame: 0 refused"):
+        quiet(load_gltf, d.write(tmp_path / "k.glb"))
+
+
 def test_animation_target_path_must_be_a_string(tmp_path):
     d = animated("LINEAR", [0.0, 1.0], [[0, 0, 0], [1, 0, 0]])
     d.doc["animations"][0]["channels"][0]["target"]["path"] = ["translation"]
@@ -607,6 +643,11 @@ MALFORMED = [
         "bad light",
         _set(["nodes", 0, "extensions"], {"KHR_lights_punctual": {"light": 3}}),
         r"nodes\[0\]\.extensions\.KHR_lights_punctual\.light: 3 is not a light index",
+    ),
+    (  # each root loaded once more: objects of the same name (and same tracks if animated)
+        "a root listed twice",
+        _set(["scenes", 0, "nodes"], [0, 0, 0]),
+        r"scenes\[0\]\.nodes\[1\]: node 0 is listed twice \(also at scenes\[0\]\.nodes\[0\]\)",
     ),
     (  # read as floats in [0, 1], the indices were no vertex indices
         "normalized indices",
