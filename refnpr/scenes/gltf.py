@@ -52,7 +52,7 @@ from typing import Any
 
 import numpy as np
 
-from .._reading import short_repr
+from .._reading import read_regular, short_repr
 from ..raster import Camera, Mesh
 from ..raster.mesh import MAX_COORDINATE, coordinate_limit_message
 from ..texture.embedded import EmbeddedImage, probe_image
@@ -255,19 +255,13 @@ class _Reader:
 
     # -- the file --------------------------------------------------------------------------------
     def _load(self) -> dict:
-        try:
-            size = self.path.stat().st_size
-        except OSError as exc:
-            raise GltfError(f"{self.label}: cannot read the file ({exc.strerror})") from None
-        if size > MAX_FILE_BYTES:
-            raise GltfError(
-                f"{self.label}: the file has {size} bytes, more than the {MAX_FILE_BYTES} refnpr "
-                "reads; split the scene or reduce its geometry"
-            )
-        try:
-            raw = self.path.read_bytes()
-        except OSError as exc:
-            raise GltfError(f"{self.label}: cannot read the file ({exc.strerror})") from None
+        try:  # a regular file only: a FIFO would block, a device (/dev/zero) never end
+            real = self.path.resolve()
+            raw = read_regular(real, what=f"{self.label}: the file", max_bytes=MAX_FILE_BYTES)
+        except (OSError, RuntimeError) as exc:  # resolve(): a symbolic link loop
+            raise GltfError(f"{self.label}: cannot read the file ({exc})") from None
+        except ValueError as exc:
+            raise GltfError(str(exc)) from None
         if raw[:4] == _GLB_MAGIC:
             text = self._glb_chunks(raw)
         elif self.path.suffix.lower() == ".glb":

@@ -3,7 +3,10 @@
 Before trimesh reads a file, :func:`load_mesh` checks it against its own format (a raw parse of
 OBJ, PLY, STL and OFF, the GLB header), because trimesh silently drops non-finite vertices with
 their faces, reads a truncated ASCII PLY as a partial mesh and reports a truncated binary STL with
-an unrelated message. Every error names the file as the caller gave it.
+an unrelated message. Every error names the file as the caller gave it. The file, and every
+file it refers to (an OBJ's materials, a glTF's buffers), is read only if it is a regular file
+of at most :data:`MAX_MESH_FILE_BYTES` (a FIFO would block, a device such as ``/dev/zero``
+never end).
 """
 
 from __future__ import annotations
@@ -13,14 +16,17 @@ from pathlib import Path
 
 import numpy as np
 
+from .._reading import read_regular
 from ..raster import Mesh
 from ._mesh_files import CHECKS, FIX, BadMeshFile, check_geometry
 from .uv_projection import UV_PROJECTIONS, project_uv
 
-__all__ = ["load_mesh", "from_trimesh", "MESH_EXTENSIONS"]
+__all__ = ["load_mesh", "from_trimesh", "MESH_EXTENSIONS", "MAX_MESH_FILE_BYTES"]
 
 #: File extensions :func:`load_mesh` reads (case-insensitive).
 MESH_EXTENSIONS = ("obj", "ply", "stl", "off", "glb", "gltf")
+#: The largest mesh file read (bytes), and the largest file it refers to.
+MAX_MESH_FILE_BYTES = 1 << 31
 
 
 def from_trimesh(tm, *, name: str = "mesh") -> Mesh:
@@ -79,7 +85,8 @@ def load_mesh(path: str | os.PathLike, *, uv_projection: str | None = None) -> M
     FileNotFoundError
         If ``path`` does not exist.
     ValueError
-        If ``path`` is a directory or has an unsupported extension; if the file is truncated or
+        If ``path`` is a directory, not a regular file (a FIFO, a device), larger than
+        :data:`MAX_MESH_FILE_BYTES` or has an unsupported extension; if the file is truncated or
         corrupt, holds non-finite vertices, faces that reference missing vertices or faces of
         fewer than 3 vertices, no triangles (or only zero-area ones), or coordinates beyond
         :data:`~refnpr.raster.mesh.MAX_COORDINATE`; or if ``uv_projection`` is unknown. The
@@ -108,8 +115,11 @@ def load_mesh(path: str | os.PathLike, *, uv_projection: str | None = None) -> M
             + (f"the unsupported extension {p.suffix!r}" if ext else "no file extension")
             + f"; supported mesh formats: {', '.join('.' + e for e in MESH_EXTENSIONS)}"
         )
-    data = p.read_bytes()
     what = f"path: mesh file {label}"
+    try:
+        data = read_regular(p.resolve(), what=what, max_bytes=MAX_MESH_FILE_BYTES)
+    except (OSError, RuntimeError) as exc:  # resolve(): a symbolic link loop
+        raise ValueError(f"{what}: cannot read it ({exc})") from None
     if not data.strip():
         raise ValueError(f"{what} is empty (0 bytes of geometry); {FIX}")
     check = CHECKS.get(ext)
@@ -125,7 +135,7 @@ def load_mesh(path: str | os.PathLike, *, uv_projection: str | None = None) -> M
         if parsed is not None:  # OFF: trimesh reads it line by line; the check read it whole
             loaded = trimesh.Trimesh(**parsed, process=False)
         else:
-            loaded = trimesh.load(p, file_type=ext, process=False)
+            loaded = trimesh.load(p, file_type=ext, process=False, resolver=_resolver(p))
     except Exception as exc:  # noqa: BLE001 -- trimesh raises many types for unreadable files
         raise ValueError(
             f"path: trimesh could not read {label} as {ext.upper()}: {type(exc).__name__}: "
@@ -155,3 +165,24 @@ def load_mesh(path: str | os.PathLike, *, uv_projection: str | None = None) -> M
     if uv_projection is not None:
         meshes = [project_uv(m, uv_projection) for m in meshes]
     return meshes[0] if len(meshes) == 1 else meshes
+
+
+def _resolver(path: Path):
+    """trimesh's resolver of the files that mesh file ``path`` refers to (inside its
+    directory, as trimesh's own), reading each as :func:`load_mesh` reads ``path``."""
+    from trimesh.resolvers import FilePathResolver  # deferred, as trimesh in load_mesh
+
+    class RegularFiles(FilePathResolver):
+        def get(self, name: str) -> bytes:
+            for candidate in (name.strip(), name.strip().lstrip("/"), os.path.split(name)[-1]):
+                try:
+                    full = self.absolute(candidate)  # resolved, inside the directory
+                except ValueError:
+                    continue
+                if full.exists():
+                    what = f"{name!r} (a file that {self.file_name!r} refers to)"
+                    return read_regular(full, what=what, max_bytes=MAX_MESH_FILE_BYTES)
+            self.absolute(name)  # the error of a name that leaves the directory
+            raise FileNotFoundError(name)
+
+    return RegularFiles(str(path))

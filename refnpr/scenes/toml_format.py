@@ -80,6 +80,7 @@ from dataclasses import fields
 from importlib import resources
 from pathlib import Path
 
+from .._reading import read_regular
 from ..raster import Camera
 from ..texture.builtin import BUILTIN_TEXTURES
 from .animation import MAX_FRAMES, Animation, Track, check_keys_in_range
@@ -95,6 +96,7 @@ __all__ = [
     "builtin_scene_path",
     "parse_toml_bytes",
     "scene_frames",
+    "MAX_SCENE_FILE_BYTES",
 ]
 
 _TOP_KEYS = tuple(
@@ -108,6 +110,8 @@ _TRANSFORM_KEYS = ("translate", "rotate_deg", "scale", "matrix")
 _ANIMATION_KEYS = ("frames", "fps", "track")
 _TRACK_KEYS = ("target", "interpolation", "keys", "integer")
 _KEY_KEYS = ("frame", "time", "value", "quaternion", "axis", "angle_deg")
+#: The largest TOML scene file read (bytes).
+MAX_SCENE_FILE_BYTES = 64 << 20
 
 
 class SceneFileError(ValueError):
@@ -338,7 +342,7 @@ def _gltf_content(src: str, top: dict, base: Path) -> Scene:
     anim = top.get("animation")
     fps = anim.get("fps", 24.0) if isinstance(anim, Mapping) else 24.0
     full = base / path
-    if not full.is_file():
+    if not full.exists():  # a FIFO or a device exists: load_gltf names what it is
         raise SceneFileError(f"{src}: gltf: file {str(full)!r} not found")
     with _where(src, "gltf"):
         return load_gltf(full, fps=fps, headlight=False, **spec)
@@ -488,11 +492,17 @@ def _data_dir() -> Path:
 
 
 def _read(path: Path, source: str) -> dict:
-    """Parse a scene file; every failure is a SceneFileError naming ``source`` (and the line)."""
+    """Parse a scene file; every failure is a SceneFileError naming ``source`` (and the line).
+    Only a regular file of at most :data:`MAX_SCENE_FILE_BYTES` is read (a FIFO would block,
+    a device such as ``/dev/zero`` never end)."""
     try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise SceneFileError(f"{source}: cannot read the scene file ({exc.strerror})") from exc
+        raw = read_regular(
+            path.resolve(), what=f"{source}: the scene file", max_bytes=MAX_SCENE_FILE_BYTES
+        )
+    except (OSError, RuntimeError) as exc:  # resolve(): a symbolic link loop
+        raise SceneFileError(f"{source}: cannot read the scene file ({exc})") from None
+    except ValueError as exc:
+        raise SceneFileError(str(exc)) from None
     return parse_toml_bytes(raw, source, what="TOML scene files", error=SceneFileError)
 
 
@@ -592,7 +602,7 @@ def load_scene(name_or_path: str | Path, *, camera: str | int | None = None) -> 
             raise SceneFileError(
                 f"scene: {str(path)!r} is a directory; expected a .toml scene file"
             )
-        if not path.is_file():
+        if not path.exists():  # a FIFO or a device exists: _read names what it is
             raise FileNotFoundError(f"scene: file {str(path)!r} does not exist")
         return parse_scene(_read(path, str(path)), path.parent, source=str(path))
     if not isinstance(name_or_path, str):

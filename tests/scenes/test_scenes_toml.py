@@ -1,5 +1,6 @@
 """Scene files: built-in scenes, mesh specs, a full round trip, and error messages."""
 
+import os
 import tomllib
 
 import numpy as np
@@ -383,3 +384,70 @@ def test_style_file_parameters_are_relative_to_the_scene_file(tmp_path):
     scene = load_scene(tmp_path / "s.toml")
     assert scene.style["texture"] == str(tmp_path / "paper.png")
     assert scene.style["list"] == [str(tmp_path / "paper.png"), "brick"]  # names stay names
+
+
+# -- files that are not regular files ----------------------------------------------------------
+# A FIFO would block a read forever and a device such as /dev/zero never ends: a scene file, a
+# mesh file and a glTF file are read only if they are regular files (their size capped).
+SCENE_HEAD = "[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\n[[object]]\n"
+
+
+def _not_regular(path, kind):
+    if kind == "fifo":
+        os.mkfifo(path)
+    else:
+        path.symlink_to("/dev/null")  # a device; reading /dev/zero would never end
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_mesh_path_that_is_no_regular_file_is_refused(tmp_path, kind):
+    _not_regular(tmp_path / "m.obj", kind)
+    (tmp_path / "s.toml").write_text(SCENE_HEAD + 'path = "m.obj"\n')
+    with pytest.raises(
+        SceneFileError,
+        match=r"s\.toml: \[\[object\]\] #1 'm\.obj': path: mesh file .*m\.obj' is not a regular "
+        r"file; expected a regular file",
+    ):
+        load_scene(tmp_path / "s.toml")
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_scene_or_gltf_file_that_is_no_regular_file_is_refused(tmp_path, kind):
+    _not_regular(tmp_path / "s.toml", kind)
+    with pytest.raises(SceneFileError, match=r"s\.toml: the scene file is not a regular file"):
+        load_scene(tmp_path / "s.toml")
+    _not_regular(tmp_path / "m.glb", kind)
+    (tmp_path / "g.toml").write_text('gltf = "m.glb"\n')
+    with pytest.raises(SceneFileError, match=r"m\.glb: the file is not a regular file"):
+        load_scene(tmp_path / "g.toml")
+    with pytest.raises(SceneFileError, match=r"m\.glb: the file is not a regular file"):
+        load_scene(tmp_path / "m.glb")
+
+
+def test_a_file_that_a_mesh_file_refers_to_is_read_only_if_regular(tmp_path):
+    """trimesh reads an OBJ's material library through refnpr's resolver: a FIFO is refused
+    (trimesh then loads the geometry without materials) instead of blocking the read."""
+    os.mkfifo(tmp_path / "m.mtl")
+    (tmp_path / "t.obj").write_text("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n")
+    (tmp_path / "s.toml").write_text(SCENE_HEAD + 'path = "t.obj"\n')
+    assert load_scene(tmp_path / "s.toml").objects[0].mesh.n_faces == 1
+
+
+def test_mesh_and_scene_files_above_their_caps_are_refused(tmp_path, monkeypatch):
+    import refnpr.scenes.loading as loading
+    import refnpr.scenes.toml_format as toml_format
+
+    trimesh.creation.box().export(tmp_path / "box.stl")
+    (tmp_path / "s.toml").write_text(SCENE_HEAD + 'path = "box.stl"\n')
+    assert load_scene(tmp_path / "s.toml").objects[0].mesh.n_faces == 12
+    monkeypatch.setattr(loading, "MAX_MESH_FILE_BYTES", 100)
+    with pytest.raises(
+        SceneFileError,
+        match=r"path: mesh file .*box\.stl' has \d+ bytes, more than the 100 bytes allowed",
+    ):
+        load_scene(tmp_path / "s.toml")
+    monkeypatch.setattr(toml_format, "MAX_SCENE_FILE_BYTES", 20)
+    with pytest.raises(
+        SceneFileError, match=r"s\.toml: the scene file has \d+ bytes, more than the 20 bytes"
+    ):
+        load_scene(tmp_path / "s.toml")
