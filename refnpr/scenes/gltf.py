@@ -78,7 +78,8 @@ __all__ = [
 
 #: File suffixes read as glTF scenes (case-insensitive).
 GLTF_EXTENSIONS = (".gltf", ".glb")
-#: The largest ``.glb``, ``.gltf`` or buffer file read (bytes).
+#: The largest ``.glb``, ``.gltf`` or buffer file read (bytes); also the largest buffer
+#: (``byteLength``) and the most bytes all the buffers of a file hold together.
 MAX_FILE_BYTES = 1 << 31
 #: The largest JSON part (bytes).
 MAX_JSON_BYTES = 64 << 20
@@ -171,6 +172,7 @@ class _Reader:
         self.path, self.label, self.base = path, label, path.parent
         self.ignored: list[str] = []  # glTF inputs not read, named once in a warning
         self._buffers: dict[int, memoryview] = {}
+        self._buffer_bytes = 0  # the byteLength of the buffers read so far, together
         self._glb_bin: bytes | None = None
         # images read, by index: file paths or EmbeddedImages (shared by the materials)
         self.images: dict[int, str | EmbeddedImage] = {}
@@ -350,6 +352,18 @@ class _Reader:
         buf = self.item("buffers", index, where)
         bw = f"buffers[{index}]"
         length = self.get_int(buf, "byteLength", bw, lo=1)
+        if length > MAX_FILE_BYTES - self._buffer_bytes:  # checked before anything is read
+            others = (
+                f" (with the {self._buffer_bytes} bytes of the buffers read before it, "
+                f"{self._buffer_bytes + length})"
+                if self._buffer_bytes
+                else ""
+            )
+            raise self.fail(
+                f"{bw}.byteLength",
+                f"{length} bytes{others}, more than the {MAX_FILE_BYTES} bytes refnpr reads of "
+                "a file's buffers; split the scene or reduce its geometry",
+            )
         uri = buf.get("uri")
         if uri is None:
             if index != 0 or self._glb_bin is None:
@@ -373,6 +387,7 @@ class _Reader:
             )
         view = memoryview(data)[:length]
         self._buffers[index] = view
+        self._buffer_bytes += length
         return view
 
     def data_uri(self, uri: str, where: str) -> bytes:
@@ -384,8 +399,13 @@ class _Reader:
         head, sep, payload = uri.partition(",")
         if not sep or not head.endswith(";base64"):
             raise self.fail(where, "a data: URI must be base64 (data:...;base64,...)")
-        if len(payload) // 4 * 3 > length + 3 and len(payload) > MAX_JSON_BYTES:
-            raise self.fail(where, "the data: URI is larger than its byteLength")
+        decoded = len(payload) // 4 * 3  # at most 2 bytes more than it decodes to
+        if decoded > length + 3:  # (a little slack for padding)
+            raise self.fail(
+                where,
+                f"the data: URI holds about {decoded} bytes, more than its byteLength "
+                f"({length}); make byteLength the size of the decoded data",
+            )
         try:
             return base64.b64decode(payload, validate=True)
         except (binascii.Error, ValueError) as exc:
@@ -419,24 +439,25 @@ class _Reader:
         return full
 
     def _external(self, uri: str, length: int, where: str) -> bytes:
+        """The first ``length`` bytes of the buffer file ``uri`` (a regular file beside the
+        .gltf of at most MAX_FILE_BYTES, holding at least ``length`` bytes)."""
         full = self.resolve_uri(uri, where)
-        try:
-            size = full.stat().st_size
-            if not full.is_file():
-                raise self.fail(where, f"{uri!r} is not a file")
-        except OSError:
+        if not full.exists():
             raise self.fail(
                 where, f"buffer file {uri!r} not found beside the .gltf ({str(full)!r})"
-            ) from None
-        if size < length:
-            raise self.fail(
-                where, f"buffer file {uri!r} has {size} bytes, but byteLength declares {length}"
             )
         try:
-            with full.open("rb") as f:
-                return f.read(length)
-        except OSError as exc:
-            raise self.fail(where, f"cannot read {uri!r} ({exc.strerror})") from None
+            data = read_regular(
+                full, what=f"buffer file {uri!r}", max_bytes=MAX_FILE_BYTES, head=length
+            )
+        except ValueError as exc:
+            raise self.fail(where, str(exc)) from None
+        if len(data) < length:
+            raise self.fail(
+                where,
+                f"buffer file {uri!r} has {len(data)} bytes, but byteLength declares {length}",
+            )
+        return data
 
     def view(self, index: Any, where: str) -> tuple[memoryview, dict, str]:
         """Buffer view ``index`` (referenced at ``where``): its bytes (bounds-checked against its

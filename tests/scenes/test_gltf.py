@@ -808,12 +808,69 @@ def test_truncated_glb_and_huge_byte_length(tmp_path):
     d = _base()
     path = d.write(tmp_path / "h.gltf", "bin")
     doc = json.loads(path.read_text())
-    doc["buffers"][0]["byteLength"] = 2**40
+    doc["buffers"][0]["byteLength"] = 10**6
     path.write_text(json.dumps(doc))
     with pytest.raises(
-        ValueError, match=r"h\.gltf: buffers\[0\]\.uri: buffer file 'model\.bin' has \d+ bytes"
+        ValueError,
+        match=r"h\.gltf: buffers\[0\]\.uri: buffer file 'model\.bin' has \d+ bytes, but "
+        r"byteLength declares 1000000",
     ):
         load_gltf(path)
+    doc["buffers"][0]["byteLength"] = 2**40  # beyond the cap: refused before the file is read
+    path.write_text(json.dumps(doc))
+    with pytest.raises(
+        ValueError, match=r"h\.gltf: buffers\[0\]\.byteLength: 1099511627776 bytes, more than"
+    ):
+        load_gltf(path)
+
+
+def test_buffers_are_capped_one_by_one_and_together(tmp_path, monkeypatch):
+    """A buffer file is read up to its byteLength: MAX_FILE_BYTES caps each byteLength, and
+    the buffers of a file together, before anything is read (not only the .gltf's size)."""
+    import refnpr.scenes.gltf as gltf
+
+    d = _base()
+    d.blob += bytes(1200 - len(d.blob))  # 1200 bytes of buffer, a .gltf of a few hundred
+    path = d.write(tmp_path / "cap.gltf", "bin")
+    assert quiet(load_gltf, path).objects[0].mesh.n_faces == 1
+    monkeypatch.setattr(gltf, "MAX_FILE_BYTES", 1000)
+    with pytest.raises(
+        GltfError,
+        match=r"cap\.gltf: buffers\[0\]\.byteLength: 1200 bytes, more than the 1000 bytes "
+        r"refnpr reads of a file's buffers",
+    ):
+        quiet(load_gltf, path)
+    # two buffers of 600 bytes each (the normals in the second): each fits, not both
+    monkeypatch.setattr(gltf, "MAX_FILE_BYTES", 1100)
+    doc = json.loads(path.read_text())
+    blob = (tmp_path / "model.bin").read_bytes()[:600]
+    (tmp_path / "model.bin").write_bytes(blob)
+    (tmp_path / "second.bin").write_bytes(blob)
+    doc["buffers"] = [
+        {"byteLength": 600, "uri": "model.bin"},
+        {"byteLength": 600, "uri": "second.bin"},
+    ]
+    doc["bufferViews"][1]["buffer"] = 1
+    path.write_text(json.dumps(doc))
+    with pytest.raises(
+        GltfError,
+        match=r"cap\.gltf: buffers\[1\]\.byteLength: 600 bytes \(with the 600 bytes of the "
+        r"buffers read before it, 1200\), more than the 1100 bytes",
+    ):
+        quiet(load_gltf, path)
+
+
+def test_a_data_uri_longer_than_its_byte_length_is_refused(tmp_path):
+    path = _base().write(tmp_path / "d.gltf", "data")
+    doc = json.loads(path.read_text())
+    doc["buffers"][0]["byteLength"] = 36  # the data holds 84 bytes
+    path.write_text(json.dumps(doc))
+    with pytest.raises(
+        GltfError,
+        match=r"d\.gltf: buffers\[0\]\.uri: the data: URI holds about 84 bytes, more than its "
+        r"byteLength \(36\)",
+    ):
+        quiet(load_gltf, path)
 
 
 def test_animation_work_is_bounded_by_frames_times_nodes(tmp_path, monkeypatch):
