@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import difflib
 import inspect
-import json
 import re
 import sys
 import tempfile
@@ -46,6 +45,9 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
+from .._reading import inside, read_regular
+from . import limits
+from ._json import load_json
 from .mutant_render import CaseRenderer
 from .port_bugs import BUGS, NotApplicable
 
@@ -62,8 +64,7 @@ __all__ = [
 
 #: The verdicts of a (case, bug) pair (see the module docstring).
 VERDICTS = ("caught", "missed", "no_effect", "n/a", "error")
-_NAME = re.compile(r"^[a-z0-9][a-z0-9_-]*$")
-_MAX_JSON = 64 * 1024 * 1024  # bytes of one index.json / case.json read
+_NAME = re.compile(r"[a-z0-9][a-z0-9_-]*")  # fullmatch: "$" would let a final newline in
 
 
 @dataclass
@@ -183,17 +184,19 @@ class MutantReport:
 # -- reading the kit ----------------------------------------------------------------------------
 
 
-def _read_json(path: Path, what: str) -> Any:
+def _read_json(kit_dir: Path, rel: str) -> Any:
+    """The kit's JSON file ``rel``, read as ``kit check`` reads it (the kit is untrusted): a
+    path inside the kit, a regular file (a FIFO would block, a link to ``/dev/zero`` never end)
+    of at most :data:`~refnpr.kit.limits.MAX_JSON_BYTES`, JSON nested at most
+    :data:`~refnpr.kit.limits.MAX_JSON_DEPTH` deep."""
+    what = f"kit file {rel!r}"
     try:
-        size = path.stat().st_size
-        if size > _MAX_JSON:
-            raise ValueError(f"{what}: {str(path)!r} is {size} bytes; at most {_MAX_JSON} read")
-        return json.loads(path.read_bytes())
-    except FileNotFoundError:
-        raise ValueError(f"{what}: {str(path)!r} does not exist") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
-        why = type(exc).__name__ if isinstance(exc, RecursionError) else str(exc)
-        raise ValueError(f"{what}: cannot read {str(path)!r} as JSON ({why})") from None
+        kit_root = kit_dir.resolve(strict=True)
+    except (OSError, RuntimeError) as exc:  # the directory went away, a symbolic link loop
+        raise ValueError(f"{what}: the kit {str(kit_dir)!r} cannot be read ({exc})") from None
+    path = inside(kit_root, rel, what=what, root_name="the kit")
+    data = read_regular(path, what=what, max_bytes=limits.MAX_JSON_BYTES)
+    return load_json(data, what=what, max_depth=limits.MAX_JSON_DEPTH)
 
 
 def _kit_entries(kit_dir: Path) -> list[dict[str, Any]]:
@@ -204,7 +207,10 @@ def _kit_entries(kit_dir: Path) -> list[dict[str, Any]]:
             f"kit_dir: {str(kit_dir)!r} is not a directory ({why}); export a kit with "
             "`refnpr kit export DIR`"
         )
-    index = _read_json(kit_dir / "index.json", "kit_dir")
+    try:
+        index = _read_json(kit_dir, "index.json")
+    except ValueError as exc:
+        raise ValueError(f"kit_dir: {exc}") from None
     cases = index.get("cases") if isinstance(index, dict) else None
     if not isinstance(cases, list) or not cases:
         raise ValueError(
@@ -214,7 +220,7 @@ def _kit_entries(kit_dir: Path) -> list[dict[str, Any]]:
     out, seen = [], set()
     for i, c in enumerate(cases):
         name = c.get("name") if isinstance(c, dict) else None
-        if not isinstance(name, str) or not _NAME.match(name):
+        if not isinstance(name, str) or not _NAME.fullmatch(name):
             raise ValueError(
                 f"kit_dir: index.json cases[{i}].name: expected a name matching "
                 f"[a-z0-9][a-z0-9_-]*, got {name!r}"
@@ -405,7 +411,7 @@ def _render_case(
             "(refnpr kit export), or give that suite"
         )
     try:
-        case_json = _read_json(kit_dir / mc.name / "case.json", f"case {mc.name!r}")
+        case_json = _read_json(kit_dir, f"{mc.name}/case.json")
         if not isinstance(case_json, dict):
             raise ValueError(f"case {mc.name!r}: case.json is not a JSON object")
         size = tuple(case_json.get(k) for k in ("width", "height", "spp"))
@@ -416,8 +422,8 @@ def _render_case(
             )
         renderer = CaseRenderer(case, lod_bias=_lod_bias(case_json))
         correct = renderer.correct()
-    except (ValueError, TypeError, OSError) as exc:
-        return fail_all(f"cannot render the case: {exc}")
+    except (ValueError, TypeError, OSError, MemoryError) as exc:  # a MemoryError may say nothing
+        return fail_all(f"cannot render the case: {str(exc) or type(exc).__name__}")
     _write(correct, root / "control", mc.name)
     rendered.setdefault("control", []).append(mc.name)
     for bug in bug_names:

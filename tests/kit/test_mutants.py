@@ -10,6 +10,8 @@ mutant of a bug that applies must fail.
 from __future__ import annotations
 
 import json
+import os
+import re
 
 import numpy as np
 import pytest
@@ -393,5 +395,89 @@ def test_cli_json_markdown_and_errors(tiny, tmp_path, capsys):
         run_mutants(tmp_path / "nope", suite=suite)
     (tmp_path / "bad").mkdir()
     (tmp_path / "bad" / "index.json").write_text("{")
-    with pytest.raises(ValueError, match="cannot read .* as JSON"):
+    with pytest.raises(ValueError, match=r"kit_dir: kit file 'index\.json': not valid JSON"):
         run_mutants(tmp_path / "bad", suite=suite)
+
+
+# -- a hostile kit -------------------------------------------------------------------------------
+# index.json and case.json are read as `kit check` reads them: inside the kit, regular files
+# (a FIFO would block the read, a link to /dev/zero never end) of a bounded size, bounded JSON.
+
+ONE_CASE = (
+    '[[case]]\nname = "c"\nscene = "sphere"\nstyle = { name = "toon" }\nwidth = 8\nheight = 6\n'
+)
+INDEX = '{"cases": [{"name": "c", "kind": "image", "style": "toon"}]}'
+
+
+def _hostile_kit(tmp_path):
+    kit = tmp_path / "kit"
+    (kit / "c").mkdir(parents=True)
+    (tmp_path / "suite.toml").write_text(ONE_CASE)
+    (tmp_path / "outside.json").write_text(INDEX)
+    return kit, tmp_path / "suite.toml"
+
+
+@pytest.mark.parametrize(
+    "label, make, message",
+    [
+        (
+            "link out of the kit",
+            lambda kit: (kit / "index.json").symlink_to(kit.parent / "outside.json"),
+            r"kit_dir: kit file 'index\.json': 'index\.json' leads outside the kit",
+        ),
+        (
+            "fifo",
+            lambda kit: os.mkfifo(kit / "index.json"),
+            r"kit_dir: kit file 'index\.json' is not a regular file",
+        ),
+        (  # Python parses at most 4300 digits: a ValueError that named no file
+            "5000 digits",
+            lambda kit: (kit / "index.json").write_text('{"cases": [' + "1" * 5000 + "]}"),
+            r"kit_dir: kit file 'index\.json': not valid JSON: Exceeds the limit",
+        ),
+        (
+            "above the JSON cap",
+            lambda kit: (kit / "index.json").write_text(INDEX + " " * 9000),
+            r"kit_dir: kit file 'index\.json' has 9\d+ bytes, more than the 8000 bytes allowed",
+        ),
+    ],
+)
+def test_a_hostile_index_is_refused_naming_the_file(tmp_path, monkeypatch, label, make, message):
+    from refnpr.kit import limits
+
+    monkeypatch.setattr(limits, "MAX_JSON_BYTES", 8000)
+    kit, suite = _hostile_kit(tmp_path)
+    make(kit)
+    with pytest.raises(ValueError, match=message):
+        run_mutants(kit, suite=suite, bugs=["v_flip"])
+
+
+@pytest.mark.parametrize(
+    "label, make, message",
+    [
+        (
+            "link out of the kit",
+            lambda kit: (kit / "c" / "case.json").symlink_to(kit.parent / "outside.json"),
+            r"kit file 'c/case\.json': 'c/case\.json' leads outside the kit",
+        ),
+        (
+            "link to /dev/zero",  # read whole, it exhausted memory (a MemoryError, not caught)
+            lambda kit: (kit / "c" / "case.json").symlink_to("/dev/zero"),
+            r"kit file 'c/case\.json': 'c/case\.json' leads outside the kit",
+        ),
+        (
+            "fifo",
+            lambda kit: os.mkfifo(kit / "c" / "case.json"),
+            r"kit file 'c/case\.json' is not a regular file",
+        ),
+    ],
+)
+def test_a_hostile_case_file_is_an_error_of_its_case(tmp_path, label, make, message):
+    kit, suite = _hostile_kit(tmp_path)
+    (kit / "index.json").write_text(INDEX)
+    (tmp_path / "outside.json").write_text('{"width": 9, "height": 6, "spp": 1}')
+    make(kit)
+    report = run_mutants(kit, suite=suite, bugs=["v_flip"])
+    (case,) = report.cases
+    assert case.control == "error"
+    assert re.search("cannot render the case: " + message, case.control_message)
