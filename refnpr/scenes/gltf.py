@@ -71,6 +71,9 @@ __all__ = [
     "MAX_ANIMATION_WORK",
     "MAX_ZERO_ACCESSOR_BYTES",
     "MAX_FILE_BYTES",
+    "MAX_NODES",
+    "MAX_PLACED_TRIANGLES",
+    "MAX_PLACED_VERTICES",
     "camera_headlight",
     "headlight_track",
     "load_gltf",
@@ -87,6 +90,13 @@ MAX_JSON_BYTES = 64 << 20
 MAX_ANIMATION_KEYS = 2_000_000
 #: The most bytes an accessor without a bufferView (all zeros by the spec) may expand to.
 MAX_ZERO_ACCESSOR_BYTES = 64 << 20
+#: The most nodes a file may have (each costs a matrix and its work in every animation frame).
+MAX_NODES = 100_000
+#: The most triangles, and vertices, the objects of a scene may have together: a mesh that
+#: several nodes place counts once per node (each placement is an object with its own world
+#: mesh). Checked before any object is built.
+MAX_PLACED_TRIANGLES = 20_000_000
+MAX_PLACED_VERTICES = 3 * MAX_PLACED_TRIANGLES
 #: The most frames x (nodes + animation channels) an animation may evaluate (its work).
 MAX_ANIMATION_WORK = 20_000_000
 #: The material's ambient colour m_a is this fraction of the base colour (so that a base colour
@@ -692,6 +702,12 @@ def _unit_quaternion(r: _Reader, q: np.ndarray, where: str) -> np.ndarray:
 def _nodes(r: _Reader) -> list[_Node]:
     """Every node with its local matrix and parent; cycles and shared children refused."""
     raw = r.array("nodes")
+    if len(raw) > MAX_NODES:
+        raise r.fail(
+            "nodes",
+            f"the file has {len(raw)} nodes, more than the {MAX_NODES} refnpr reads; merge "
+            "nodes (e.g. join static meshes) or split the scene",
+        )
     nodes: list[_Node] = []
     for i, node in enumerate(raw):
         w = f"nodes[{i}]"
@@ -1374,6 +1390,7 @@ def load_gltf(
             "object of zero scale out of the scene; one that an animation scales up needs a tiny "
             "non-zero rest scale instead, e.g. 1e-6)"
         )
+    _check_placed(r, [meshes[(r.doc["nodes"][pl.node]["mesh"], pl.index)] for pl in objects_at])
     objects = [instance(pl, world[pl.node]) for pl in objects_at]
     bounds_lo = np.min([o.world_mesh().positions.min(axis=0) for o in objects], axis=0)
     bounds_hi = np.max([o.world_mesh().positions.max(axis=0) for o in objects], axis=0)
@@ -1454,6 +1471,28 @@ def load_gltf(
         return Scene(**{**_fields(scene), "animation": anim})
     except ValueError as exc:
         raise GltfError(f"{given}: animations: {exc}") from None
+
+
+def _check_placed(r: _Reader, placed: list[Mesh]) -> None:
+    """Refuse objects (the meshes their nodes place, one per object) with more than
+    MAX_PLACED_TRIANGLES triangles or MAX_PLACED_VERTICES vertices together: each is an object
+    of its own (its world mesh, its share of every render), so a small file that places one
+    mesh many times would exhaust memory."""
+    triangles = sum(m.n_faces for m in placed)
+    vertices = sum(m.n_vertices for m in placed)
+    if triangles <= MAX_PLACED_TRIANGLES and vertices <= MAX_PLACED_VERTICES:
+        return
+    which = (
+        f"{triangles} triangles, more than the {MAX_PLACED_TRIANGLES}"
+        if triangles > MAX_PLACED_TRIANGLES
+        else f"{vertices} vertices, more than the {MAX_PLACED_VERTICES}"
+    )
+    shared = len(placed) - len({id(m) for m in placed})
+    raise GltfError(
+        f"{r.label}: the scene's {len(placed)} objects have {which} refnpr renders in one scene"
+        + (f" ({shared} of the objects place a mesh that another one places too)" if shared else "")
+        + "; place fewer copies of the meshes, or simplify them"
+    )
 
 
 def _fields(scene: Scene) -> dict:

@@ -873,6 +873,36 @@ def test_a_data_uri_longer_than_its_byte_length_is_refused(tmp_path):
         quiet(load_gltf, path)
 
 
+def test_nodes_and_the_geometry_they_place_are_capped(tmp_path, monkeypatch):
+    """Each node that places a mesh makes an object with its own world mesh: a small file could
+    place one large mesh thousands of times. The node count and the triangles and vertices of
+    all objects together are capped before any object is built."""
+    import refnpr.scenes.gltf as gltf
+
+    d = _base()
+    for k in range(3):
+        d.node(name=f"copy{k}", mesh=d.doc["nodes"][0]["mesh"], translation=[k + 1.0, 0.0, 0.0])
+    path = d.write(tmp_path / "inst.glb")
+    assert len(quiet(load_gltf, path).objects) == 4  # 4 triangles, 12 vertices
+    monkeypatch.setattr(gltf, "MAX_NODES", 3)
+    with pytest.raises(
+        GltfError, match=r"inst\.glb: nodes: the file has 4 nodes, more than the 3 refnpr reads"
+    ):
+        quiet(load_gltf, path)
+    monkeypatch.setattr(gltf, "MAX_NODES", 4)
+    monkeypatch.setattr(gltf, "MAX_PLACED_TRIANGLES", 3)
+    with pytest.raises(
+        GltfError,
+        match=r"inst\.glb: the scene's 4 objects have 4 triangles, more than the 3 refnpr "
+        r"renders in one scene \(3 of the objects place a mesh that another one places too\)",
+    ):
+        quiet(load_gltf, path)
+    monkeypatch.setattr(gltf, "MAX_PLACED_TRIANGLES", 4)
+    monkeypatch.setattr(gltf, "MAX_PLACED_VERTICES", 11)
+    with pytest.raises(GltfError, match=r"4 objects have 12 vertices, more than the 11 refnpr"):
+        quiet(load_gltf, path)
+
+
 def test_animation_work_is_bounded_by_frames_times_nodes(tmp_path, monkeypatch):
     """Each frame evaluates every node's world matrix: frames x (nodes + animated nodes) is
     capped before any frame is evaluated (a small file could otherwise ask for hours)."""
