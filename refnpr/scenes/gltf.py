@@ -52,7 +52,7 @@ from typing import Any
 
 import numpy as np
 
-from .._reading import read_regular, short_repr
+from .._reading import printable, read_regular, short_repr
 from ..raster import Camera, Mesh
 from ..raster.mesh import MAX_COORDINATE, coordinate_limit_message
 from ..texture.embedded import EmbeddedImage, probe_image
@@ -193,6 +193,9 @@ class _Reader:
         return GltfError(f"{self.label}: {where}: {message}")
 
     def ignore(self, what: str) -> None:
+        """Name ``what`` (it may quote the file's own keys) in the warning of inputs not read,
+        once, with its control and format characters escaped (no terminal escapes)."""
+        what = printable(what)
         if what not in self.ignored:
             self.ignored.append(what)
 
@@ -1167,12 +1170,20 @@ def _lights(r: _Reader) -> list[dict]:
         intensity = r.get_real(light, "intensity", w, 1.0)
         if np.any(color < 0) or intensity < 0:
             raise r.fail(w, "color and intensity must be >= 0")
+        with np.errstate(over="ignore"):
+            product = color * intensity
+        if not np.all(np.isfinite(product)):
+            raise r.fail(
+                w,
+                f"color {color.tolist()} x intensity {intensity:g} (the light's colour) is "
+                "beyond float64; give a smaller intensity or colour",
+            )
         if "range" in light:
             r.ignore("light range (refnpr lights do not fall off)")
         out.append(
             {
                 "kind": kind,
-                "color": tuple(color * intensity),
+                "color": tuple(product),
                 "name": r.name_of(light, w, f"light{i}"),
             }
         )
@@ -1423,7 +1434,8 @@ def load_gltf(
             _warn(f"{given}: spot light {info['name']!r} is read as a point light (no cone)")
         kind = "directional" if info["kind"] == "directional" else "point"
         placed_at = _light_from(r, nodes, pl, world[pl.node], info)
-        lights.append(Light(kind=kind, color=info["color"], **placed_at))
+        with _located(r, f"extensions.KHR_lights_punctual.lights[{pl.index}]"):
+            lights.append(Light(kind=kind, color=info["color"], **placed_at))
     headlight = headlight and not lights
     if headlight:
         lights.append(camera_headlight(cam))

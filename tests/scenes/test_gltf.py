@@ -309,6 +309,65 @@ def test_material_base_color_and_ignored_inputs(tmp_path):
     assert "normalTexture" in ignored[0] and "metallicFactor" in ignored[0]
 
 
+def test_ignored_keys_are_named_with_their_control_characters_escaped(tmp_path):
+    """The note of inputs not read quotes the file's own keys: a terminal escape or a bidi
+    override in one is written as a Python escape, never sent to the terminal."""
+    d = _base()
+    d.doc["meshes"][0]["primitives"][0]["attributes"]["\x1b[2J\x1b[31mX\u202e"] = 0
+    d.doc["extensions"] = {"\x1b]0;title\x07": {}}
+    with pytest.warns(GltfWarning) as record:
+        load_gltf(d.write(tmp_path / "esc.glb"))
+    (ignored,) = [str(w.message) for w in record if "not read (ignored)" in str(w.message)]
+    assert ignored.isprintable()
+    assert "vertex attribute \\x1b[2J\\x1b[31mX\\u202e" in ignored
+    assert "extension \\x1b]0;title\\x07" in ignored
+
+
+def _light(color, intensity):
+    def edit(d):
+        d.doc["extensions"] = {
+            "KHR_lights_punctual": {
+                "lights": [{"type": "point", "color": color, "intensity": intensity}]
+            }
+        }
+        d.node(extensions={"KHR_lights_punctual": {"light": 0}}, translation=[0.0, 0.0, 2.0])
+
+    return edit
+
+
+def test_a_light_whose_colour_times_intensity_overflows_is_refused(tmp_path):
+    d = _base()
+    _light([1e300, 1.0, 1.0], 1e300)(d)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # no numpy overflow warning either
+        with pytest.raises(
+            GltfError,
+            match=r"l\.glb: extensions\.KHR_lights_punctual\.lights\[0\]: color \[1e\+300, 1\.0, "
+            r"1\.0\] x intensity 1e\+300 \(the light's colour\) is beyond float64",
+        ):
+            quiet(load_gltf, d.write(tmp_path / "l.glb"))
+    d = _base()
+    _light([1e200, 1.0, 1.0], 1e100)(d)  # large, but a float64
+    (light,) = quiet(load_gltf, d.write(tmp_path / "big.glb")).lights
+    assert light.color == (1e300, 1e100, 1e100)
+
+
+def test_a_refused_light_names_the_file_and_light(tmp_path, monkeypatch):
+    import refnpr.scenes.gltf as gltf
+
+    def refuse(**fields):
+        raise ValueError(f"color: {len(fields)} fields refused")
+
+    monkeypatch.setattr(gltf, "Light", refuse)
+    d = _base()
+    _light([1.0, 0.5, 0.25], 2.0)(d)
+    with pytest.raises(
+        GltfError,
+        match=r"r\.glb: extensions\.KHR_lights_punctual\.lights\[0\]: color: 3 fields refused",
+    ):
+        quiet(load_gltf, d.write(tmp_path / "r.glb"))
+
+
 def test_camera_choice_and_orthographic(tmp_path):
     d = two_boxes_with_camera()
     d.doc["cameras"].append(
