@@ -7,6 +7,7 @@ import argparse
 import dataclasses
 import json
 import os
+import re
 import sys
 import threading
 import time
@@ -44,7 +45,13 @@ def _param(text: str) -> tuple[str, object]:
     import tomllib
 
     try:
-        value = tomllib.loads(f"v = {raw}")["v"]
+        parsed = tomllib.loads(f"v = {raw}")
+        if len(parsed) != 1:  # a newline in the value started another key
+            raise argparse.ArgumentTypeError(
+                f"--param: the value of {key.strip()!r} holds more than one TOML value "
+                f"({raw!r}); give one KEY=VALUE per --param"
+            )
+        value = parsed["v"]
     except tomllib.TOMLDecodeError:
         value = raw  # a bare word is a string
     except RecursionError:  # tomllib parses nested arrays recursively
@@ -253,11 +260,13 @@ def _cmd_render(args: argparse.Namespace) -> int:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
+    from ._atomic import check_parent_writable
     from .sequence import _video_suffix, frame_range, render_sequence, write_video
 
     out = Path(args.output)
     if out.exists() and not out.is_dir():
         raise ValueError(f"-o/--output: {args.output!r} is a file; give a directory for the frames")
+    check_parent_writable(out / "frame", args.output, "-o/--output")
     if args.video is not None:
         _video_suffix(args.video, "--video")
     scene, style = _scene_and_style(args)
@@ -669,7 +678,7 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument(
         "--frames",
         metavar="A:B",
-        help="frames A to B-1, like a Python slice (10:, :24); default all",
+        help="frames A to B-1, like a Python slice (10:, :24, -10: for the last ten); default all",
     )
     a.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for the frames")
     a.add_argument(
@@ -828,7 +837,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_style_options(co, own_style)
     co.add_argument("--size", type=_size, default=(256, 192), help="WxH (default 256x192)")
     co.add_argument("--spp", type=int, default=1, help="samples per pixel of the frames (1)")
-    co.add_argument("--frames", metavar="A:B", help="frames A..B-1 (default all)")
+    co.add_argument(
+        "--frames", metavar="A:B", help="frames A..B-1, like a Python slice (default all)"
+    )
     co.add_argument(
         "--depth-rtol",
         type=float,
@@ -864,7 +875,24 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: An option value that argparse would take for an option: a slice starting with a minus sign.
+_NEGATIVE_SLICE = re.compile(r"-\d+:-?\d*")
+
+
+def _slices_attached(argv: list[str]) -> list[str]:
+    """``argv`` with ``--frames -10:`` written ``--frames=-10:``: argparse reads a value that
+    starts with "-" (other than a plain negative number) as an option and fails."""
+    out: list[str] = []
+    for a in argv:
+        if out and out[-1] == "--frames" and _NEGATIVE_SLICE.fullmatch(a):
+            out[-1] = f"--frames={a}"
+        else:
+            out.append(a)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
+    argv = _slices_attached(list(sys.argv[1:] if argv is None else argv))
     args = build_parser().parse_args(argv)
     show = warnings.showwarning
 

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from . import __version__
+from ._atomic import check_output_file, check_parent_writable
 from .exr import image_channels, write_exr_channels
 from .image import Image, atomic_file
 from .render import DEFAULT_STYLE, RenderContext, _check_args, as_scene
@@ -431,6 +432,7 @@ def _plan(
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"out_dir: {str(out)!r} is a file; give a directory for the frames")
+    check_parent_writable(out / "frame", str(out_dir), "out_dir")  # a file above it, read-only
     user_style = style is not None
     spec = style if user_style else (scene.style or DEFAULT_STYLE)
     base_style = style_from_spec(spec)
@@ -657,8 +659,10 @@ def _run(plan: _Plan, progress: SequenceProgress | None) -> SequenceResult:
 
 
 def _video_suffix(path: str | os.PathLike, what: str = "video") -> str:
-    """The suffix of a video file name (``.mp4`` or ``.gif``); for MP4, imageio-ffmpeg must be
-    installed. ValueError naming ``what``, the path and the fix otherwise."""
+    """The suffix of a video file name (``.mp4`` or ``.gif``) that can be written (not a
+    directory, in a writable directory: :func:`~refnpr._atomic.check_output_file`); for MP4,
+    imageio-ffmpeg must be installed. ValueError naming ``what``, the path and the fix
+    otherwise."""
     suffix = Path(path).suffix.lower()
     if suffix not in (".mp4", ".gif"):
         raise ValueError(f"{what}: expected a file name ending in .mp4 or .gif, got {str(path)!r}")
@@ -671,6 +675,7 @@ def _video_suffix(path: str | os.PathLike, what: str = "video") -> str:
                 "package; install the extra with `pip install 'refnpr[video]'`, or write a "
                 ".gif instead"
             ) from None
+    check_output_file(path, what, suffix)
     return suffix
 
 

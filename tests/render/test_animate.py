@@ -54,6 +54,15 @@ def test_animate_writes_frames_and_resumes(tmp_path, scene_file, capsys):
     assert "wrote 2 of 4 frame(s)" in capsys.readouterr().out  # 1 and 2 were done
 
 
+@pytest.mark.parametrize(("frames", "kept"), [("-2:", [2, 3]), ("-3:-1", [1, 2])])
+def test_animate_takes_a_slice_counted_from_the_end_after_a_space(
+    tmp_path, scene_file, frames, kept
+):
+    out = tmp_path / "frames"
+    assert animate(scene_file, "--size", "8x8", "--spp", "1", "-o", out, "--frames", frames) == 0
+    assert sorted(p.name for p in out.glob("*.png")) == [f"frame_{f:05d}.png" for f in kept]
+
+
 def test_animate_style_params_video_and_progress(tmp_path, scene_file, capsys):
     out = tmp_path / "frames"
     video = tmp_path / "clip.gif"

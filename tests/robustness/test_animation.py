@@ -39,6 +39,26 @@ def _animate(track: str, *args: str):
 
 
 _FOV = 'target = "camera.fov_y"\n'
+_KEY = _FOV + "keys = [{ frame = 0, value = 30 }]\n"
+
+
+def _with(path: str, *args: str, directory: bool = False):
+    """:func:`_animate` of a one-key track after creating ``path`` (a file, or a directory)
+    in the case's directory."""
+
+    def run(tmp: Path):
+        target = tmp / path
+        target.mkdir() if directory else target.write_text("x")
+        return _animate(_KEY, *args)(tmp)
+
+    return run
+
+
+def _output_under_file(tmp: Path):
+    (tmp / "spin.toml").write_text(_HEAD + _KEY)
+    (tmp / "afile").write_text("x")
+    return cli("animate", "spin.toml", "--size", "8x8", "-o", "afile/out", cwd=tmp)
+
 
 CASES = [
     Case(
@@ -97,6 +117,28 @@ CASES = [
         "refnpr animate --video out.avi",
         _animate(_FOV + "keys = [{ frame = 0, value = 30 }]\n", "--video", "out.avi"),
         Exits(2, r"--video: expected a file name ending in \.mp4 or \.gif, got 'out\.avi'"),
+    ),
+    Case(
+        "animate-video-is-a-directory",
+        "nonsense",
+        "refnpr animate --video clip.gif where clip.gif is a directory",
+        _with("clip.gif", "--video", "clip.gif", directory=True),
+        Exits(2, r"--video: 'clip\.gif' is a directory; give a file name ending in \.gif"),
+        notes="every frame was rendered before the video failed with an OSError",
+    ),
+    Case(
+        "animate-video-under-a-file",
+        "nonsense",
+        "refnpr animate --video afile/clip.gif where afile is a file",
+        _with("afile", "--video", "afile/clip.gif"),
+        Exits(2, r"--video: cannot write 'afile/clip\.gif': 'afile' is a file, not a directory"),
+    ),
+    Case(
+        "animate-output-under-a-file",
+        "nonsense",
+        "refnpr animate -o afile/out where afile is a file",
+        _output_under_file,
+        Exits(2, r"-o/--output: cannot write 'afile/out': 'afile' is a file, not a directory"),
     ),
     Case(
         "animate-workers-zero",

@@ -92,6 +92,14 @@ CASES = [
         Exits(2, r"error: --param: 'name' is not a style parameter.*--style smooth"),
     ),
     Case(
+        "param-two-values",
+        "nonsense",
+        "refnpr render --style toon --param $'n=3\\nt=0.9' (a newline in the value)",
+        _render("--size", "8x8", "--style", "toon", "--param", "n=3\nt=0.9"),
+        Exits(2, r"error: .*--param: the value of 'n' holds more than one TOML value"),
+        notes="the value after the newline was dropped without a word",
+    ),
+    Case(
         "param-empty-key",
         "nonsense",
         "refnpr render --style toon --param =3",
