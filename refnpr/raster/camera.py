@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,6 +95,12 @@ class Camera:
             raise ValueError(f"near: expected a positive clip distance, got {near}; use e.g. 0.1")
         if far <= near:
             raise ValueError(f"far: must be greater than near ({near}), got {far}")
+        if not (math.isfinite(2.0 * far * near) and math.isfinite(far + near)):
+            most = sys.float_info.max / (2.0 * max(near, 1.0))
+            raise ValueError(
+                f"far: {far} with near {near} overflows the perspective matrix (2 far near / "
+                f"(near - far), projection_matrix); give a far of at most {most:.4g}"
+            )
         forward = target - eye
         if np.linalg.norm(forward) == 0.0:
             raise ValueError(

@@ -130,6 +130,17 @@ def test_non_finite_camera_parameters():
         Camera.look_at((0, 0, 3), (0, 0, 0), (0, 0, 1))
 
 
+@pytest.mark.parametrize(("far", "near"), [(1e308, 1.0), (9e307, 0.1), (1e300, 1e10)])
+def test_a_far_plane_that_overflows_the_projection_is_refused(far, near):
+    with pytest.raises(ValueError, match=r"far: .* overflows the perspective matrix.*at most"):
+        Camera.look_at((0, 0, 3), (0, 0, 0), near=near, far=far)
+
+
+def test_the_largest_far_plane_accepted_gives_a_finite_projection():
+    cam = Camera.look_at((0, 0, 3), (0, 0, 0), near=1.0, far=8.98e307)
+    assert np.all(np.isfinite(cam.view_projection(4, 4)))
+
+
 def test_integers_beyond_the_float_range_are_not_finite():
     huge = 10**400  # float(huge) raises OverflowError
     with pytest.raises(ValueError, match=r"fov_y: expected a finite number, got an integer beyond"):
