@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._reading import read_regular
+from .._reading import inside, read_regular
 from ..raster import Mesh
 from ._mesh_files import CHECKS, FIX, BadMeshFile, check_geometry
 from .uv_projection import UV_PROJECTIONS, project_uv
@@ -174,15 +174,17 @@ def _resolver(path: Path):
 
     class RegularFiles(FilePathResolver):
         def get(self, name: str) -> bytes:
+            root = Path(self.parent).resolve()
+            what = f"{name!r} (a file that {self.file_name!r} refers to)"
+            where = f"the directory of {self.file_name!r}"
             for candidate in (name.strip(), name.strip().lstrip("/"), os.path.split(name)[-1]):
                 try:
-                    full = self.absolute(candidate)  # resolved, inside the directory
+                    full = inside(root, candidate, what=what, root_name=where)
                 except ValueError:
                     continue
                 if full.exists():
-                    what = f"{name!r} (a file that {self.file_name!r} refers to)"
                     return read_regular(full, what=what, max_bytes=MAX_MESH_FILE_BYTES)
-            self.absolute(name)  # the error of a name that leaves the directory
+            inside(root, name.strip(), what=what, root_name=where)  # a name that leaves it
             raise FileNotFoundError(name)
 
     return RegularFiles(str(path))
