@@ -101,10 +101,12 @@ def rgb(name: str, value: Any) -> tuple[float, float, float]:
     """A ``parse`` of a colour: 3 linear RGB values in [0, 1]."""
     try:
         c = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond the floats
         c = np.full(1, np.nan)
     if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
-        raise ValueError(f"{name}: expected 3 values in [0, 1] (linear RGB), got {value!r}")
+        raise ValueError(
+            f"{name}: expected 3 values in [0, 1] (linear RGB), got {short_repr(value)}"
+        )
     return (float(c[0]), float(c[1]), float(c[2]))
 
 
@@ -362,6 +364,9 @@ class Params:
         self.by_name = {p.name: p for p in self.params}
         if len(self.by_name) != len(self.params):
             raise ValueError(f"{style}: a parameter is declared twice")
+        shadowed = sorted(set(self.by_name) & set(dir(Values)))
+        if shadowed:  # values.<name> would give the attribute, not the value
+            raise ValueError(f"{style}: parameter name(s) {shadowed} are attributes of Values")
         self.renamed = dict(renamed or {})
         self.frame = tuple(frame)
         self.module = module

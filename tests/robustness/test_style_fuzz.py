@@ -65,6 +65,8 @@ HOSTILE: list[Any] = [
     1e300,
     -1e300,
     1e-300,
+    10**400,  # an integer beyond the float range
+    [10**400, 0, 0],
     NAN,
     INF,
     -INF,

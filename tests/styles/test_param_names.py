@@ -245,3 +245,11 @@ def test_halftone_params_use_current_screen_keys():
         old = HalftoneStyle(screen={"kind": "dither", "texture": "brick", "uniform": False})
     new = HalftoneStyle(screen={"kind": "dither", "texture": "brick", "rank_equalize": False})
     assert old.params() == new.params()
+
+
+@pytest.mark.parametrize("name", ["items", "replace", "as_dict", "given"])
+def test_a_parameter_may_not_take_the_name_of_a_values_attribute(name):
+    from refnpr.styles._declare import Param, Params
+
+    with pytest.raises(ValueError, match=rf"\['{name}'\] are attributes of Values"):
+        Params("x", Param(name, 1, "doc"), module="m")

@@ -43,6 +43,11 @@ def parse_indication(value: Any, where: str = "indication") -> np.ndarray | None
         return 2.0 * load_texture(path, param="indication").astype(np.float64) - 1.0
     try:
         arr = np.array(value, dtype=np.float64)
+    except OverflowError:
+        raise ValueError(
+            f"{where}: holds an integer beyond the float range; expected signed values in "
+            "[-1, 1] (0 = no change, > 0 lighter, < 0 darker)"
+        ) from None
     except (TypeError, ValueError):
         raise TypeError(
             f"{where}: expected a nested list of numbers (rows of a low-resolution signed map) "

@@ -46,6 +46,11 @@ def _check_array(tex: Any, name: str) -> np.ndarray:
         raise TypeError(f"{name}: expected a real texture array, got a complex one; {_how()}")
     try:
         a = np.asarray(tex, dtype=np.float64)
+    except OverflowError:
+        raise ValueError(
+            f"{name}: holds an integer beyond the float range; texel values lie in [0, 1] "
+            "(linear RGB(A))"
+        ) from None
     except (TypeError, ValueError) as exc:
         raise TypeError(f"{name}: expected a numeric texture array, got {tex!r}; {_how()}") from exc
     if (
