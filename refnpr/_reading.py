@@ -42,7 +42,7 @@ def inside(root: Path, rel: Any, *, what: str, root_name: str, base: Path | None
     root : Path
         A resolved directory (``Path.resolve(strict=True)``).
     rel : Any
-        The path as the kit gives it, relative to ``base``.
+        The path as the untrusted file gives it, relative to ``base``.
     what : str
         The key that holds it (``"expected.png"``), the start of every message.
     root_name : str
@@ -104,6 +104,15 @@ def read_regular(path: Path, *, what: str, max_bytes: int, head: int | None = No
         The file (resolved).
     what : str
         The file as messages name it (``"render 'x.png'"``).
+    max_bytes : int
+        The largest file read (its size from ``stat``, before it is opened).
+    head : int, optional
+        Read only the first ``head`` bytes (a header to check before the whole file).
+
+    Returns
+    -------
+    bytes
+        The whole file, or its first ``head`` bytes.
 
     Raises
     ------

@@ -52,6 +52,7 @@ from .verdict import (
 
 __all__ = [
     "CASE_NAME",
+    "valid_case_name",
     "MISSING_POLICIES",
     "CaseCheck",
     "Visual",
@@ -74,7 +75,9 @@ MISSING_POLICIES = ("fail", "skip")
 _STYLE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 
 
-def _valid_name(name: Any) -> bool:
+def valid_case_name(name: Any) -> bool:
+    """Whether ``name`` is a case name a kit may give: :data:`CASE_NAME`, without ``..`` (it
+    names the case's render files)."""
     return isinstance(name, str) and CASE_NAME.fullmatch(name) is not None and ".." not in name
 
 
@@ -137,7 +140,7 @@ def _read_index(kit_root: Path, kit_dir: Path) -> list[_Entry]:
         name = c.get("name") if isinstance(c, dict) else None
         if not isinstance(c, dict):
             problems.append(f"cases[{i}] is {_q(c, 40)}, not an object")
-        elif not _valid_name(name):
+        elif not valid_case_name(name):
             problems.append(f"cases[{i}].name {_q(name, 60)} is not a valid case name")
         elif name in seen:
             problems.append(

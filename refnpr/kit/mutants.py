@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import difflib
 import inspect
-import re
 import sys
 import tempfile
 import time
@@ -45,9 +44,10 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from .._reading import inside, read_regular
+from .._reading import inside, read_regular, short_repr
 from . import limits
 from ._json import load_json
+from .check import CASE_NAME, valid_case_name
 from .mutant_render import CaseRenderer
 from .port_bugs import BUGS, NotApplicable
 
@@ -64,7 +64,6 @@ __all__ = [
 
 #: The verdicts of a (case, bug) pair (see the module docstring).
 VERDICTS = ("caught", "missed", "no_effect", "n/a", "error")
-_NAME = re.compile(r"[a-z0-9][a-z0-9_-]*")  # fullmatch: "$" would let a final newline in
 
 
 @dataclass
@@ -220,10 +219,10 @@ def _kit_entries(kit_dir: Path) -> list[dict[str, Any]]:
     out, seen = [], set()
     for i, c in enumerate(cases):
         name = c.get("name") if isinstance(c, dict) else None
-        if not isinstance(name, str) or not _NAME.fullmatch(name):
+        if not valid_case_name(name):
             raise ValueError(
                 f"kit_dir: index.json cases[{i}].name: expected a name matching "
-                f"[a-z0-9][a-z0-9_-]*, got {name!r}"
+                f"{CASE_NAME.pattern} without '..', got {short_repr(name)}"
             )
         if name in seen:
             raise ValueError(f"kit_dir: index.json lists the case {name!r} twice")

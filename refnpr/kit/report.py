@@ -42,7 +42,7 @@ from .._reading import inside, read_regular
 from ..image import atomic_file, write_png_atomic
 from . import limits
 from ._json import load_json
-from .check import CASE_NAME, CaseCheck, Visual, case_style
+from .check import CaseCheck, Visual, case_style, valid_case_name
 from .diagnose import (
     diff_scale,
     diverging_rgb,
@@ -99,16 +99,12 @@ def _group(check: CaseCheck) -> str:
 
 
 def _folder(name: str, index: int, used: set[str]) -> str:
-    base = name if _valid(name) else f"case-{index}"
+    base = name if valid_case_name(name) else f"case-{index}"
     folder, k = base, 2
     while folder in used:
         folder, k = f"{base}-{k}", k + 1
     used.add(folder)
     return folder
-
-
-def _valid(name: object) -> bool:
-    return isinstance(name, str) and CASE_NAME.fullmatch(name) is not None and ".." not in name
 
 
 def _inside(root: Path, rel: str) -> Path | None:
@@ -131,7 +127,7 @@ def _read_case_json(kit_root: Path, name: str) -> tuple[Path | None, dict[str, A
     """(path, data, why not): ``KIT/<name>/case.json`` read as the check reads an untrusted
     kit (inside the kit, a regular file, size- and depth-limited JSON); ``path`` is set when
     it is a regular file inside the kit, even if it does not parse."""
-    if not _valid(name):
+    if not valid_case_name(name):
         return None, None, "the case name is not a valid kit name; case.json was not read"
     what = f"kit file {name + '/case.json'!r}"
     try:
@@ -168,7 +164,7 @@ def _links(
             url = _rel_url(target, root)
             if url is not None:
                 links[key] = url + ("/" if key == "kit folder" else "")
-    if renders_root is not None and _valid(name):
+    if renders_root is not None and valid_case_name(name):
         for rel in (f"{name}.png", name):
             p = _inside(renders_root, rel)
             if p is not None and (p.is_file() or p.is_dir()):
