@@ -9,7 +9,20 @@ import numbers
 
 from ..formulas._validate import describe, to_float
 
-__all__ = ["check_int", "check_real", "check_type", "check_vec", "describe", "positives"]
+__all__ = [
+    "MAX_GENERATED_VERTICES",
+    "check_grid",
+    "check_int",
+    "check_real",
+    "check_type",
+    "check_vec",
+    "describe",
+    "positives",
+]
+
+#: The most vertices a built-in mesh builder makes (about 1.1 GB of float64 positions, normals
+#: and uv): its resolution is checked against it before any array is allocated.
+MAX_GENERATED_VERTICES = 20_000_000
 
 
 def check_type(name: str, value, cls, what: str) -> None:
@@ -77,3 +90,15 @@ def check_vec(
         check_real(f"{name}[{i}]", x, nonnegative=nonnegative, positive=positive)
         for i, x in enumerate(items)
     )
+
+
+def check_grid(vertices: int, counts: dict[str, int], copies: int = 1) -> None:
+    """``ValueError`` naming the resolution ``counts`` (``{"n_u": 64, "n_v": 32}``) unless the
+    ``vertices`` a builder makes from them (``copies`` grids of that many) are at most
+    :data:`MAX_GENERATED_VERTICES`."""
+    if vertices * copies > MAX_GENERATED_VERTICES:
+        given = ", ".join(f"{k}={v}" for k, v in counts.items())
+        raise ValueError(
+            f"{', '.join(counts)}: {given} makes about {vertices * copies:,} vertices, more than the "
+            f"{MAX_GENERATED_VERTICES:,} a built-in mesh may have; use a smaller resolution"
+        )

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, positives
+from ._params import check_grid, check_int, positives
 from ._topology import grid_faces
 
 __all__ = ["torus_knot", "torus_knot_curve", "rotation_minimising_frames"]
@@ -130,6 +130,7 @@ def torus_knot(
     if r >= R:
         raise ValueError(f"r: must be smaller than R ({R}), got {r}")
     n_u, n_v = check_int("n_u", n_u, minimum=8), check_int("n_v", n_v, minimum=3)
+    check_grid((n_u + 1) * (n_v + 1), {"n_u": n_u, "n_v": n_v})
     clearance = _clearance(p, q, R, r)
     if tube_radius >= 0.5 * clearance:
         raise ValueError(

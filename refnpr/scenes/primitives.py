@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, check_real, positives
+from ._params import check_grid, check_int, check_real, positives
 from ._topology import split_u_seam
 from .revolution import revolve
 
@@ -34,6 +34,7 @@ def uv_sphere(radius: float = 1.0, n_u: int = 64, n_v: int = 32) -> Mesh:
     """
     radius = check_real("radius", radius, positive=True)
     n_u, n_v = check_int("n_u", n_u, minimum=3), check_int("n_v", n_v, minimum=2)
+    check_grid((n_u + 1) * (n_v + 1), {"n_u": n_u, "n_v": n_v})
     k = np.arange(n_v + 1)
     lat = np.pi * k / n_v - np.pi / 2.0
     nr, ny = np.cos(lat), np.sin(lat)
@@ -161,6 +162,7 @@ def torus(R: float = 1.0, r: float = 0.35, n_u: int = 64, n_v: int = 32) -> Mesh
     if r >= R:
         raise ValueError(f"r: the tube radius must be smaller than R ({R}), got {r}")
     n_u, n_v = check_int("n_u", n_u, minimum=3), check_int("n_v", n_v, minimum=3)
+    check_grid((n_u + 1) * (n_v + 1), {"n_u": n_u, "n_v": n_v})
     k = np.arange(n_v + 1)
     phi = 2.0 * np.pi * k / n_v
     nr, ny = np.cos(phi), np.sin(phi)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, positives
+from ._params import check_grid, check_int, positives
 from ._topology import compact, concat, drop_degenerate, grid_faces, pole_u, unit
 
 __all__ = ["revolve", "vase", "vase_profile"]
@@ -114,6 +114,7 @@ def vase(
     """
     height, radius, thickness = positives(height=height, radius=radius, thickness=thickness)
     n_u, n_v = check_int("n_u", n_u, minimum=3), check_int("n_v", n_v, minimum=1)
+    check_grid((n_u + 1) * (n_v + 1), {"n_u": n_u, "n_v": n_v})
     if thickness >= height:
         raise ValueError(f"thickness: must be smaller than height ({height}), got {thickness}")
     s_out = np.linspace(0.0, 1.0, n_v + 1)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, positives
+from ._params import check_grid, check_int, positives
 from ._topology import concat, grid_faces
 
 __all__ = ["plane", "room"]
@@ -62,6 +62,7 @@ def plane(width: float = 10.0, depth: float = 10.0, tile: float = 1.0, segments:
     """
     width, depth, tile = positives(width=width, depth=depth, tile=tile)
     segments = check_int("segments", segments, minimum=1)
+    check_grid((segments + 1) ** 2, {"segments": segments})
     x0, x1, z0, z1 = -width / 2.0, width / 2.0, -depth / 2.0, depth / 2.0
     corners = np.array([[x0, 0.0, z1], [x1, 0.0, z1], [x0, 0.0, z0], [x1, 0.0, z0]])
     positions, faces, normals, uv = _quad_grid(corners, segments, segments, tile)
@@ -97,6 +98,7 @@ def room(
     """
     width, depth, height, tile = positives(width=width, depth=depth, height=height, tile=tile)
     n = check_int("segments", segments, minimum=1)
+    check_grid((n + 1) ** 2, {"segments": n}, copies=6)
     x0, x1, z0, z1 = -width / 2.0, width / 2.0, -depth / 2.0, depth / 2.0
     # floor corners front-left, front-right, back-left, back-right, and the tops of the walls'
     # vertical edges; rectangles that meet share these exact values

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import Mesh
-from ._params import check_int, check_real
+from ._params import check_grid, check_int, check_real
 from ._topology import grid_faces, unit
 
 __all__ = ["NOISE_KINDS", "terrain", "terrain_height"]
@@ -178,6 +178,7 @@ def terrain(
     """
     size = check_real("size", size, positive=True)
     n = check_int("n", n, minimum=1)
+    check_grid((n + 1) ** 2, {"n": n})
     height = check_real("height", height, nonnegative=True)
     octaves = check_int("octaves", octaves, minimum=1, maximum=16)
     seed = check_int("seed", seed, minimum=0)

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from refnpr.scenes import plane, room, terrain, terrain_height
+from refnpr.scenes import plane, room, terrain, terrain_height, torus, torus_knot, uv_sphere, vase
 
 
 def test_plane_faces_up_and_tiles(checks):
@@ -87,3 +87,33 @@ def test_terrain_seeded():
 def test_flat_validation(call, exc, match):
     with pytest.raises(exc, match=match):
         call()
+
+
+@pytest.mark.parametrize(
+    "build, counts",
+    [
+        (lambda: plane(segments=10**6), "segments=1000000"),
+        (lambda: room(segments=2000), "segments=2000"),  # six rectangles of 2001^2 vertices
+        (lambda: terrain(n=10**5), "n=100000"),
+        (lambda: uv_sphere(n_u=30_000, n_v=30_000), "n_u=30000, n_v=30000"),
+        (lambda: torus(n_u=30_000, n_v=3_000), "n_u=30000, n_v=3000"),
+        (lambda: vase(n_u=10**5, n_v=10**5), "n_u=100000, n_v=100000"),
+        (lambda: torus_knot(n_u=10**5, n_v=1000), "n_u=100000, n_v=1000"),
+    ],
+)
+def test_a_builder_refuses_a_resolution_beyond_the_vertex_cap_before_allocating(build, counts):
+    """A resolution nobody checked allocated until a MemoryError (n_u = n_v = 30000: 6.7 GiB
+    for the sphere's grid alone)."""
+    with pytest.raises(ValueError, match=rf"{counts} makes about [\d,]+ vertices, more than the "):
+        build()
+
+
+def test_the_vertex_cap_admits_a_grid_of_exactly_the_cap(monkeypatch):
+    import refnpr.scenes._params as params
+
+    monkeypatch.setattr(params, "MAX_GENERATED_VERTICES", 100)
+    assert plane(segments=9).positions.shape == (100, 3)  # (9 + 1)^2 vertices
+    with pytest.raises(
+        ValueError, match=r"segments=10 makes about 121 vertices, more than the 100"
+    ):
+        plane(segments=10)
