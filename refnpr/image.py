@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import struct
 import zlib
@@ -82,6 +83,11 @@ def read_image_file(path: str | os.PathLike, *, what: str = "image") -> np.ndarr
     raise ValueError(f"{what}: cannot read {shown!r}: {reason}; expected {IMAGE_FORMATS}") from None
 
 
+#: The most values (rows x cols x channels, over every frame) an image file may decode to:
+#: Pillow's decompression-bomb bound (2 x its ``MAX_IMAGE_PIXELS``) of four channels, about
+#: 716 M values (2.9 GB as float32); a TIFF declares any size, and imageio decodes it whole.
+MAX_DECODED_VALUES = 4 * 2 * 89_478_485
+
 #: Colour modes whose channels are not RGB: decoded as RGB (a CMYK JPEG's four channels would
 #: otherwise read as RGBA).
 _CONVERTED_MODES = ("CMYK", "YCbCr", "LAB", "HSV")
@@ -89,13 +95,17 @@ _CONVERTED_MODES = ("CMYK", "YCbCr", "LAB", "HSV")
 
 def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     """Decode an image (a path or the encoded bytes, ``extension`` naming the format of bytes)
-    as the array imageio gives, with two exceptions:
+    as the array imageio gives, with these exceptions:
 
     - an image in a colour model other than grey or RGB (a CMYK JPEG) is converted to RGB;
+    - a palette, RGB or grey image with PNG transparency (a ``tRNS`` chunk: palette alphas or a
+      colour key) is decoded with its alpha, as RGBA or grey + alpha (imageio drops it);
     - a 16-bit RGB, RGBA or grey + alpha PNG is decoded at 16 bits by :func:`decode_png16`
       (``uint16``, grey + alpha as two channels), where imageio (Pillow) gives 8 bits.
 
-    Decoder errors propagate."""
+    An image of more than :data:`MAX_DECODED_VALUES` values (a TIFF declares any size; a PNG
+    or JPEG is bounded by Pillow) is refused from its header with a ``ValueError``. Decoder
+    errors propagate."""
     import imageio.v3 as iio
 
     if isinstance(source, (bytes, bytearray)):
@@ -111,11 +121,21 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
         )
         limit = Image.MAX_IMAGE_PIXELS  # Pillow's decompression-bomb bound, as for other files
         return decode_png16(data, max_pixels=2 * limit if limit else 1 << 62)
+    shape = iio.improps(source, extension=extension).shape
+    if math.prod(shape) > MAX_DECODED_VALUES:
+        raise ValueError(
+            f"the image is too large: {' x '.join(map(str, shape))} values, more than the "
+            f"{MAX_DECODED_VALUES:,} refnpr decodes; use a smaller image"
+        )
+    meta = iio.immeta(source, extension=extension)
+    mode = meta.get("mode")
+    if "transparency" in meta and mode in ("P", "RGB", "L"):  # tRNS: imageio drops the alpha
+        return np.asarray(
+            iio.imread(source, extension=extension, mode="LA" if mode == "L" else "RGBA")
+        )
     pixels = np.asarray(iio.imread(source, extension=extension))
-    if pixels.ndim == 3 and pixels.shape[2] in (3, 4):
-        mode = iio.immeta(source, extension=extension).get("mode")
-        if mode in _CONVERTED_MODES:
-            pixels = np.asarray(iio.imread(source, extension=extension, mode="RGB"))
+    if pixels.ndim == 3 and pixels.shape[2] in (3, 4) and mode in _CONVERTED_MODES:
+        pixels = np.asarray(iio.imread(source, extension=extension, mode="RGB"))
     return pixels
 
 
@@ -279,6 +299,10 @@ def _decode_reason(exc: BaseException) -> str:
         return f"the file is truncated ({first})"
     if isinstance(exc, PermissionError):
         return "permission denied"
+    if first.startswith("the image is too large"):  # decode_image's own refusal
+        return first
+    if isinstance(exc, MemoryError) or type(exc).__name__ == "DecompressionBombError":
+        return f"the image is too large to decode ({type(exc).__name__}: {first})"
     return f"the file is corrupt or not an image ({type(exc).__name__}: {first})"
 
 
@@ -353,6 +377,11 @@ class Image:
         a = np.asarray(self.rgba)
         if a.ndim != 3 or a.shape[2] != 4:
             raise ValueError(f"rgba: expected shape (H, W, 4), got {a.shape}")
+        if a.dtype.kind != "f":  # 128 as uint8 would be a value of 128, not 0.5
+            raise TypeError(
+                f"rgba: expected float linear RGBA in [0, 1], got dtype {a.dtype}; divide 8-bit "
+                "sRGB by 255 and decode it with srgb_to_linear"
+            )
         if not np.all(np.isfinite(a)):
             raise ValueError("rgba: image contains NaN or inf; a style produced invalid values")
         if self.passes is not None:

@@ -75,3 +75,55 @@ def test_write_refuses_odd_shapes(tmp_path):
             write_png_atomic(tmp_path / "x.png", np.zeros(shape, np.uint8))
     assert list(tmp_path.iterdir()) == []
     write_png_atomic(tmp_path / "g.png", np.zeros((4, 4, 1), np.uint8))  # one channel: gray
+
+
+def _rgba_with_a_transparent_pixel():
+    rgba = np.zeros((4, 4, 4), np.uint8)
+    rgba[..., 0], rgba[..., 3] = 200, 255
+    rgba[0, 0] = (10, 20, 30, 0)
+    return rgba
+
+
+@pytest.mark.parametrize("kind", ["palette", "rgb-colour-key", "grey-colour-key"])
+def test_png_transparency_of_a_trns_chunk_is_read(tmp_path, kind):
+    """A palette PNG (as pngquant or oxipng write) or an RGB or grey PNG with a colour key
+    keeps its transparency in a tRNS chunk, which imageio dropped: the transparent pixel read
+    as opaque."""
+    from PIL import Image as PILImage
+
+    rgba = _rgba_with_a_transparent_pixel()
+    path = tmp_path / f"{kind}.png"
+    if kind == "palette":
+        PILImage.fromarray(rgba).quantize().save(path)
+        want = rgba
+    elif kind == "rgb-colour-key":
+        PILImage.fromarray(rgba[..., :3]).save(path, transparency=(10, 20, 30))
+        want = rgba
+    else:
+        PILImage.fromarray(rgba[..., 0]).save(path, transparency=10)
+        want = np.stack([rgba[..., 0], np.where(rgba[..., 0] == 10, 0, 255)], axis=-1)
+    np.testing.assert_array_equal(read_image_file(path), want)
+
+
+def test_an_image_too_large_to_decode_is_refused_from_its_header(tmp_path, monkeypatch):
+    """A TIFF declares any size and imageio decodes it whole: an 875 KB file of 30000 x 30000
+    zeros allocated gigabytes. The size is checked from the header first."""
+    import imageio.v3 as iio
+
+    import refnpr.image as image
+
+    path = tmp_path / "big.tif"
+    iio.imwrite(path, np.zeros((40, 30), np.uint8))
+    monkeypatch.setattr(image, "MAX_DECODED_VALUES", 1000)
+    with pytest.raises(ValueError, match=r"big\.tif': the image is too large: 40 x 30 values"):
+        read_image_file(path, what="texture")
+    monkeypatch.setattr(image, "MAX_DECODED_VALUES", 1200)
+    assert read_image_file(path).shape == (40, 30)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, bool, np.int32])
+def test_an_image_holds_float_linear_rgba(dtype):
+    from refnpr.image import Image
+
+    with pytest.raises(TypeError, match=r"rgba: expected float linear RGBA in \[0, 1\], got dtype"):
+        Image(np.full((1, 1, 4), 1, dtype=dtype))
