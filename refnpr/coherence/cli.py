@@ -44,11 +44,14 @@ def _fmt(v: float | None) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """The ``refnpr coherence`` command; returns 0 (errors are ValueError / TypeError)."""
+    from .._atomic import check_output_file
     from ..image import check_png_path
     from ..scenes import load_scene
     from .driver import measure
     from .motion import DEPTH_RTOL
 
+    if args.json is not None:
+        check_output_file(args.json, "--json", ".json")  # before rendering, not after
     if args.plot is not None:
         check_png_path(args.plot)  # before rendering, not after
         if importlib.util.find_spec("matplotlib") is None:
@@ -90,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
         strokes=args.strokes,
         previous=scene.at(frames.start - 1) if frames.start > 0 else None,
     )
-    if args.json:
+    if args.json is not None:
         report.save(args.json)
     if args.plot:
         report.plot(args.plot)

@@ -36,14 +36,18 @@ def luminance(rgb: np.ndarray, *, name: str = "rgb") -> np.ndarray:
     a = np.asarray(rgb)
     if a.ndim != 3 or a.shape[2] not in (3, 4):
         raise ValueError(f"{name}: expected an (H, W, 3) or (H, W, 4) image, got shape {a.shape}")
-    if a.dtype.kind == "f":
-        bad = ~np.isfinite(a[..., :3]).all(axis=-1)
-        if bad.any():
-            y, x = (int(i) for i in np.argwhere(bad)[0])
-            raise ValueError(
-                f"{name}: expected finite colours, got NaN or inf in {int(bad.sum())} of its "
-                f"pixels, the first at (y, x) = ({y}, {x}): {a[y, x].tolist()}"
-            )
+    if a.dtype.kind != "f":  # a PNG frame as read (uint8): 0..255, not linear [0, 1]
+        raise TypeError(
+            f"{name}: expected float linear RGB in [0, 1], got dtype {a.dtype}; convert a PNG "
+            "frame with refnpr.image.srgb_to_linear(frame / 255)"
+        )
+    bad = ~np.isfinite(a[..., :3]).all(axis=-1)
+    if bad.any():
+        y, x = (int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(
+            f"{name}: expected finite colours, got NaN or inf in {int(bad.sum())} of its "
+            f"pixels, the first at (y, x) = ({y}, {x}): {a[y, x].tolist()}"
+        )
     return lighting.luminance(a[..., :3])  # alpha ignored, also where it is not finite
 
 

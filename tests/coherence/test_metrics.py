@@ -141,6 +141,17 @@ def test_a_frame_with_a_nan_pixel_is_refused_by_its_name(which):
         pair_metrics(images["image"], images["prev_image"], mf)
 
 
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, bool])
+def test_a_frame_that_is_not_float_linear_rgb_is_refused(dtype):
+    """A PNG frame as read is uint8 0..255: measured as it is, the metrics came out 255 times
+    too large, without a word."""
+    sc = scene([wall()])
+    mf = motion_field(gbuf(sc), gbuf(sc), sc, sc)
+    frame = np.ones((H, W, 4), dtype=dtype)
+    with pytest.raises(TypeError, match=r"^image: expected float linear RGB.*got dtype"):
+        pair_metrics(frame, np.ones((H, W, 4)), mf)
+
+
 # -- measure ------------------------------------------------------------------------------
 def test_static_scene_measures_zero():
     sc = scene([wall(tz=-1.0), SceneObject(icosphere(2, 1.0), transform_matrix((0.3, 0, 0.5)))])
