@@ -485,16 +485,22 @@ def _run_of(module: str):
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from .compare import compare_dirs, format_table
+    from ._atomic import check_output_file
+    from .compare import check_outside_compared, compare_dirs, format_table
     from .image import atomic_file
 
     if args.out is not None and Path(args.out).exists() and not Path(args.out).is_dir():
         raise ValueError(f"--out: {args.out!r} is a file; give a directory for the diff images")
-    if args.json is not None and Path(args.json).is_dir():
+    if args.json and Path(args.json).is_dir():
         raise ValueError(
             f"--json: {args.json!r} is a directory; give a file name such as "
             f"{str(Path(args.json) / 'metrics.json')!r}"
         )
+    if args.json is not None:
+        check_output_file(args.json, "--json", ".json")
+    for option, path in (("--out", args.out), ("--json", args.json)):
+        if path is not None:
+            check_outside_compared(path, option, args.reference, args.candidate)
     results = compare_dirs(
         args.reference, args.candidate, out_dir=args.out, tolerance=args.tolerance
     )
@@ -512,7 +518,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     bad = [
         m for m in results if not m.passes(max_frac_over=args.max_frac_over, min_ssim=args.min_ssim)
     ]
-    if args.json:
+    if args.json is not None:
         with atomic_file(args.json, suffix=".json") as tmp:
             tmp.write_text(json.dumps([m.as_dict() for m in results], indent=2))
     print(f"{len(results) - len(bad)} passed, {len(bad)} failed")
@@ -730,8 +736,12 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("compare", help="compare another backend's renders with reference images")
     c.add_argument("reference", help="directory of reference PNGs (e.g. refnpr/suite/)")
     c.add_argument("candidate", help="directory of candidate PNGs with the same file names")
-    c.add_argument("--out", help="write NAME.diff.png and report.json here")
-    c.add_argument("--json", help="write the metrics as JSON to this file")
+    c.add_argument(
+        "--out", help="write NAME.diff.png and report.json here (outside both directories)"
+    )
+    c.add_argument(
+        "--json", help="write the metrics as JSON to this .json file (outside both directories)"
+    )
     c.add_argument("--tolerance", type=_fraction("--tolerance"), default=2.0 / 255)
     c.add_argument("--max-frac-over", type=_fraction("--max-frac-over"), default=0.001)
     c.add_argument("--min-ssim", type=_fraction("--min-ssim"), default=0.99)

@@ -20,7 +20,14 @@ import numpy as np
 from .formulas.lighting import luminance
 from .image import atomic_file, read_image_file, write_png_atomic
 
-__all__ = ["ImageMetrics", "compare_images", "compare_dirs", "load_image", "difference_image"]
+__all__ = [
+    "ImageMetrics",
+    "compare_images",
+    "compare_dirs",
+    "check_outside_compared",
+    "load_image",
+    "difference_image",
+]
 
 
 @dataclass(frozen=True)
@@ -179,7 +186,7 @@ def compare_dirs(
     ------
     ValueError
         A directory that does not exist or holds no ``.png`` files, the same directory twice, or
-        an ``out_dir`` that is a file.
+        an ``out_dir`` that is a file or is (or lies inside) one of the compared directories.
     """
     ref_dir, cand_dir = Path(reference_dir), Path(candidate_dir)
     for label, d in (("reference_dir", ref_dir), ("candidate_dir", cand_dir)):
@@ -193,6 +200,8 @@ def compare_dirs(
         )
     if out_dir is not None and Path(out_dir).exists() and not Path(out_dir).is_dir():
         raise ValueError(f"out_dir: {str(out_dir)!r} is a file; expected a directory")
+    if out_dir is not None:
+        check_outside_compared(out_dir, "out_dir", ref_dir, cand_dir)
     names = sorted(p.name for p in ref_dir.glob("*.png"))
     if not names:
         raise ValueError(f"reference_dir: no .png files in {str(ref_dir)!r}")
@@ -225,6 +234,37 @@ def compare_dirs(
         with atomic_file(Path(out_dir) / "report.json", suffix=".json") as tmp:
             tmp.write_text(json.dumps([m.as_dict() for m in results], indent=2))
     return results
+
+
+def check_outside_compared(
+    path: str | Path, what: str, reference_dir: str | Path, candidate_dir: str | Path
+) -> None:
+    """A ValueError naming ``what`` (the parameter or option) unless ``path`` lies outside both
+    compared directories: files written into them would overwrite an image or be compared as
+    images by the next run.
+
+    Parameters
+    ----------
+    path : str or path
+        The output directory or file.
+    what : str
+        The parameter or option that gave it (``"--out"``), the start of the message.
+    reference_dir, candidate_dir : str or path
+        The compared directories.
+
+    Raises
+    ------
+    ValueError
+        ``path`` is one of the directories or lies inside one (after resolving symbolic links).
+    """
+    target = Path(path).resolve()
+    for label, d in (("reference", reference_dir), ("candidate", candidate_dir)):
+        if target.is_relative_to(Path(d).resolve()):
+            raise ValueError(
+                f"{what}: {str(path)!r} is or lies inside the {label} directory {str(d)!r}; "
+                "write the comparison's files elsewhere (they would be compared as images or "
+                "overwrite them)"
+            )
 
 
 def format_table(results: list[ImageMetrics]) -> str:

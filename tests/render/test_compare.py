@@ -1,6 +1,7 @@
 """The comparison tool a backend uses against the golden images."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -100,3 +101,52 @@ def test_a_threshold_of_k_levels_accepts_every_difference_of_k_levels():
         assert not position_tolerant_mismatch(a, b, threshold=k / 255, deviation=0).any()
         assert position_tolerant_mismatch(a, b, threshold=(k - 1) / 255, deviation=0).all()
         assert not position_tolerant_mismatch(a, c, threshold=(k - 1) / 255, deviation=0).any()
+
+
+@pytest.mark.parametrize("where", ["ref", "cand", "ref/sub", "cand/x/y"])
+def test_out_dir_inside_a_compared_directory_is_refused(tmp_path, where, capsys):
+    from refnpr.cli import main
+
+    ref, cand = tmp_path / "ref", tmp_path / "cand"
+    write_png_atomic(ref / "a.png", _img(5))
+    write_png_atomic(cand / "a.png", _img(6))
+    with pytest.raises(ValueError, match=r"out_dir: .* inside the (reference|candidate) dir"):
+        compare_dirs(ref, cand, out_dir=tmp_path / where)
+    assert main(["compare", str(ref), str(cand), "--out", str(tmp_path / where)]) == 2
+    assert "--out: " in capsys.readouterr().err
+    assert sorted(p.name for p in ref.rglob("*")) == ["a.png"]
+    assert sorted(p.name for p in cand.rglob("*")) == ["a.png"]
+
+
+@pytest.mark.parametrize(
+    ("json_arg", "match"),
+    [
+        ("ref/a.png", r"--json: expected a \.json file name, got '.*ref/a\.png'"),
+        ("r.txt", r"--json: expected a \.json file name"),
+        ("ref/r.json", r"--json: .* inside the reference directory"),
+        ("cand/r.json", r"--json: .* inside the candidate directory"),
+    ],
+)
+def test_json_must_be_a_json_file_outside_the_compared_directories(
+    tmp_path, json_arg, match, capsys
+):
+    from refnpr.cli import main
+
+    ref, cand = tmp_path / "ref", tmp_path / "cand"
+    write_png_atomic(ref / "a.png", _img(5))
+    write_png_atomic(cand / "a.png", _img(5))
+    before = (ref / "a.png").read_bytes()
+    assert main(["compare", str(ref), str(cand), "--json", str(tmp_path / json_arg)]) == 2
+    assert re.search(match, capsys.readouterr().err)
+    assert (ref / "a.png").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["a.png", "a.png", "cand", "ref"]
+
+
+def test_an_empty_json_name_is_refused(tmp_path, capsys):
+    from refnpr.cli import main
+
+    ref, cand = tmp_path / "ref", tmp_path / "cand"
+    write_png_atomic(ref / "a.png", _img(5))
+    write_png_atomic(cand / "a.png", _img(5))
+    assert main(["compare", str(ref), str(cand), "--json", ""]) == 2
+    assert "--json: expected a file name ending in .json, got ''" in capsys.readouterr().err
