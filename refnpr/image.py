@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import math
 import os
 import struct
@@ -127,16 +128,38 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
             f"the image is too large: {' x '.join(map(str, shape))} values, more than the "
             f"{MAX_DECODED_VALUES:,} refnpr decodes; use a smaller image"
         )
-    meta = iio.immeta(source, extension=extension)
-    mode = meta.get("mode")
-    if "transparency" in meta and mode in ("P", "RGB", "L"):  # tRNS: imageio drops the alpha
-        return np.asarray(
-            iio.imread(source, extension=extension, mode="LA" if mode == "L" else "RGBA")
-        )
+    if _png_transparency(source, head):  # tRNS: imageio drops the alpha
+        mode = "LA" if head[25] == 0 else "RGBA"  # grey, else RGB or palette (colour types)
+        return np.asarray(iio.imread(source, extension=extension, mode=mode))
     pixels = np.asarray(iio.imread(source, extension=extension))
-    if pixels.ndim == 3 and pixels.shape[2] in (3, 4) and mode in _CONVERTED_MODES:
-        pixels = np.asarray(iio.imread(source, extension=extension, mode="RGB"))
+    if pixels.ndim == 3 and pixels.shape[2] in (3, 4):
+        mode = iio.immeta(source, extension=extension).get("mode")
+        if mode in _CONVERTED_MODES:
+            pixels = np.asarray(iio.imread(source, extension=extension, mode="RGB"))
     return pixels
+
+
+def _png_transparency(source: Any, head: bytes) -> bool:
+    """Whether ``source`` (a path or bytes starting with ``head``) is a grey, RGB or palette PNG
+    with a ``tRNS`` chunk (its transparency), found among the chunks before the first IDAT."""
+    if len(head) < 26 or head[:8] != PNG_SIGNATURE or head[25] not in (0, 2, 3):
+        return False
+    if isinstance(source, (bytes, bytearray)):
+        f: Any = io.BytesIO(source)
+    else:
+        f = open(source, "rb")  # noqa: SIM115 (closed below)
+    with f:
+        f.seek(8)
+        while True:
+            chunk = f.read(8)
+            if len(chunk) < 8:
+                return False
+            length, kind = struct.unpack(">I4s", chunk)
+            if kind == b"tRNS":
+                return True
+            if kind in (b"IDAT", b"IEND"):
+                return False
+            f.seek(length + 4, os.SEEK_CUR)  # the data and the CRC
 
 
 #: The eight bytes every PNG file starts with.
