@@ -60,6 +60,13 @@ def _output_under_file(tmp: Path):
     return cli("animate", "spin.toml", "--size", "8x8", "-o", "afile/out", cwd=tmp)
 
 
+def _coherence_json_into_a_directory(tmp: Path):
+    (tmp / "d").mkdir()
+    return cli(
+        "coherence", "xtoon_flow", "--size", "8x6", "--frames", "0:3", "--json", "d", cwd=tmp
+    )
+
+
 CASES = [
     Case(
         "animation-bad-quaternion",
@@ -146,6 +153,14 @@ CASES = [
         "refnpr animate --workers 0",
         _animate(_FOV + "keys = [{ frame = 0, value = 30 }]\n", "--workers", "0"),
         Exits(2, r"--workers: expected a whole number >= 1, got 0"),
+    ),
+    Case(
+        "coherence-json-directory",
+        "nonsense",
+        "refnpr coherence xtoon_flow --json d where d is a directory",
+        _coherence_json_into_a_directory,
+        Exits(2, r"--json: 'd' is a directory; give a file name ending in \.json"),
+        notes="it failed after rendering every frame, naming a hidden temporary file",
     ),
     Case(
         "coherence-still-scene",
