@@ -6,7 +6,9 @@ over the image's own alpha onto black so that transparent pixels compare by cove
 * ``max_abs``: largest absolute difference of any channel (alpha included);
 * ``rmse``: root mean square difference over all channels;
 * ``frac_over``: fraction of pixels whose largest channel difference exceeds ``tolerance``;
-* ``ssim``: mean structural similarity (scikit-image, ``data_range=1``, on luminance).
+* ``ssim``: mean structural similarity (scikit-image, ``data_range=1``, on luminance); NaN
+  (``null`` in JSON, ``n/a`` in tables) for an image 1 or 2 pixels tall or wide that differs at
+  all, where the smallest SSIM window (3 x 3) does not fit: the SSIM criterion is then not judged.
 """
 
 from __future__ import annotations
@@ -50,7 +52,10 @@ class ImageMetrics:
         return cls(name, np.inf, np.inf, 1.0, 0.0, tolerance, status=status, message=message)
 
     def passes(self, *, max_frac_over: float, min_ssim: float) -> bool:
-        return self.status == "ok" and self.frac_over <= max_frac_over and self.ssim >= min_ssim
+        """Whether the image was compared and meets both criteria; an SSIM of NaN (not
+        computable, see :func:`compare_images`) leaves the SSIM criterion unjudged."""
+        ssim_ok = bool(np.isnan(self.ssim)) or self.ssim >= min_ssim
+        return self.status == "ok" and self.frac_over <= max_frac_over and ssim_ok
 
     def as_dict(self) -> dict:
         """JSON-ready: inf and NaN become None."""
@@ -128,7 +133,30 @@ def difference_image(
 def compare_images(
     reference: np.ndarray, candidate: np.ndarray, *, name: str = "", tolerance: float = 2.0 / 255
 ) -> ImageMetrics:
-    """Metrics of ``candidate`` against ``reference``, both (H, W, 4) float in [0, 1]."""
+    """Metrics of ``candidate`` against ``reference``, both (H, W, 4) float in [0, 1].
+
+    Parameters
+    ----------
+    reference, candidate : (H, W, 4) float array
+        RGBA in [0, 1], as :func:`load_image` returns.
+    name : str
+        The image's name, copied to the result.
+    tolerance : float
+        Per-channel difference in [0, 1] above which a pixel counts in ``frac_over``.
+
+    Returns
+    -------
+    ImageMetrics
+        Status "size" or "nonfinite" (worst metrics) when the images cannot be compared. ``ssim``
+        is NaN for images 1 or 2 pixels tall or wide that differ at all: the smallest SSIM window
+        (3 x 3) does not fit them, and :meth:`ImageMetrics.passes` then judges them by
+        ``frac_over`` alone (identical images have SSIM 1 at any size).
+
+    Raises
+    ------
+    ValueError
+        A ``tolerance`` that is not a number in [0, 1].
+    """
     from skimage.metrics import structural_similarity
 
     if not (isinstance(tolerance, (int, float)) and 0.0 <= tolerance <= 1.0):
@@ -152,7 +180,7 @@ def compare_images(
     ssim = (
         float(structural_similarity(lum_r, lum_c, data_range=1.0, win_size=win))
         if win >= 3
-        else float(np.all(diff == 0))
+        else (1.0 if not diff.any() else float("nan"))
     )
     return ImageMetrics(
         name=name,
@@ -268,13 +296,14 @@ def check_outside_compared(
 
 
 def format_table(results: list[ImageMetrics]) -> str:
-    """Plain-text table of metrics."""
+    """Plain-text table of metrics (an SSIM that could not be computed shows as ``n/a``)."""
     lines = [
         f"{'image':32s} {'status':10s} {'max_abs':>8s} {'rmse':>8s} {'frac>tol':>9s} {'ssim':>7s}"
     ]
     for m in results:
         lines.append(
-            f"{m.name:32s} {m.status:10s} {m.max_abs:8.4f} {m.rmse:8.4f} {m.frac_over:9.5f} {m.ssim:7.4f}"
+            f"{m.name:32s} {m.status:10s} {m.max_abs:8.4f} {m.rmse:8.4f} {m.frac_over:9.5f} "
+            + ("    n/a" if np.isnan(m.ssim) else f"{m.ssim:7.4f}")
         )
         if m.message:
             lines.append(f"    {m.message}")

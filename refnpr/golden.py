@@ -560,7 +560,8 @@ def _check_case_render(case: GoldenCase, target: Path, got: Any, fail_root: Path
             write_png_atomic(d / "diff.png", difference_image(ref, cand))
     msg = (
         f"{m.status}: max_abs={m.max_abs:.4f} rmse={m.rmse:.5f} "
-        f"frac>tol={m.frac_over:.5f} (allowed {case.max_frac_over}) ssim={m.ssim:.4f}"
+        f"frac>tol={m.frac_over:.5f} (allowed {case.max_frac_over}) "
+        + ("ssim=n/a (image too small)" if np.isnan(m.ssim) else f"ssim={m.ssim:.4f}")
     )
     if not ok:
         msg += f"; images written to {fail_root / case.name}"

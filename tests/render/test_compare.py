@@ -150,3 +150,28 @@ def test_an_empty_json_name_is_refused(tmp_path, capsys):
     write_png_atomic(cand / "a.png", _img(5))
     assert main(["compare", str(ref), str(cand), "--json", ""]) == 2
     assert "--json: expected a file name ending in .json, got ''" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 9), (2, 9), (9, 2)])
+def test_ssim_of_an_image_too_small_for_its_window_is_not_judged(tmp_path, shape, capsys):
+    from refnpr.cli import main
+
+    a = _img(7, shape)
+    b = a.copy()
+    b[0, 0, 0] = a[0, 0, 0] ^ 1  # one level: within the tolerance
+    m = compare_images(a / 255, b / 255, name="x")
+    assert np.isnan(m.ssim) and m.frac_over == 0.0
+    assert m.passes(max_frac_over=0.0, min_ssim=0.99)
+    assert m.as_dict()["ssim"] is None
+    assert format_table([m]).splitlines()[1].endswith("    n/a")
+    assert compare_images(a / 255, a / 255).ssim == 1.0  # identical: 1 at any size
+    far = b.copy()
+    far[0, 0, :3] = 255 - a[0, 0, :3]
+    assert not compare_images(a / 255, far / 255).passes(max_frac_over=0.0, min_ssim=0.0)
+    ref, cand = tmp_path / "ref", tmp_path / "cand"
+    write_png_atomic(ref / "t.png", a)
+    write_png_atomic(cand / "t.png", b)
+    out = tmp_path / "m.json"
+    assert main(["compare", str(ref), str(cand), "--json", str(out), "--min-ssim", "0.99"]) == 0
+    assert "n/a" in capsys.readouterr().out
+    assert json.loads(out.read_text())[0]["ssim"] is None  # strict JSON: no NaN

@@ -148,3 +148,19 @@ def test_scene_file_paths_are_relative_to_the_suite_in_any_case(tmp_path, monkey
     monkeypatch.chdir(tmp_path)
     assert scene_case("c", "x/Up.Gltf").scene == str(tmp_path / "x" / "Up.Gltf")
     assert scene_case("d", "teapot").scene == "teapot"  # a built-in name stays a name
+
+
+def test_an_image_too_small_for_ssim_is_judged_by_its_pixels(tmp_path):
+    import imageio.v3 as iio
+
+    from refnpr.image import write_png_atomic
+
+    suite = tmp_path / "suite.toml"
+    suite.write_text("[[case]]\nname = 'thin'\nscene = 'sphere'\nwidth = 2\nheight = 8\n")
+    update_suite(suite, log=lambda *_: None)
+    img = iio.imread(tmp_path / "thin.png")
+    img[4, 1, 0] = img[4, 1, 0] ^ 1  # one level: within the tolerance
+    write_png_atomic(tmp_path / "thin.png", img)
+    (r,) = check_suite(suite, failure_dir=tmp_path / "fail")
+    assert r.passed, r.message
+    assert "ssim=n/a" in r.message
