@@ -52,7 +52,7 @@ import re
 import stat
 import tempfile
 from collections.abc import Callable, Iterable, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -499,7 +499,9 @@ def check_suite(
     """Re-render every case and compare with its golden file. Missing golden files fail.
 
     A failing image case's ``reference``, ``result`` and ``diff`` PNGs go to
-    ``failure_dir / NAME/`` (default: :func:`default_failure_dir`).
+    ``failure_dir / NAME/`` (default: :func:`default_failure_dir`; no ``diff`` when the sizes
+    differ); those of an earlier failure are removed when the case passes, and that directory
+    with them if nothing else is in it.
 
     ``render_cases`` (see :data:`RenderCases`) renders the cases elsewhere (a Dask cluster:
     :func:`refnpr.distributed.check_suite`); the comparison, the messages and the failure
@@ -533,31 +535,61 @@ def check_suite(
     return [results[i] for i in sorted(results)]
 
 
+#: The images :func:`check_suite` writes into a failing case's directory ``failure_dir / NAME``
+_FAILURE_IMAGES = ("reference.png", "result.png", "diff.png")
+
+
+def _write_failure_images(
+    d: Path, ref: np.ndarray, got: np.ndarray, diff: np.ndarray | None
+) -> None:
+    """Write a failing case's ``reference``, ``result`` and, where the sizes agree, ``diff``
+    PNGs into ``d``; without a ``diff``, the one of an earlier failure is removed (it is stale)."""
+    write_png_atomic(d / "reference.png", np.rint(ref * 255).astype(np.uint8))
+    write_png_atomic(d / "result.png", got)
+    if diff is not None:
+        write_png_atomic(d / "diff.png", diff)
+    else:
+        (d / "diff.png").unlink(missing_ok=True)
+
+
+def _remove_failure_images(d: Path) -> None:
+    """Remove the images of an earlier failure of a case (it now passes, or has no images to
+    show), and its directory ``d`` if that leaves it empty (other files stay, with it)."""
+    if d.is_symlink() or not d.is_dir():
+        return
+    for name in _FAILURE_IMAGES:
+        (d / name).unlink(missing_ok=True)
+    with suppress(OSError):  # not empty: something else is kept there
+        d.rmdir()
+
+
 def _check_case_render(case: GoldenCase, target: Path, got: Any, fail_root: Path) -> CaseResult:
     """Compare one case's render with its golden file (writing failure images)."""
     if case.kind == "gbuffer":
         return _check_gbuffer(case, target, got)
+    d = fail_root / case.name
     try:
         ref = load_image(target, what="golden file")
     except ValueError as exc:  # a corrupt golden file fails its case, not the suite
+        _remove_failure_images(d)  # those of an earlier failure would be stale
         return CaseResult(case.name, False, f"{exc}; run `refnpr golden --update` to rewrite it")
     cand = got.astype(np.float64) / 255.0
     m = compare_images(ref, cand, name=case.name, tolerance=case.tolerance)
     if m.status == "size":
+        _write_failure_images(d, ref, got, None)
         gh, gw = ref.shape[:2]
         why = (
             f"size: golden file {str(target)!r} is {gw}x{gh} but the case renders "
             f"{case.width}x{case.height}; if the suite's size changed on purpose, "
-            "run `refnpr golden --update`"
+            f"run `refnpr golden --update`; images written to {d}"
         )
         return CaseResult(case.name, False, why, m)
     ok = m.passes(max_frac_over=case.max_frac_over, min_ssim=case.min_ssim)
-    if not ok:
-        d = fail_root / case.name
-        write_png_atomic(d / "reference.png", np.rint(ref * 255).astype(np.uint8))
-        write_png_atomic(d / "result.png", got)
-        if m.status == "ok":
-            write_png_atomic(d / "diff.png", difference_image(ref, cand))
+    if ok:
+        _remove_failure_images(d)
+    else:
+        diff = difference_image(ref, cand) if m.status == "ok" else None
+        _write_failure_images(d, ref, got, diff)
     msg = (
         f"{m.status}: max_abs={m.max_abs:.4f} rmse={m.rmse:.5f} "
         f"frac>tol={m.frac_over:.5f} (allowed {case.max_frac_over}) "

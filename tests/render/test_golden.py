@@ -164,3 +164,28 @@ def test_an_image_too_small_for_ssim_is_judged_by_its_pixels(tmp_path):
     (r,) = check_suite(suite, failure_dir=tmp_path / "fail")
     assert r.passed, r.message
     assert "ssim=n/a" in r.message
+
+
+def test_failure_images_are_never_stale(tmp_path):
+    import imageio.v3 as iio
+
+    suite = tmp_path / "suite.toml"
+    fail = tmp_path / "fail"
+    suite.write_text(_MINI.format(n=2))
+    update_suite(suite, only=["a"], log=lambda *_: None)
+    golden = (tmp_path / "a.png").read_bytes()
+    (fail / "other").mkdir(parents=True)  # another case's images: left alone
+    (fail / "other" / "result.png").write_bytes(golden)
+    suite.write_text(_MINI.format(n=5))
+    (r,) = check_suite(suite, only=["a"], failure_dir=fail)
+    assert not r.passed and (fail / "a" / "diff.png").exists()
+    suite.write_text(_MINI.format(n=2).replace("height = 16", "height = 12"))
+    (r,) = check_suite(suite, only=["a"], failure_dir=fail)
+    assert not r.passed and r.message.startswith("size:")
+    assert sorted(p.name for p in (fail / "a").iterdir()) == ["reference.png", "result.png"]
+    assert iio.imread(fail / "a" / "result.png").shape[:2] == (12, 24)
+    assert iio.imread(fail / "a" / "reference.png").shape[:2] == (16, 24)
+    suite.write_text(_MINI.format(n=2))
+    (r,) = check_suite(suite, only=["a"], failure_dir=fail)
+    assert r.passed and not (fail / "a").exists()
+    assert (fail / "other" / "result.png").read_bytes() == golden
