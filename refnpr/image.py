@@ -99,8 +99,9 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     as the array imageio gives, with these exceptions:
 
     - an image in a colour model other than grey or RGB (a CMYK JPEG) is converted to RGB;
-    - a palette, RGB or grey image with PNG transparency (a ``tRNS`` chunk: palette alphas or a
-      colour key) is decoded with its alpha, as RGBA or grey + alpha (imageio drops it);
+    - a PNG with a ``tRNS`` chunk (palette alphas, or the colour key of an 8-bit RGB or an 8-
+      or 1-bit grey image) is decoded with its alpha, as RGBA or grey + alpha (imageio drops
+      it; Pillow cannot apply the key of other bit depths, which keep their pixels, opaque);
     - a 16-bit RGB, RGBA or grey + alpha PNG is decoded at 16 bits by :func:`decode_png16`
       (``uint16``, grey + alpha as two channels), where imageio (Pillow) gives 8 bits.
 
@@ -140,9 +141,13 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
 
 
 def _png_transparency(source: Any, head: bytes) -> bool:
-    """Whether ``source`` (a path or bytes starting with ``head``) is a grey, RGB or palette PNG
-    with a ``tRNS`` chunk (its transparency), found among the chunks before the first IDAT."""
-    if len(head) < 26 or head[:8] != PNG_SIGNATURE or head[25] not in (0, 2, 3):
+    """Whether ``source`` (a path or bytes starting with ``head``) is a palette PNG, an 8-bit
+    RGB or an 8- or 1-bit grey PNG with a ``tRNS`` chunk (its transparency), found among the
+    chunks before the first IDAT: the kinds whose transparency Pillow turns into alpha."""
+    if len(head) < 26 or head[:8] != PNG_SIGNATURE:
+        return False
+    depth, colour = head[24], head[25]
+    if not (colour == 3 or (colour == 2 and depth == 8) or (colour == 0 and depth in (1, 8))):
         return False
     if isinstance(source, (bytes, bytearray)):
         f: Any = io.BytesIO(source)

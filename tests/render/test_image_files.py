@@ -127,3 +127,16 @@ def test_an_image_holds_float_linear_rgba(dtype):
 
     with pytest.raises(TypeError, match=r"rgba: expected float linear RGBA in \[0, 1\], got dtype"):
         Image(np.full((1, 1, 4), 1, dtype=dtype))
+
+
+def test_a_16_bit_grey_png_with_a_colour_key_keeps_its_16_bit_values(tmp_path):
+    """Pillow cannot apply the colour key of a 16-bit grey PNG (it would clip the values to 8
+    bits): such a file decodes as before, at 16 bits."""
+    from PIL import Image as PILImage
+
+    values = (np.arange(16, dtype=np.uint16) * 4000).reshape(4, 4)
+    path = tmp_path / "g16.png"
+    PILImage.fromarray(values).save(path, transparency=0)
+    got = read_image_file(path)
+    assert got.dtype == np.uint16
+    np.testing.assert_array_equal(got, values)
