@@ -114,7 +114,7 @@ def vase(
     """
     height, radius, thickness = positives(height=height, radius=radius, thickness=thickness)
     n_u, n_v = check_int("n_u", n_u, minimum=3), check_int("n_v", n_v, minimum=1)
-    check_grid((n_u + 1) * (n_v + 1), {"n_u": n_u, "n_v": n_v})
+    check_grid((n_u + 1) * (2 * n_v + 8), {"n_u": n_u, "n_v": n_v})  # two walls, three rims
     if thickness >= height:
         raise ValueError(f"thickness: must be smaller than height ({height}), got {thickness}")
     s_out = np.linspace(0.0, 1.0, n_v + 1)

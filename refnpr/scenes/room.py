@@ -98,7 +98,7 @@ def room(
     """
     width, depth, height, tile = positives(width=width, depth=depth, height=height, tile=tile)
     n = check_int("segments", segments, minimum=1)
-    check_grid((n + 1) ** 2, {"segments": n}, copies=6)
+    check_grid((n + 1) ** 2, {"segments": n}, copies=3)  # the floor and two walls
     x0, x1, z0, z1 = -width / 2.0, width / 2.0, -depth / 2.0, depth / 2.0
     # floor corners front-left, front-right, back-left, back-right, and the tops of the walls'
     # vertical edges; rectangles that meet share these exact values

@@ -93,7 +93,7 @@ def test_flat_validation(call, exc, match):
     "build, counts",
     [
         (lambda: plane(segments=10**6), "segments=1000000"),
-        (lambda: room(segments=2000), "segments=2000"),  # six rectangles of 2001^2 vertices
+        (lambda: room(segments=2600), "segments=2600"),  # three rectangles of 2601^2 vertices
         (lambda: terrain(n=10**5), "n=100000"),
         (lambda: uv_sphere(n_u=30_000, n_v=30_000), "n_u=30000, n_v=30000"),
         (lambda: torus(n_u=30_000, n_v=3_000), "n_u=30000, n_v=3000"),
@@ -117,3 +117,30 @@ def test_the_vertex_cap_admits_a_grid_of_exactly_the_cap(monkeypatch):
         ValueError, match=r"segments=10 makes about 121 vertices, more than the 100"
     ):
         plane(segments=10)
+
+
+@pytest.mark.parametrize(
+    "build, counts",
+    [
+        (lambda: plane(segments=7), {"segments": 7}),
+        (lambda: room(segments=5), {"segments": 5}),
+        (lambda: terrain(n=6), {"n": 6}),
+        (lambda: uv_sphere(n_u=9, n_v=5), {"n_u": 9, "n_v": 5}),
+        (lambda: torus(n_u=9, n_v=5), {"n_u": 9, "n_v": 5}),
+        (lambda: vase(n_u=8, n_v=4), {"n_u": 8, "n_v": 4}),
+        (lambda: torus_knot(n_u=16, n_v=5), {"n_u": 16, "n_v": 5}),
+    ],
+)
+def test_the_vertex_estimate_of_each_builder_bounds_its_mesh_closely(build, counts, monkeypatch):
+    """With the cap one vertex below a builder's mesh, the builder refuses it: the estimate it
+    checks is at least the vertices it makes, and at most a few more (seams, poles)."""
+    import re
+
+    import refnpr.scenes._params as params
+
+    n = build().positions.shape[0]
+    monkeypatch.setattr(params, "MAX_GENERATED_VERTICES", n - 1)
+    with pytest.raises(ValueError, match=r"makes about [\d,]+ vertices") as info:
+        build()
+    estimate = int(re.search(r"about ([\d,]+)", str(info.value)).group(1).replace(",", ""))
+    assert n <= estimate <= 1.25 * n, (n, estimate)
