@@ -496,11 +496,10 @@ def _cmd_compare(args: argparse.Namespace) -> int:
             f"--json: {args.json!r} is a directory; give a file name such as "
             f"{str(Path(args.json) / 'metrics.json')!r}"
         )
-    if args.json is not None:
+    if args.json is not None:  # a .json file: never one of the compared PNGs
         check_output_file(args.json, "--json", ".json")
-    for option, path in (("--out", args.out), ("--json", args.json)):
-        if path is not None:
-            check_outside_compared(path, option, args.reference, args.candidate)
+    if args.out is not None:  # its NAME.diff.png would be compared on the next run
+        check_outside_compared(args.out, "--out", args.reference, args.candidate)
     results = compare_dirs(
         args.reference, args.candidate, out_dir=args.out, tolerance=args.tolerance
     )
@@ -739,9 +738,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument(
         "--out", help="write NAME.diff.png and report.json here (outside both directories)"
     )
-    c.add_argument(
-        "--json", help="write the metrics as JSON to this .json file (outside both directories)"
-    )
+    c.add_argument("--json", help="write the metrics as JSON to this .json file")
     c.add_argument("--tolerance", type=_fraction("--tolerance"), default=2.0 / 255)
     c.add_argument("--max-frac-over", type=_fraction("--max-frac-over"), default=0.001)
     c.add_argument("--min-ssim", type=_fraction("--min-ssim"), default=0.99)
@@ -860,7 +857,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="also measure strokes by id (TAMISS): endpoint jitter, strokes appearing/vanishing",
     )
-    co.add_argument("--json", metavar="FILE", help="write the report as JSON")
+    co.add_argument("--json", metavar="FILE.json", help="write the report as JSON")
     co.add_argument("--plot", metavar="FILE.png", help="plot the numbers over frames")
     co.add_argument("-q", "--quiet", action="store_true", help="no table")
     co.set_defaults(func=_run_of("coherence.cli"))

@@ -123,13 +123,9 @@ def test_out_dir_inside_a_compared_directory_is_refused(tmp_path, where, capsys)
     [
         ("ref/a.png", r"--json: expected a \.json file name, got '.*ref/a\.png'"),
         ("r.txt", r"--json: expected a \.json file name"),
-        ("ref/r.json", r"--json: .* inside the reference directory"),
-        ("cand/r.json", r"--json: .* inside the candidate directory"),
     ],
 )
-def test_json_must_be_a_json_file_outside_the_compared_directories(
-    tmp_path, json_arg, match, capsys
-):
+def test_json_must_be_a_json_file(tmp_path, json_arg, match, capsys):
     from refnpr.cli import main
 
     ref, cand = tmp_path / "ref", tmp_path / "cand"
