@@ -17,6 +17,7 @@ __all__ = [
     "check_finite",
     "check_scalar",
     "to_float",
+    "BEYOND_FLOAT_RANGE",
     "check_int",
     "check_bool",
     "as_ints",
@@ -39,6 +40,10 @@ def describe(value) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+#: How messages name a Python int that float() refuses (``OverflowError``): about 309 digits.
+BEYOND_FLOAT_RANGE = "an integer beyond the float range (|value| > 1.8e308)"
+
+
 def to_float(name: str, value) -> float:
     """``float(value)`` of a real number ``value``; an integer beyond the float range (a Python
     int of about 309 digits or more, where ``float`` raises ``OverflowError``) is a
@@ -46,10 +51,7 @@ def to_float(name: str, value) -> float:
     try:
         return float(value)
     except OverflowError:
-        raise ValueError(
-            f"{name}: expected a finite number, got an integer beyond the float range "
-            f"(|value| > 1.8e308)"
-        ) from None
+        raise ValueError(f"{name}: expected a finite number, got {BEYOND_FLOAT_RANGE}") from None
 
 
 def as_float(name: str, value, *, finite: bool = False) -> np.ndarray:

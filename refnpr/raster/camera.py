@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..formulas._validate import to_float
+from ..formulas._validate import BEYOND_FLOAT_RANGE, to_float
 
 __all__ = ["Camera"]
 
@@ -17,9 +17,7 @@ def _vec3(name: str, value) -> np.ndarray:
     try:
         arr = np.asarray(value, dtype=np.float64)
     except OverflowError:  # a Python int of about 309 digits or more
-        raise ValueError(
-            f"{name}: must be finite, got an integer beyond the float range (|value| > 1.8e308)"
-        ) from None
+        raise ValueError(f"{name}: must be finite, got {BEYOND_FLOAT_RANGE}") from None
     except (TypeError, ValueError) as exc:
         raise TypeError(f"{name}: expected 3 numbers, got {value!r}") from exc
     if arr.shape != (3,):

@@ -53,6 +53,7 @@ from typing import Any
 import numpy as np
 
 from .._reading import printable, read_regular, short_repr
+from ..formulas._validate import BEYOND_FLOAT_RANGE
 from ..raster import Camera, Mesh
 from ..raster.mesh import MAX_COORDINATE, coordinate_limit_message
 from ..texture.embedded import EmbeddedImage, probe_image
@@ -159,7 +160,7 @@ def _finite(v) -> bool:
 
 def _beyond_float(v) -> str:
     """A note for a number that ``_finite`` refuses: an integer beyond the float range."""
-    return " (an integer beyond the float range, |value| > 1.8e308)" if _int(v) else ""
+    return f" ({BEYOND_FLOAT_RANGE})" if _int(v) else ""
 
 
 #: glTF's largest integer (JSON integers must lie in [-(2^53 - 1), 2^53 - 1]).

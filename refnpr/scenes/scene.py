@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..formulas._validate import BEYOND_FLOAT_RANGE
 from ..raster import Camera, Mesh
 from ._params import check_real, check_type, check_vec
 from .animation import Animation
@@ -168,8 +169,7 @@ def _as_transform(value) -> np.ndarray:
         m = np.array(value, dtype=np.float64)
     except OverflowError:  # a Python int of about 309 digits or more
         raise ValueError(
-            "transform: expected a finite (4, 4) matrix, got an integer beyond the float range "
-            "(|value| > 1.8e308)"
+            f"transform: expected a finite (4, 4) matrix, got {BEYOND_FLOAT_RANGE}"
         ) from None
     except (TypeError, ValueError) as exc:
         raise TypeError(f"transform: expected a (4, 4) array of numbers, got {value!r}") from exc

@@ -81,6 +81,7 @@ from importlib import resources
 from pathlib import Path
 
 from .._reading import read_regular
+from ..formulas._validate import BEYOND_FLOAT_RANGE
 from ..raster import Camera
 from ..texture.builtin import BUILTIN_TEXTURES
 from .animation import MAX_FRAMES, Animation, Track, check_keys_in_range
@@ -400,8 +401,8 @@ def _key(src: str, where: str, spec, fps: float, rotation: bool) -> Keyframe:
             frame = t * fps
         except OverflowError:  # an integer beyond the float range
             raise SceneFileError(
-                f"{src}: {where}: time: expected seconds (a finite number), got an integer "
-                "beyond the float range (|value| > 1.8e308)"
+                f"{src}: {where}: time: expected seconds (a finite number), got "
+                f"{BEYOND_FLOAT_RANGE}"
             ) from None
     if rotation:
         has_q, has_aa = "quaternion" in spec, "axis" in spec or "angle_deg" in spec

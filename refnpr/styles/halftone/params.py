@@ -8,6 +8,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from refnpr.formulas._validate import BEYOND_FLOAT_RANGE
+
 from .._common import check_uv_scale
 from .._declare import Param, Params, number_or, rgb_param
 from . import screens as HS
@@ -45,7 +47,7 @@ def parse_indication(value: Any, where: str = "indication") -> np.ndarray | None
         arr = np.array(value, dtype=np.float64)
     except OverflowError:
         raise ValueError(
-            f"{where}: holds an integer beyond the float range; expected signed values in "
+            f"{where}: holds {BEYOND_FLOAT_RANGE}; expected signed values in "
             "[-1, 1] (0 = no change, > 0 lighter, < 0 darker)"
         ) from None
     except (TypeError, ValueError):

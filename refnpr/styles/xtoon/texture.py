@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from refnpr.formulas import xtoon
+from refnpr.formulas._validate import BEYOND_FLOAT_RANGE
 from refnpr.image import srgb_to_linear
 
 from .presets import COLS, PRESETS, ROWS, as_rgba, band_ramp, per_texel
@@ -48,8 +49,7 @@ def _check_array(tex: Any, name: str) -> np.ndarray:
         a = np.asarray(tex, dtype=np.float64)
     except OverflowError:
         raise ValueError(
-            f"{name}: holds an integer beyond the float range; texel values lie in [0, 1] "
-            "(linear RGB(A))"
+            f"{name}: holds {BEYOND_FLOAT_RANGE}; texel values lie in [0, 1] (linear RGB(A))"
         ) from None
     except (TypeError, ValueError) as exc:
         raise TypeError(f"{name}: expected a numeric texture array, got {tex!r}; {_how()}") from exc
