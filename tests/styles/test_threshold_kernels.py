@@ -429,10 +429,35 @@ def test_kernel_compiles_only_the_frames_modes():
     assert math.isfinite(K.ANALYTIC) and K.ANALYTIC not in (K.CONSTANT, K.LINES, K.IMAGE)
 
 
-def test_stipple_with_and_without_tone_table_shares_one_compiled_scalar():
+def test_stipple_with_and_without_tone_table_shares_one_compiled_scalar(monkeypatch):
     """numba types an array's writability: ``NO_TABLE`` and a tone table's ``cdf`` are both
     read-only, so the stipple scalar is compiled for one ``cdf`` type, by the face and the
-    kernel alike."""
+    kernel alike. The arrays each path hands on are captured and typed (a kernel loaded from
+    numba's disk cache compiles nothing, so its callee's signatures would say nothing)."""
+    import numba
+
+    from refnpr.formulas.threshold import stipple as S
+    from refnpr.styles.threshold import _kernels as K
+
+    seen = []
+    face_elementwise, kernel_for = S.elementwise, K.shade_threshold_for
+
+    def elementwise(scalar, dtype, *args, **kw):
+        if scalar is thr.stipple_threshold.scalar:
+            seen.append(("face", args[-1].value))
+        return face_elementwise(scalar, dtype, *args, **kw)
+
+    def shade_threshold_for(*case):
+        kernel = kernel_for(*case)
+
+        def run(frame, record, tables, out, kept):
+            seen.append(("kernel", tables.cdf))
+            return kernel(frame, record, tables, out, kept)
+
+        return run
+
+    monkeypatch.setattr(S, "elementwise", elementwise)
+    monkeypatch.setattr(K, "shade_threshold_for", shade_threshold_for)
     ctx = random_ctx(5, "directional", shape=(4, 5))
     uv = np.random.default_rng(0).uniform(0.0, 4.0, (20, 2))
     table = thr.stipple_tone_table(n_t=3, n_y=5, samples=16)
@@ -440,8 +465,13 @@ def test_stipple_with_and_without_tone_table_shares_one_compiled_scalar():
     thr.stipple_threshold(uv, 1.3, 2.2, tone_table=table)
     ThresholdStyle(source="stipple").shade(ctx)
     ThresholdStyle(source="stipple", uniform=True).shade(ctx)
-    cdf_types = {sig[-1] for sig in thr.stipple_threshold.scalar.signatures}
-    assert cdf_types and all(not t.mutable for t in cdf_types), cdf_types
+    # without and with a tone table, through the face (building a table calls it too) and the
+    # kernel (uniform=True reads the style's table)
+    assert {(w, c.size > 0) for w, c in seen} == {
+        ("face", False), ("face", True), ("kernel", False), ("kernel", True)
+    }
+    cdf_types = {numba.typeof(c) for _, c in seen}
+    assert len(cdf_types) == 1 and not next(iter(cdf_types)).mutable, cdf_types
 
 
 @pytest.mark.parametrize("source", ["lines", "image"])
