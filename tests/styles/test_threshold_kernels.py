@@ -468,7 +468,10 @@ def test_stipple_with_and_without_tone_table_shares_one_compiled_scalar(monkeypa
     # without and with a tone table, through the face (building a table calls it too) and the
     # kernel (uniform=True reads the style's table)
     assert {(w, c.size > 0) for w, c in seen} == {
-        ("face", False), ("face", True), ("kernel", False), ("kernel", True)
+        ("face", False),
+        ("face", True),
+        ("kernel", False),
+        ("kernel", True),
     }
     cdf_types = {numba.typeof(c) for _, c in seen}
     assert len(cdf_types) == 1 and not next(iter(cdf_types)).mutable, cdf_types
