@@ -487,7 +487,9 @@ def format_table(
             continue
         m = r.metrics
         nums = " ".join(
-            f"{m[k]:{w}.{p}f}" if k in m else f"{'-':>{w}s}"
+            f"{m[k]:{w}.{p}f}"
+            if k in m and not math.isnan(m[k])
+            else f"{'-' if k not in m else 'n/a':>{w}s}"  # n/a: an SSIM under 3 px
             for k, w, p in (
                 ("max_abs", 8, 4),
                 ("rmse", 8, 5),

@@ -419,7 +419,8 @@ class Margin:
         The smallest k / 255 (k = 0 ... 255) at which the fraction failing is at most
         ``max_frac_over`` (deviation as the case states).
     ssim : float or None
-        The render's SSIM: the largest ``min_ssim`` at which it passes that criterion.
+        The render's SSIM: the largest ``min_ssim`` at which it passes that criterion; NaN
+        where it cannot be computed (an image under 3 px that differs), which passes it.
     """
 
     threshold: float
@@ -436,7 +437,7 @@ class Margin:
 
     @property
     def ssim_ok(self) -> bool:
-        return self.ssim is not None and self.ssim >= self.min_ssim
+        return self.ssim is not None and (math.isnan(self.ssim) or self.ssim >= self.min_ssim)
 
 
 def _tol_number(tol: Mapping[str, Any], key: str) -> float | None:
@@ -510,7 +511,7 @@ def tolerance_margin(
         min_ssim=min_ssim,
         frac=frac_at(threshold),
         pass_threshold=hi / 255,
-        ssim=None if ssim is None or not math.isfinite(ssim) else float(ssim),
+        ssim=None if ssim is None else float(ssim),  # NaN: not computable, not judged
     )
 
 

@@ -136,11 +136,13 @@ def _v8(v: float) -> str:
 def _num(v: float | None, fmt: str) -> str:
     if v is None:
         return ""
+    if math.isnan(v):  # an SSIM not computable (under 3 px), not judged
+        return "n/a"
     return "inf" if not math.isfinite(v) else fmt.format(v)
 
 
 def _attr(v: float | None) -> str:
-    if v is None:
+    if v is None or math.isnan(v):  # sorted with the missing values
         return ""
     return "inf" if not math.isfinite(v) else repr(float(v))
 
@@ -218,7 +220,13 @@ def margin_table(rec: CaseRecord) -> str:
             f"<td>{text(case)}</td><td>{text(passes)}</td></tr>"
         )
 
-    ssim = "-" if m.ssim is None else f"min_ssim <= {m.ssim:.5f}"
+    ssim = (
+        "-"
+        if m.ssim is None
+        else "not judged (SSIM needs 3x3 pixels)"
+        if math.isnan(m.ssim)
+        else f"min_ssim <= {m.ssim:.5f}"
+    )
     return (
         '<table class="margin"><tr><th>criterion</th><th>case</th>'
         "<th>this render passes at</th></tr>"

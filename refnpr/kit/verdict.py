@@ -425,10 +425,18 @@ def check_image(
         "ssim": m.ssim,
     }
     max_frac, min_ssim = tol["max_frac_over"], tol["min_ssim"]
-    ok = metrics["frac_over_position"] <= max_frac and metrics["ssim"] >= min_ssim
+    # an SSIM of NaN: an image under 3 px tall or wide that differs (compare_images), whose
+    # SSIM cannot be computed; that criterion is not judged, as in Metrics.passes
+    unjudged = math.isnan(m.ssim)
+    ok = metrics["frac_over_position"] <= max_frac and (unjudged or m.ssim >= min_ssim)
+    ssim_text = (
+        "n/a (not judged: SSIM needs 3x3 pixels)"
+        if unjudged
+        else f"{m.ssim:.4f} (min {min_ssim:g})"
+    )
     msg = (
         f"frac_over_position={metrics['frac_over_position']:.5f} (allowed {max_frac:g}, "
-        f"N={dev}) ssim={metrics['ssim']:.4f} (min {min_ssim:g})"
+        f"N={dev}) ssim={ssim_text}"
     )
     if "max_flip" in tol:  # FLIP decides too only where the case says so
         from .diagnose import flip_error

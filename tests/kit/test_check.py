@@ -621,6 +621,32 @@ def test_cli_kit_check_exit_status_report_and_json(tiny_kit, tmp_path, capsys):
     assert "kit_dir: " in capsys.readouterr().err
 
 
+def test_a_case_under_3_px_is_judged_without_ssim(tmp_path, capsys):
+    """SSIM needs a 3x3 window: a 2x2 case whose render differs within the threshold passes on
+    the position-tolerant fraction alone (SSIM n/a in the table, the message and the report's
+    margin), and a difference over the threshold still fails it."""
+    from refnpr.cli import main
+
+    kit = tmp_path / "kit"
+    kit.mkdir()
+    index = {"format": "refnpr-kit", "version": 1, "refnpr": "test"}
+    index["cases"] = [_image_case(kit, "tiny", _gradient_linear(2, 2), [0, 0, 0, 0])]
+    (kit / "index.json").write_text(json.dumps(index))
+    renders = _perfect_renders(kit, tmp_path / "r")
+    _edit_png(renders / "tiny.png", lambda a: np.where(a > 0, a - 1, a + 1))  # 1/255: within
+    r = _by_name(check_kit(kit, renders))["tiny"]
+    assert np.isnan(r.metrics["ssim"]) and r.metrics["frac_over_position"] == 0.0
+    assert r.passed and "ssim=n/a (not judged" in r.message
+    report = tmp_path / "rep"
+    assert main(["kit", "check", str(kit), str(renders), "--report", str(report)]) == 0
+    row = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("tiny "))
+    assert row.split()[-1] == "n/a"
+    page = (report / "index.html").read_text()
+    assert 'class="ok" data-criterion="min_ssim"' in page and "not judged" in page
+    _edit_png(renders / "tiny.png", lambda a: 255 - a)  # far over the threshold
+    assert not _by_name(check_kit(kit, renders))["tiny"].passed
+
+
 def _set_tolerance(kit: Path, name: str, **changes) -> None:
     path = kit / name / "case.json"
     case = json.loads(path.read_text())
