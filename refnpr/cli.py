@@ -888,10 +888,13 @@ _NEGATIVE_SLICE = re.compile(r"-\d+:-?\d*")
 
 def _slices_attached(argv: list[str]) -> list[str]:
     """``argv`` with ``--frames -10:`` written ``--frames=-10:``: argparse reads a value that
-    starts with "-" (other than a plain negative number) as an option and fails."""
+    starts with "-" (other than a plain negative number) as an option and fails. An
+    abbreviation that argparse takes for ``--frames`` (``--fram``; no other option of refnpr
+    starts with ``--f``) is written out in full."""
     out: list[str] = []
     for a in argv:
-        if out and out[-1] == "--frames" and _NEGATIVE_SLICE.fullmatch(a):
+        prev = out[-1] if out else ""
+        if len(prev) >= 3 and "--frames".startswith(prev) and _NEGATIVE_SLICE.fullmatch(a):
             out[-1] = f"--frames={a}"
         else:
             out.append(a)

@@ -54,13 +54,33 @@ def test_animate_writes_frames_and_resumes(tmp_path, scene_file, capsys):
     assert "wrote 2 of 4 frame(s)" in capsys.readouterr().out  # 1 and 2 were done
 
 
-@pytest.mark.parametrize(("frames", "kept"), [("-2:", [2, 3]), ("-3:-1", [1, 2])])
+@pytest.mark.parametrize(
+    ("option", "frames", "kept"),
+    [("--frames", "-2:", [2, 3]), ("--frames", "-3:-1", [1, 2]), ("--fram", "-2:", [2, 3])],
+)
 def test_animate_takes_a_slice_counted_from_the_end_after_a_space(
-    tmp_path, scene_file, frames, kept
+    tmp_path, scene_file, option, frames, kept
 ):
     out = tmp_path / "frames"
-    assert animate(scene_file, "--size", "8x8", "--spp", "1", "-o", out, "--frames", frames) == 0
+    assert animate(scene_file, "--size", "8x8", "--spp", "1", "-o", out, option, frames) == 0
     assert sorted(p.name for p in out.glob("*.png")) == [f"frame_{f:05d}.png" for f in kept]
+
+
+def test_only_frames_starts_with_f_so_its_abbreviations_are_safe_to_rewrite():
+    """The CLI writes an abbreviation of ``--frames`` followed by a negative slice out in full
+    (``cli._slices_attached``); that is right only while no other option starts with --f."""
+    import argparse
+
+    from refnpr.cli import build_parser
+
+    seen, todo = set(), [build_parser()]
+    while todo:
+        parser = todo.pop()
+        for action in parser._actions:
+            seen.update(o for o in action.option_strings if o.startswith("--f"))
+            if isinstance(action, argparse._SubParsersAction):
+                todo.extend(action.choices.values())
+    assert seen == {"--frames"}
 
 
 def test_animate_style_params_video_and_progress(tmp_path, scene_file, capsys):
