@@ -106,8 +106,10 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
       (``uint16``, grey + alpha as two channels), where imageio (Pillow) gives 8 bits.
 
     An image of more than :data:`MAX_DECODED_VALUES` values (a TIFF declares any size; a PNG
-    or JPEG is bounded by Pillow) is refused from its header with a ``ValueError``. Decoder
-    errors propagate."""
+    or JPEG is bounded by Pillow) is refused from its header with a ``ValueError``, and so is
+    a file of several images (an animated PNG, GIF or WebP from its header; a multi-page TIFF
+    once read), whose frames would otherwise read as rows or channels. Decoder errors
+    propagate."""
     import imageio.v3 as iio
 
     if isinstance(source, (bytes, bytearray)):
@@ -123,21 +125,54 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
         )
         limit = Image.MAX_IMAGE_PIXELS  # Pillow's decompression-bomb bound, as for other files
         return decode_png16(data, max_pixels=2 * limit if limit else 1 << 62)
-    shape = iio.improps(source, extension=extension).shape
+    frames = _frame_count(source, extension)
+    if frames > 1:
+        raise _Refused(_several_images(frames))
+    props = iio.improps(source, extension=extension)
+    shape = tuple(props.shape)
     if math.prod(shape) > MAX_DECODED_VALUES:
-        raise ValueError(
+        raise _Refused(
             f"the image is too large: {' x '.join(map(str, shape))} values, more than the "
             f"{MAX_DECODED_VALUES:,} refnpr decodes; use a smaller image"
         )
+    one: dict[str, Any] = {"extension": extension}
+    if props.is_batch:  # a one-frame GIF or WebP: its frame, not a stack of one
+        one["index"], shape = 0, shape[1:]
     if _png_transparency(source, head):  # tRNS: imageio drops the alpha
         mode = "LA" if head[25] == 0 else "RGBA"  # grey, else RGB or palette (colour types)
-        return np.asarray(iio.imread(source, extension=extension, mode=mode))
-    pixels = np.asarray(iio.imread(source, extension=extension))
+        return np.asarray(iio.imread(source, mode=mode, **one))
+    pixels = np.asarray(iio.imread(source, **one))
+    if pixels.shape != shape and pixels.shape[1:] == shape:  # a multi-page TIFF's pages
+        raise _Refused(_several_images(pixels.shape[0]))
     if pixels.ndim == 3 and pixels.shape[2] in (3, 4):
-        mode = iio.immeta(source, extension=extension).get("mode")
+        mode = iio.immeta(source, **one).get("mode")
         if mode in _CONVERTED_MODES:
-            pixels = np.asarray(iio.imread(source, extension=extension, mode="RGB"))
+            pixels = np.asarray(iio.imread(source, mode="RGB", **one))
     return pixels
+
+
+def _frame_count(source: Any, extension: str | None) -> int:
+    """How many images the file holds as its plugin counts them from the header (an animated
+    PNG's, GIF's or WebP's frames; 1 where the plugin cannot say, and for a TIFF, whose pages
+    :func:`decode_image` counts once read)."""
+    import imageio.v3 as iio
+
+    try:
+        props = iio.improps(source, index=..., extension=extension)
+    except Exception:  # noqa: BLE001 -- the decode that follows reports a bad file
+        return 1
+    return int(props.n_images or 1) if props.is_batch else 1
+
+
+class _Refused(ValueError):
+    """A file :func:`decode_image` decodes but refuses (its message is the whole reason)."""
+
+
+def _several_images(n: int) -> str:
+    return (
+        f"the file holds {n} images (an animation or a multi-page file); refnpr reads a "
+        "single image: save the one you want as its own file"
+    )
 
 
 def _png_transparency(source: Any, head: bytes) -> bool:
@@ -327,7 +362,7 @@ def _decode_reason(exc: BaseException) -> str:
         return f"the file is truncated ({first})"
     if isinstance(exc, PermissionError):
         return "permission denied"
-    if first.startswith("the image is too large"):  # decode_image's own refusal
+    if isinstance(exc, _Refused):  # decode_image's own refusal
         return first
     if isinstance(exc, MemoryError) or type(exc).__name__ == "DecompressionBombError":
         return f"the image is too large to decode ({type(exc).__name__}: {first})"

@@ -121,6 +121,34 @@ def test_an_image_too_large_to_decode_is_refused_from_its_header(tmp_path, monke
     assert read_image_file(path).shape == (40, 30)
 
 
+@pytest.mark.parametrize("suffix", [".png", ".gif", ".webp", ".tif"])
+@pytest.mark.parametrize("channels", [1, 3])
+def test_a_file_of_several_images_is_refused_and_a_one_frame_file_is_its_image(
+    tmp_path, suffix, channels
+):
+    """An animated PNG, GIF or WebP, or a multi-page TIFF, decodes to a stack of images, whose
+    frames read as rows (a grey TIFF's three 8 x 8 pages made a 3 x 8 texture of 8 channels).
+    It is refused, naming the count; a file of one frame is that frame (a one-frame GIF
+    decoded as a (1, rows, cols, 3) stack)."""
+    from PIL import Image
+
+    rng = np.random.default_rng(1)
+    shape = (8, 6, 3) if channels == 3 else (8, 6)
+    frames = [rng.integers(0, 256, shape).astype(np.uint8) for _ in range(3)]
+    if suffix == ".gif":  # GIF stores a palette: give each frame few colours
+        frames = [(f // 128 * 255).astype(np.uint8) for f in frames]
+    images = [Image.fromarray(f) for f in frames]
+    several, one = tmp_path / f"several{suffix}", tmp_path / f"one{suffix}"
+    extra = {"lossless": True} if suffix == ".webp" else {}
+    images[0].save(several, save_all=True, append_images=images[1:], **extra)
+    images[0].save(one, **extra)
+    with pytest.raises(ValueError, match=r"several\.\w+': the file holds 3 images"):
+        read_image_file(several, what="texture")
+    got = read_image_file(one)
+    want = frames[0] if got.ndim == len(shape) else np.repeat(frames[0][..., None], 3, axis=2)
+    np.testing.assert_array_equal(got, want)
+
+
 @pytest.mark.parametrize("dtype", [np.uint8, bool, np.int32])
 def test_an_image_holds_float_linear_rgba(dtype):
     from refnpr.image import Image

@@ -400,6 +400,14 @@ def _check_refused(result: tuple[str, list[str]], tmp: Path) -> None:
     assert error.startswith("ValueError: pixels:") and "(4, 4, 7)" in error, error
 
 
+def _animated(path: Path) -> Path:
+    from PIL import Image
+
+    frames = [Image.fromarray(np.full((4, 4, 3), 80 * i, np.uint8)) for i in range(3)]
+    frames[0].save(path, save_all=True, append_images=frames[1:])
+    return path
+
+
 def _render(*args: str):
     def run(tmp: Path):
         return cli("render", "--size", "8x8", "-q", *args, cwd=tmp)
@@ -462,6 +470,13 @@ CASES = [
         "load_texture of a directory",
         _load_texture(lambda t: _mkdir(t / "textures")),
         Raises(ValueError, r"textures.*is a directory"),
+    ),
+    Case(
+        "texture-animated-png",
+        "files",
+        "load_texture of an animated PNG of 3 frames",
+        _load_texture(lambda t: _animated(t / "anim.png")),
+        Raises(ValueError, r"anim\.png.*holds 3 images.*single image"),
     ),
     Case(
         "texture-unknown-name",
