@@ -14,6 +14,7 @@ over the image's own alpha onto black so that transparent pixels compare by cove
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
@@ -237,6 +238,13 @@ def compare_dirs(
     for fname in names:
         stem = fname[:-4]
         ref_path, cand_path = ref_dir / fname, cand_dir / fname
+        if cand_path.is_symlink() and not cand_path.exists():  # there, but reads nothing
+            why = (
+                f"candidate {str(cand_path)!r} is a symbolic link to "
+                f"{os.readlink(cand_path)!r}, which does not exist"
+            )
+            results.append(ImageMetrics.failed(stem, tolerance, "unreadable", why))
+            continue
         if not cand_path.exists():
             results.append(
                 ImageMetrics.failed(stem, tolerance, "missing", f"no candidate {str(cand_path)!r}")

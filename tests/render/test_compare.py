@@ -69,6 +69,18 @@ def test_compare_dirs_reports_missing_and_size(tmp_path):
     assert "absent" in format_table(list(results.values()))
 
 
+def test_a_broken_link_as_candidate_is_unreadable_not_missing(tmp_path):
+    """A candidate that is a symbolic link to nothing is there (the backend wrote a link) but
+    cannot be read: reported as such, naming the link's target, not as "no candidate"."""
+    ref, cand = tmp_path / "ref", tmp_path / "cand"
+    write_png_atomic(ref / "a.png", _img(2))
+    cand.mkdir()
+    (cand / "a.png").symlink_to(tmp_path / "renders" / "a.png")
+    (m,) = compare_dirs(ref, cand)
+    assert m.status == "unreadable" and "symbolic link to" in m.message, m
+    assert "renders/a.png" in m.message and "does not exist" in m.message
+
+
 def test_rgb_and_gray_pngs_load_as_rgba(tmp_path):
     write_png_atomic(tmp_path / "g.png", np.full((2, 3), 128, np.uint8))
     g = load_image(tmp_path / "g.png")
