@@ -67,7 +67,9 @@ class ImageMetrics:
 
 
 def load_image(path: str | Path, *, what: str = "image") -> np.ndarray:
-    """An image file as (H, W, 4) float64 in [0, 1] (alpha 1 if absent).
+    """An image file as (H, W, 4) float64 (alpha 1 if absent): integer pixels divided by their
+    type's maximum, in [0, 1]; float pixels (a float TIFF) as stored, also outside [0, 1]
+    (compared as they are; NaN or inf gives status "nonfinite").
 
     Parameters
     ----------
