@@ -107,9 +107,9 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
 
     An image of more than :data:`MAX_DECODED_VALUES` values (a TIFF declares any size; a PNG
     or JPEG is bounded by Pillow) is refused from its header with a ``ValueError``, and so is
-    a file of several images (an animated PNG, GIF or WebP from its header; a multi-page TIFF
-    once read), whose frames would otherwise read as rows or channels. Decoder errors
-    propagate."""
+    a file of several images (an animated PNG, GIF or WebP; a multi-page TIFF), counted from
+    its header before any is decoded, whose frames would otherwise read as rows or channels.
+    Decoder errors propagate."""
     import imageio.v3 as iio
 
     if isinstance(source, (bytes, bytearray)):
@@ -125,7 +125,7 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
         )
         limit = Image.MAX_IMAGE_PIXELS  # Pillow's decompression-bomb bound, as for other files
         return decode_png16(data, max_pixels=2 * limit if limit else 1 << 62)
-    frames = _frame_count(source, extension)
+    frames = _frame_count(source, extension, head)
     if frames > 1:
         raise _Refused(_several_images(frames))
     props = iio.improps(source, extension=extension)
@@ -142,7 +142,7 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
         mode = "LA" if head[25] == 0 else "RGBA"  # grey, else RGB or palette (colour types)
         return np.asarray(iio.imread(source, mode=mode, **one))
     pixels = np.asarray(iio.imread(source, **one))
-    if pixels.shape != shape and pixels.shape[1:] == shape:  # a multi-page TIFF's pages
+    if pixels.shape != shape and pixels.shape[1:] == shape:  # pages the header count missed
         raise _Refused(_several_images(pixels.shape[0]))
     if pixels.ndim == 3 and pixels.shape[2] in (3, 4):
         mode = iio.immeta(source, **one).get("mode")
@@ -151,17 +151,28 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     return pixels
 
 
-def _frame_count(source: Any, extension: str | None) -> int:
-    """How many images the file holds as its plugin counts them from the header (an animated
-    PNG's, GIF's or WebP's frames; 1 where the plugin cannot say, and for a TIFF, whose pages
-    :func:`decode_image` counts once read)."""
+def _frame_count(source: Any, extension: str | None, head: bytes) -> int:
+    """How many images the file holds, from its header: an animated PNG's, GIF's or WebP's
+    frames as imageio's plugin counts them, a TIFF's pages in the series imageio decodes
+    (tifffile's first series); 1 where the plugin cannot say."""
     import imageio.v3 as iio
 
     try:
+        if head[:4] in _TIFF_MAGIC:
+            import tifffile
+
+            f = io.BytesIO(bytes(source)) if isinstance(source, (bytes, bytearray)) else source
+            with tifffile.TiffFile(f) as tif:
+                series = tif.series[0]
+                return max(1, math.prod(series.shape) // max(1, math.prod(series.keyframe.shape)))
         props = iio.improps(source, index=..., extension=extension)
     except Exception:  # noqa: BLE001 -- the decode that follows reports a bad file
         return 1
     return int(props.n_images or 1) if props.is_batch else 1
+
+
+#: The first four bytes of a TIFF or BigTIFF file (little- and big-endian).
+_TIFF_MAGIC = (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+")
 
 
 class _Refused(ValueError):

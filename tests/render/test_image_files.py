@@ -149,6 +149,25 @@ def test_a_file_of_several_images_is_refused_and_a_one_frame_file_is_its_image(
     np.testing.assert_array_equal(got, want)
 
 
+@pytest.mark.parametrize("suffix", [".png", ".gif", ".webp", ".tif"])
+def test_several_images_are_refused_before_any_is_decoded(tmp_path, suffix, monkeypatch):
+    """The count comes from the header (a TIFF's from its series' pages): a file of many
+    pages, each under the size cap, is not decoded whole first."""
+    import imageio.v3 as iio
+    from PIL import Image
+
+    images = [Image.fromarray(np.full((4, 5, 3), 60 * i, np.uint8)) for i in range(4)]
+    path = tmp_path / f"several{suffix}"
+    images[0].save(path, save_all=True, append_images=images[1:])
+
+    def no_decode(*args, **kwargs):
+        raise AssertionError("decoded before the count was checked")
+
+    monkeypatch.setattr(iio, "imread", no_decode)
+    with pytest.raises(ValueError, match="the file holds 4 images"):
+        read_image_file(path)
+
+
 @pytest.mark.parametrize("dtype", [np.uint8, bool, np.int32])
 def test_an_image_holds_float_linear_rgba(dtype):
     from refnpr.image import Image
