@@ -241,9 +241,15 @@ def compare_dirs(
         stem = fname[:-4]
         ref_path, cand_path = ref_dir / fname, cand_dir / fname
         if cand_path.is_symlink() and not cand_path.exists():  # there, but reads nothing
+            try:
+                cand_path.stat()
+                reason = "it cannot be followed"
+            except OSError as exc:  # no such file; too many levels of symbolic links
+                reason = exc.strerror or type(exc).__name__
             why = (
                 f"candidate {str(cand_path)!r} is a symbolic link to "
-                f"{os.readlink(cand_path)!r}, which does not exist"
+                f"{os.readlink(cand_path)!r} that cannot be followed ({reason}); write the "
+                "render there or fix the link"
             )
             results.append(ImageMetrics.failed(stem, tolerance, "unreadable", why))
             continue

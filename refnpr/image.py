@@ -117,6 +117,10 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     else:
         with open(source, "rb") as f:
             head = f.read(26)
+    chunks = _png_chunks(source) if head[:8] == PNG_SIGNATURE else {}
+    frames = _frame_count(source, extension, head, chunks)
+    if frames > 1:
+        raise _Refused(_several_images(frames))
     if is_png16_colour(head):
         from PIL import Image
 
@@ -125,9 +129,6 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
         )
         limit = Image.MAX_IMAGE_PIXELS  # Pillow's decompression-bomb bound, as for other files
         return decode_png16(data, max_pixels=2 * limit if limit else 1 << 62)
-    frames = _frame_count(source, extension, head)
-    if frames > 1:
-        raise _Refused(_several_images(frames))
     props = iio.improps(source, extension=extension)
     shape = tuple(props.shape)
     if math.prod(shape) > MAX_DECODED_VALUES:
@@ -136,9 +137,9 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
             f"{MAX_DECODED_VALUES:,} refnpr decodes; use a smaller image"
         )
     one: dict[str, Any] = {"extension": extension}
-    if props.is_batch:  # a one-frame GIF or WebP: its frame, not a stack of one
+    if props.is_batch:  # a one-frame GIF or APNG: its frame, not a stack of one
         one["index"], shape = 0, shape[1:]
-    if _png_transparency(source, head):  # tRNS: imageio drops the alpha
+    if b"tRNS" in chunks and _keyed(head):  # the transparency imageio drops
         mode = "LA" if head[25] == 0 else "RGBA"  # grey, else RGB or palette (colour types)
         return np.asarray(iio.imread(source, mode=mode, **one))
     pixels = np.asarray(iio.imread(source, **one))
@@ -151,12 +152,16 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     return pixels
 
 
-def _frame_count(source: Any, extension: str | None, head: bytes) -> int:
-    """How many images the file holds, from its header: an animated PNG's, GIF's or WebP's
-    frames as imageio's plugin counts them, a TIFF's pages in the series imageio decodes
-    (tifffile's first series); 1 where the plugin cannot say."""
+def _frame_count(source: Any, extension: str | None, head: bytes, chunks: dict) -> int:
+    """How many images the file holds, from its header: an animated PNG's frames (its
+    ``acTL`` chunk), a GIF's or WebP's as imageio's plugin counts them, a TIFF's pages in the
+    series imageio decodes (tifffile's first series); 1 for other formats (a camera JPEG whose
+    MPF header lists a large thumbnail is one image) and where the header does not say."""
     import imageio.v3 as iio
 
+    if head[:8] == PNG_SIGNATURE:
+        actl = chunks.get(b"acTL", b"")
+        return max(1, struct.unpack(">I", actl[:4])[0]) if len(actl) >= 4 else 1
     try:
         if head[:4] in _TIFF_MAGIC:
             import tifffile
@@ -165,10 +170,12 @@ def _frame_count(source: Any, extension: str | None, head: bytes) -> int:
             with tifffile.TiffFile(f) as tif:
                 series = tif.series[0]
                 return max(1, math.prod(series.shape) // max(1, math.prod(series.keyframe.shape)))
-        props = iio.improps(source, index=..., extension=extension)
+        if head[:6] in (b"GIF87a", b"GIF89a") or (head[:4] == b"RIFF" and head[8:12] == b"WEBP"):
+            props = iio.improps(source, index=..., extension=extension)
+            return int(props.n_images or 1) if props.is_batch else 1
     except Exception:  # noqa: BLE001 -- the decode that follows reports a bad file
         return 1
-    return int(props.n_images or 1) if props.is_batch else 1
+    return 1
 
 
 #: The first four bytes of a TIFF or BigTIFF file (little- and big-endian).
@@ -186,31 +193,33 @@ def _several_images(n: int) -> str:
     )
 
 
-def _png_transparency(source: Any, head: bytes) -> bool:
-    """Whether ``source`` (a path or bytes starting with ``head``) is a palette PNG, an 8-bit
-    RGB or an 8- or 1-bit grey PNG with a ``tRNS`` chunk (its transparency), found among the
-    chunks before the first IDAT: the kinds whose transparency Pillow turns into alpha."""
-    if len(head) < 26 or head[:8] != PNG_SIGNATURE:
-        return False
+def _keyed(head: bytes) -> bool:
+    """Whether a PNG of this header is of a kind whose ``tRNS`` transparency Pillow turns into
+    alpha: a palette PNG, an 8-bit RGB or an 8- or 1-bit grey PNG."""
     depth, colour = head[24], head[25]
-    if not (colour == 3 or (colour == 2 and depth == 8) or (colour == 0 and depth in (1, 8))):
-        return False
+    return colour == 3 or (colour == 2 and depth == 8) or (colour == 0 and depth in (1, 8))
+
+
+def _png_chunks(source: Any) -> dict[bytes, bytes]:
+    """The chunks of a PNG (a path or bytes) before its first ``IDAT``: type -> the first 8
+    bytes of its data (``tRNS``: transparency; ``acTL``: an animation and its frame count)."""
     if isinstance(source, (bytes, bytearray)):
         f: Any = io.BytesIO(source)
     else:
         f = open(source, "rb")  # noqa: SIM115 (closed below)
+    found: dict[bytes, bytes] = {}
     with f:
         f.seek(8)
         while True:
             chunk = f.read(8)
             if len(chunk) < 8:
-                return False
+                return found
             length, kind = struct.unpack(">I4s", chunk)
-            if kind == b"tRNS":
-                return True
             if kind in (b"IDAT", b"IEND"):
-                return False
-            f.seek(length + 4, os.SEEK_CUR)  # the data and the CRC
+                return found
+            data = f.read(min(length, 8))
+            found.setdefault(kind, data)
+            f.seek(length - len(data) + 4, os.SEEK_CUR)  # the rest of the data and the CRC
 
 
 #: The eight bytes every PNG file starts with.

@@ -7,7 +7,8 @@ straight-alpha RGBA); G-buffer cases ``<name>/<channel>.npy`` for every channel 
 
 An image case passes when the fraction of pixels failing the two-sided position-tolerant compare
 (:func:`position_tolerant_mismatch`) is at most ``tolerance.max_frac_over`` and the mean SSIM of
-luminance at least ``tolerance.min_ssim``; a G-buffer case when every channel is within
+luminance at least ``tolerance.min_ssim`` (not judged in an image under 3 px that differs, whose
+SSIM cannot be computed); a G-buffer case when every channel is within
 ``rtol``/``atol`` (discrete channels: exact but ``max_pixels``). docs/kit.md ("How ``refnpr kit
 check`` decides") states every rule and reported metric.
 

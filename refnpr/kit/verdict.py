@@ -426,7 +426,7 @@ def check_image(
     }
     max_frac, min_ssim = tol["max_frac_over"], tol["min_ssim"]
     # an SSIM of NaN: an image under 3 px tall or wide that differs (compare_images), whose
-    # SSIM cannot be computed; that criterion is not judged, as in Metrics.passes
+    # SSIM cannot be computed; that criterion is not judged, as in ImageMetrics.passes
     unjudged = math.isnan(m.ssim)
     ok = metrics["frac_over_position"] <= max_frac and (unjudged or m.ssim >= min_ssim)
     ssim_text = (

@@ -168,6 +168,20 @@ def test_several_images_are_refused_before_any_is_decoded(tmp_path, suffix, monk
         read_image_file(path)
 
 
+def test_a_camera_jpeg_with_a_large_thumbnail_is_one_image(tmp_path):
+    """Many cameras write a JPEG whose MPF header lists a second, smaller image (a "large
+    thumbnail"); Pillow opens it as MPO with two frames. It is one photograph: read as the
+    first image, as imageio reads it, not refused as several."""
+    from PIL import Image
+
+    rng = np.random.default_rng(2)
+    main = Image.fromarray(rng.integers(0, 256, (16, 24, 3)).astype(np.uint8))
+    path = tmp_path / "camera.jpg"
+    main.save(path, format="MPO", save_all=True, append_images=[main.resize((6, 4))])
+    assert Image.open(path).n_frames == 2
+    assert read_image_file(path).shape == (16, 24, 3)
+
+
 @pytest.mark.parametrize("dtype", [np.uint8, bool, np.int32])
 def test_an_image_holds_float_linear_rgba(dtype):
     from refnpr.image import Image

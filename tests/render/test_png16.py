@@ -195,3 +195,18 @@ def test_other_pngs_still_go_to_imageio(tmp_path):
     iio.imwrite(tmp_path / "c.png", rgb8)
     got = read_image_file(tmp_path / "c.png")
     assert got.dtype == np.uint8 and np.array_equal(got, rgb8)
+
+
+def test_an_animated_16_bit_png_is_refused_before_decoding(tmp_path):
+    """A 16-bit colour APNG goes to the 16-bit decoder, which reads the default image only: its
+    ``acTL`` frame count is checked first, as for every PNG."""
+    img = np.arange(2 * 3 * 3, dtype=np.uint16).reshape(2, 3, 3) * 3000
+    still = encode_png16(img, [0])
+    actl = _chunk(b"acTL", struct.pack(">II", 2, 0))  # 2 frames, loop forever
+    at = 8 + 25  # after the signature and IHDR (length, type, 13 bytes, CRC)
+    path = tmp_path / "anim16.png"
+    path.write_bytes(still[:at] + actl + still[at:])
+    with pytest.raises(ValueError, match=r"anim16\.png': the file holds 2 images"):
+        read_image_file(path)
+    path.write_bytes(still[:at] + _chunk(b"acTL", struct.pack(">II", 1, 0)) + still[at:])
+    np.testing.assert_array_equal(read_image_file(path), img)  # one frame: the image
