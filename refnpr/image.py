@@ -118,7 +118,8 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
         with open(source, "rb") as f:
             head = f.read(26)
     chunks = _png_chunks(source) if head[:8] == PNG_SIGNATURE else {}
-    frames = _frame_count(source, extension, head, chunks)
+    tiff = _tiff_series(source) if head[:4] in _TIFF_MAGIC else None
+    frames = _frame_count(source, extension, head, chunks, tiff)
     if frames > 1:
         raise _Refused(_several_images(frames))
     if is_png16_colour(head):
@@ -145,6 +146,8 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     pixels = np.asarray(iio.imread(source, **one))
     if pixels.shape != shape and pixels.shape[1:] == shape:  # pages the header count missed
         raise _Refused(_several_images(pixels.shape[0]))
+    if tiff is not None and tiff[2] == "SYX" and pixels.ndim == 3:  # planar: samples first
+        pixels = np.ascontiguousarray(np.moveaxis(pixels, 0, -1))
     if pixels.ndim == 3 and pixels.shape[2] in (3, 4):
         mode = iio.immeta(source, **one).get("mode")
         if mode in _CONVERTED_MODES:
@@ -152,30 +155,42 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
     return pixels
 
 
-def _frame_count(source: Any, extension: str | None, head: bytes, chunks: dict) -> int:
+def _frame_count(
+    source: Any, extension: str | None, head: bytes, chunks: dict, tiff: tuple | None
+) -> int:
     """How many images the file holds, from its header: an animated PNG's frames (its
     ``acTL`` chunk), a GIF's or WebP's as imageio's plugin counts them, a TIFF's pages in the
-    series imageio decodes (tifffile's first series); 1 for other formats (a camera JPEG whose
-    MPF header lists a large thumbnail is one image) and where the header does not say."""
+    series imageio decodes (``tiff``, :func:`_tiff_series`); 1 for other formats (a camera JPEG
+    whose MPF header lists a large thumbnail is one image) and where the header does not say."""
     import imageio.v3 as iio
 
     if head[:8] == PNG_SIGNATURE:
         actl = chunks.get(b"acTL", b"")
         return max(1, struct.unpack(">I", actl[:4])[0]) if len(actl) >= 4 else 1
-    try:
-        if head[:4] in _TIFF_MAGIC:
-            import tifffile
-
-            f = io.BytesIO(bytes(source)) if isinstance(source, (bytes, bytearray)) else source
-            with tifffile.TiffFile(f) as tif:
-                series = tif.series[0]
-                return max(1, math.prod(series.shape) // max(1, math.prod(series.keyframe.shape)))
-        if head[:6] in (b"GIF87a", b"GIF89a") or (head[:4] == b"RIFF" and head[8:12] == b"WEBP"):
+    if tiff is not None:
+        return max(1, math.prod(tiff[0]) // max(1, math.prod(tiff[1])))
+    if head[:6] in (b"GIF87a", b"GIF89a") or (head[:4] == b"RIFF" and head[8:12] == b"WEBP"):
+        try:
             props = iio.improps(source, index=..., extension=extension)
-            return int(props.n_images or 1) if props.is_batch else 1
-    except Exception:  # noqa: BLE001 -- the decode that follows reports a bad file
-        return 1
+        except Exception:  # noqa: BLE001 -- the decode that follows reports a bad file
+            return 1
+        return int(props.n_images or 1) if props.is_batch else 1
     return 1
+
+
+def _tiff_series(source: Any) -> tuple | None:
+    """The first series of a TIFF (what imageio decodes), from its header: its shape, the
+    shape of one page, and its axes (``"YXS"`` for interleaved colour, ``"SYX"`` for planar);
+    None where tifffile cannot say (the decode that follows reports a bad file)."""
+    try:
+        import tifffile
+
+        f = io.BytesIO(bytes(source)) if isinstance(source, (bytes, bytearray)) else source
+        with tifffile.TiffFile(f) as tif:
+            series = tif.series[0]
+            return tuple(series.shape), tuple(series.keyframe.shape), series.axes
+    except Exception:  # noqa: BLE001 -- tifffile raises many types on damaged files
+        return None
 
 
 #: The first four bytes of a TIFF or BigTIFF file (little- and big-endian).

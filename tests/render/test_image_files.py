@@ -182,6 +182,20 @@ def test_a_camera_jpeg_with_a_large_thumbnail_is_one_image(tmp_path):
     assert read_image_file(path).shape == (16, 24, 3)
 
 
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32])
+def test_a_planar_tiff_reads_like_an_interleaved_one(tmp_path, dtype):
+    """A TIFF may store colour planar (all reds, then greens, then blues); imageio then gives
+    (3, rows, cols), which read as 3 rows of cols channels. It reads as (rows, cols, 3)."""
+    import tifffile
+
+    rgb = (np.random.default_rng(3).random((5, 7, 3)) * 200).astype(dtype)
+    tifffile.imwrite(tmp_path / "planar.tif", np.moveaxis(rgb, -1, 0), photometric="rgb",
+                     planarconfig="separate")  # fmt: skip
+    tifffile.imwrite(tmp_path / "chunky.tif", rgb, photometric="rgb")
+    np.testing.assert_array_equal(read_image_file(tmp_path / "planar.tif"), rgb)
+    np.testing.assert_array_equal(read_image_file(tmp_path / "chunky.tif"), rgb)
+
+
 @pytest.mark.parametrize("dtype", [np.uint8, bool, np.int32])
 def test_an_image_holds_float_linear_rgba(dtype):
     from refnpr.image import Image
