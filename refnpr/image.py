@@ -103,7 +103,9 @@ def decode_image(source: Any, *, extension: str | None = None) -> np.ndarray:
       or 1-bit grey image) is decoded with its alpha, as RGBA or grey + alpha (imageio drops
       it; Pillow cannot apply the key of other bit depths, which keep their pixels, opaque);
     - a 16-bit RGB, RGBA or grey + alpha PNG is decoded at 16 bits by :func:`decode_png16`
-      (``uint16``, grey + alpha as two channels), where imageio (Pillow) gives 8 bits.
+      (``uint16``, grey + alpha as two channels), where imageio (Pillow) gives 8 bits;
+    - a TIFF with planar colour is returned as (rows, cols, C), where imageio gives (C, rows,
+      cols).
 
     An image of more than :data:`MAX_DECODED_VALUES` values (a TIFF declares any size; a PNG
     or JPEG is bounded by Pillow) is refused from its header with a ``ValueError``, and so is
