@@ -586,8 +586,9 @@ def index_page(records: list[CaseRecord], *, kit_dir: str, renders_dir: str) -> 
 <p>An image case passes when the fraction of pixels failing the position-tolerant compare
 (threshold per channel on sRGB values composited over black; a pixel also matches a pixel of the
 other image within N pixels, checked both ways) is at most <code>max_frac_over</code> and SSIM is at
-least <code>min_ssim</code> (not judged under 3 px, where it cannot be computed: n/a). G-buffer cases: float channels by rtol/atol, discrete channels exact
-except <code>max_pixels</code>. Failing cases come first; click a header to sort.</p>
+least <code>min_ssim</code> (not judged under 3 px, where it cannot be computed: n/a). G-buffer
+cases: float channels by rtol/atol, discrete channels exact except <code>max_pixels</code>.
+Failing cases come first; click a header to sort.</p>
 {_LEGEND}
 <div id="filters">{_checkboxes("status", status_counts, GROUPS)}{_checkboxes("style", styles, {})}
 <span id="shown"></span></div>
